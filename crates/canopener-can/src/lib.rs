@@ -1,0 +1,20 @@
+//! CAN 2.0 building blocks shared by every other canopener crate.
+//!
+//! This crate is pure data and arithmetic: it performs no IO and never reads a clock.
+//! Time arrives from the caller as an [`Instant`]; durations are [`std::time::Duration`].
+//!
+//! Main types:
+//! - [`CanId`] (with [`StandardId`] and [`ExtendedId`]): an 11- or 29-bit identifier whose `Ord` is
+//!   the bus arbitration order (the smaller value wins arbitration).
+//! - [`CanFrame`]: a classical CAN data or remote frame with DLC 0–8.
+//! - [`Instant`]: a point in time in nanoseconds since an epoch chosen by whoever drives the code.
+
+#![warn(missing_docs)]
+
+mod frame;
+mod id;
+mod time;
+
+pub use frame::{CanFrame, FrameError, MAX_CLASSIC_DATA_LEN};
+pub use id::{CanId, ExtendedId, IdError, StandardId};
+pub use time::Instant;
