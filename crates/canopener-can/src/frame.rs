@@ -40,7 +40,12 @@ impl CanFrame {
         }
         let mut buf = [0; MAX_CLASSIC_DATA_LEN];
         buf[..data.len()].copy_from_slice(data);
-        Ok(CanFrame { id: id.into(), remote: false, dlc: data.len() as u8, data: buf })
+        Ok(CanFrame {
+            id: id.into(),
+            remote: false,
+            dlc: data.len() as u8,
+            data: buf,
+        })
     }
 
     /// A remote frame requesting `dlc` bytes (0 to 8).
@@ -48,7 +53,12 @@ impl CanFrame {
         if usize::from(dlc) > MAX_CLASSIC_DATA_LEN {
             return Err(FrameError::DlcTooLarge(dlc));
         }
-        Ok(CanFrame { id: id.into(), remote: true, dlc, data: [0; MAX_CLASSIC_DATA_LEN] })
+        Ok(CanFrame {
+            id: id.into(),
+            remote: true,
+            dlc,
+            data: [0; MAX_CLASSIC_DATA_LEN],
+        })
     }
 
     /// The identifier.
@@ -68,7 +78,11 @@ impl CanFrame {
 
     /// The data bytes; empty for a remote frame.
     pub fn data(&self) -> &[u8] {
-        if self.remote { &[] } else { &self.data[..usize::from(self.dlc)] }
+        if self.remote {
+            &[]
+        } else {
+            &self.data[..usize::from(self.dlc)]
+        }
     }
 
     /// The arbitration bits as one number: the frame with the smaller key wins arbitration.

@@ -45,7 +45,11 @@ impl ExtendedId {
 
     /// An extended identifier, or `None` when `raw` needs more than 29 bits.
     pub const fn new(raw: u32) -> Option<ExtendedId> {
-        if raw <= 0x1FFF_FFFF { Some(ExtendedId(raw)) } else { None }
+        if raw <= 0x1FFF_FFFF {
+            Some(ExtendedId(raw))
+        } else {
+            None
+        }
     }
 
     /// The identifier as a number.
@@ -81,12 +85,16 @@ pub enum CanId {
 impl CanId {
     /// A standard identifier from a raw value.
     pub fn standard(raw: u16) -> Result<CanId, IdError> {
-        StandardId::new(raw).map(CanId::Standard).ok_or(IdError::StandardTooLarge(u32::from(raw)))
+        StandardId::new(raw)
+            .map(CanId::Standard)
+            .ok_or(IdError::StandardTooLarge(u32::from(raw)))
     }
 
     /// An extended identifier from a raw value.
     pub fn extended(raw: u32) -> Result<CanId, IdError> {
-        ExtendedId::new(raw).map(CanId::Extended).ok_or(IdError::ExtendedTooLarge(raw))
+        ExtendedId::new(raw)
+            .map(CanId::Extended)
+            .ok_or(IdError::ExtendedTooLarge(raw))
     }
 
     /// The identifier as a number, without any format flag.
@@ -207,7 +215,10 @@ mod tests {
         assert!(ExtendedId::new(0x1FFF_FFFF).is_some());
         assert!(ExtendedId::new(0x2000_0000).is_none());
         assert_eq!(CanId::standard(0x800), Err(IdError::StandardTooLarge(0x800)));
-        assert_eq!(CanId::extended(0x2000_0000), Err(IdError::ExtendedTooLarge(0x2000_0000)));
+        assert_eq!(
+            CanId::extended(0x2000_0000),
+            Err(IdError::ExtendedTooLarge(0x2000_0000))
+        );
     }
 
     #[test]
@@ -267,7 +278,10 @@ mod tests {
     }
 
     fn any_id() -> impl Strategy<Value = CanId> {
-        prop_oneof![(0u16..=0x7FF).prop_map(std_id), (0u32..=0x1FFF_FFFF).prop_map(ext_id)]
+        prop_oneof![
+            (0u16..=0x7FF).prop_map(std_id),
+            (0u32..=0x1FFF_FFFF).prop_map(ext_id)
+        ]
     }
 
     proptest! {

@@ -8,13 +8,18 @@
 //!   the bus arbitration order (the smaller value wins arbitration).
 //! - [`CanFrame`]: a classical CAN data or remote frame with DLC 0–8.
 //! - [`Instant`]: a point in time in nanoseconds since an epoch chosen by whoever drives the code.
+//! - [`Bitrate`] and [`bits`]: the exact on-wire bit sequence and duration of a frame (CRC-15, bit
+//!   stuffing), which the bus simulator and the bus-load figures are built on.
 
 #![warn(missing_docs)]
 
+mod bitrate;
+pub mod bits;
 mod frame;
 mod id;
 mod time;
 
+pub use bitrate::{Bitrate, BitrateError};
 pub use frame::{CanFrame, FrameError, MAX_CLASSIC_DATA_LEN};
 pub use id::{CanId, ExtendedId, IdError, StandardId};
 pub use time::Instant;

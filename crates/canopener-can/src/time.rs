@@ -30,23 +30,33 @@ impl Instant {
 
     /// An instant `micros` microseconds after the epoch (saturating).
     pub const fn from_micros(micros: u64) -> Instant {
-        Instant { nanos: micros.saturating_mul(1_000) }
+        Instant {
+            nanos: micros.saturating_mul(1_000),
+        }
     }
 
     /// An instant `millis` milliseconds after the epoch (saturating).
     pub const fn from_millis(millis: u64) -> Instant {
-        Instant { nanos: millis.saturating_mul(1_000_000) }
+        Instant {
+            nanos: millis.saturating_mul(1_000_000),
+        }
     }
 
     /// An instant `secs` seconds after the epoch (saturating).
     pub const fn from_secs(secs: u64) -> Instant {
-        Instant { nanos: secs.saturating_mul(1_000_000_000) }
+        Instant {
+            nanos: secs.saturating_mul(1_000_000_000),
+        }
     }
 
     /// An instant from whole seconds and a sub-second part in nanoseconds, as in a `timespec`.
     /// `subsec_nanos` values of one second or more are carried into the seconds.
     pub const fn from_secs_nanos(secs: u64, subsec_nanos: u32) -> Instant {
-        Instant { nanos: secs.saturating_mul(1_000_000_000).saturating_add(subsec_nanos as u64) }
+        Instant {
+            nanos: secs
+                .saturating_mul(1_000_000_000)
+                .saturating_add(subsec_nanos as u64),
+        }
     }
 
     /// Nanoseconds since the epoch.
@@ -92,7 +102,9 @@ fn duration_nanos_saturating(duration: Duration) -> u64 {
 impl Add<Duration> for Instant {
     type Output = Instant;
     fn add(self, rhs: Duration) -> Instant {
-        Instant { nanos: self.nanos.saturating_add(duration_nanos_saturating(rhs)) }
+        Instant {
+            nanos: self.nanos.saturating_add(duration_nanos_saturating(rhs)),
+        }
     }
 }
 
@@ -105,7 +117,9 @@ impl AddAssign<Duration> for Instant {
 impl Sub<Duration> for Instant {
     type Output = Instant;
     fn sub(self, rhs: Duration) -> Instant {
-        Instant { nanos: self.nanos.saturating_sub(duration_nanos_saturating(rhs)) }
+        Instant {
+            nanos: self.nanos.saturating_sub(duration_nanos_saturating(rhs)),
+        }
     }
 }
 
@@ -136,7 +150,10 @@ mod tests {
 
     #[test]
     fn display_is_candump_style() {
-        assert_eq!(Instant::from_secs_nanos(1_436_509_052, 249_713_999).to_string(), "1436509052.249713");
+        assert_eq!(
+            Instant::from_secs_nanos(1_436_509_052, 249_713_999).to_string(),
+            "1436509052.249713"
+        );
         assert_eq!(Instant::ZERO.to_string(), "0.000000");
     }
 
@@ -145,12 +162,21 @@ mod tests {
         assert_eq!(Instant::MAX + Duration::from_secs(1), Instant::MAX);
         assert_eq!(Instant::ZERO - Duration::from_secs(1), Instant::ZERO);
         assert_eq!(Instant::ZERO - Instant::from_secs(1), Duration::ZERO);
-        assert_eq!(Instant::from_secs(3).checked_duration_since(Instant::from_secs(4)), None);
-        assert_eq!(Instant::from_millis(1500) - Instant::from_secs(1), Duration::from_millis(500));
+        assert_eq!(
+            Instant::from_secs(3).checked_duration_since(Instant::from_secs(4)),
+            None
+        );
+        assert_eq!(
+            Instant::from_millis(1500) - Instant::from_secs(1),
+            Duration::from_millis(500)
+        );
     }
 
     #[test]
     fn secs_nanos_carry() {
-        assert_eq!(Instant::from_secs_nanos(1, 1_500_000_000), Instant::from_millis(2_500));
+        assert_eq!(
+            Instant::from_secs_nanos(1, 1_500_000_000),
+            Instant::from_millis(2_500)
+        );
     }
 }
