@@ -15,6 +15,7 @@
 
 mod bitrate;
 pub mod bits;
+pub mod candump;
 mod frame;
 mod id;
 mod time;
