@@ -1,0 +1,181 @@
+//! The TIME service's TIME_OF_DAY value (CiA 301 §7.2.6 and §7.1.6.5).
+//!
+//! Six bytes: D0..D3 milliseconds after midnight in the low 28 bits (the top 4 bits are reserved),
+//! D4..D5 days since 1 January 1984. All little-endian.
+
+use std::fmt;
+
+/// Milliseconds in a day; a valid TIME_OF_DAY has fewer.
+pub const MILLIS_PER_DAY: u32 = 86_400_000;
+
+/// The mask of the 28 bits that hold the milliseconds.
+pub const MILLIS_MASK: u32 = 0x0FFF_FFFF;
+
+/// A TIME_OF_DAY value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TimeOfDay {
+    /// Milliseconds after midnight (28 bits on the wire).
+    pub millis: u32,
+    /// Days since 1 January 1984.
+    pub days: u16,
+}
+
+/// Why bytes are not a TIME_OF_DAY.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum TimeOfDayError {
+    /// Fewer than 6 bytes.
+    #[error("a TIME frame carries 6 bytes (milliseconds and days), got {0}")]
+    TooShort(usize),
+}
+
+impl TimeOfDay {
+    /// Reads the first 6 bytes. The reserved top 4 bits of the milliseconds are dropped; check
+    /// [`TimeOfDay::reserved_bits`] to see them.
+    pub fn parse(data: &[u8]) -> Result<TimeOfDay, TimeOfDayError> {
+        let [m0, m1, m2, m3, d0, d1, ..] = data else {
+            return Err(TimeOfDayError::TooShort(data.len()));
+        };
+        Ok(TimeOfDay {
+            millis: u32::from_le_bytes([*m0, *m1, *m2, *m3]) & MILLIS_MASK,
+            days: u16::from_le_bytes([*d0, *d1]),
+        })
+    }
+
+    /// The reserved top 4 bits of the milliseconds word in `data`, 0 in a correct frame.
+    pub fn reserved_bits(data: &[u8]) -> u8 {
+        data.get(3).map_or(0, |byte| byte >> 4)
+    }
+
+    /// The 6 data bytes (milliseconds above 28 bits are cut off).
+    pub fn encode(&self) -> [u8; 6] {
+        let [m0, m1, m2, m3] = (self.millis & MILLIS_MASK).to_le_bytes();
+        let [d0, d1] = self.days.to_le_bytes();
+        [m0, m1, m2, m3, d0, d1]
+    }
+
+    /// The calendar date (year, month 1–12, day 1–31) of `days`, in the Gregorian calendar.
+    pub fn date(&self) -> (u32, u8, u8) {
+        let mut year = 1984u32;
+        let mut days_left = u32::from(self.days);
+        loop {
+            let year_len = if is_leap_year(year) { 366 } else { 365 };
+            if days_left < year_len {
+                break;
+            }
+            days_left -= year_len;
+            year += 1;
+        }
+        let february = if is_leap_year(year) { 29 } else { 28 };
+        let month_lengths = [31, february, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
+        let mut month = 1u8;
+        for length in month_lengths {
+            if days_left < length {
+                break;
+            }
+            days_left -= length;
+            month += 1;
+        }
+        // `days_left` is below the month's length (at most 31) here.
+        (year, month, days_left as u8 + 1)
+    }
+}
+
+fn is_leap_year(year: u32) -> bool {
+    (year.is_multiple_of(4) && !year.is_multiple_of(100)) || year.is_multiple_of(400)
+}
+
+/// `2024-01-01 12:00:00.000`; milliseconds of a day or more print as hours above 23.
+impl fmt::Display for TimeOfDay {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (year, month, day) = self.date();
+        let ms = self.millis;
+        write!(
+            f,
+            "{year:04}-{month:02}-{day:02} {:02}:{:02}:{:02}.{:03}",
+            ms / 3_600_000,
+            ms / 60_000 % 60,
+            ms / 1000 % 60,
+            ms % 1000
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn worked_example_from_the_reference() {
+        // 2024-01-01 12:00:00.000 UTC: ms 43 200 000 = 0293 2E00h, days 14 610 = 3912h.
+        let bytes = [0x00, 0x2E, 0x93, 0x02, 0x12, 0x39];
+        let time = TimeOfDay::parse(&bytes).unwrap();
+        assert_eq!(
+            time,
+            TimeOfDay {
+                millis: 43_200_000,
+                days: 14_610
+            }
+        );
+        assert_eq!(time.encode(), bytes);
+        assert_eq!(time.to_string(), "2024-01-01 12:00:00.000");
+    }
+
+    #[test]
+    fn calendar_edges() {
+        assert_eq!(TimeOfDay { millis: 0, days: 0 }.date(), (1984, 1, 1));
+        assert_eq!(TimeOfDay { millis: 0, days: 59 }.date(), (1984, 2, 29));
+        assert_eq!(TimeOfDay { millis: 0, days: 365 }.date(), (1984, 12, 31));
+        assert_eq!(TimeOfDay { millis: 0, days: 366 }.date(), (1985, 1, 1));
+        // 2000 is a leap year, 2100 is not.
+        assert_eq!(
+            TimeOfDay {
+                millis: 0,
+                days: 5_903
+            }
+            .date(),
+            (2000, 2, 29)
+        );
+        assert_eq!(
+            TimeOfDay {
+                millis: 0,
+                days: 42_427
+            }
+            .date(),
+            (2100, 2, 28)
+        );
+        assert_eq!(
+            TimeOfDay {
+                millis: 0,
+                days: 42_428
+            }
+            .date(),
+            (2100, 3, 1)
+        );
+        assert_eq!(
+            TimeOfDay {
+                millis: 0,
+                days: u16::MAX
+            }
+            .date(),
+            (2163, 6, 6)
+        );
+    }
+
+    #[test]
+    fn reserved_bits_and_short_frames() {
+        assert_eq!(TimeOfDay::reserved_bits(&[0, 0, 0, 0xF0, 0, 0]), 0xF);
+        assert_eq!(TimeOfDay::parse(&[0, 0, 0, 0xF0, 0, 0]).unwrap().millis, 0);
+        assert_eq!(TimeOfDay::parse(&[0; 5]), Err(TimeOfDayError::TooShort(5)));
+    }
+
+    proptest! {
+        #[test]
+        fn round_trip(millis in 0..=MILLIS_MASK, days: u16) {
+            let time = TimeOfDay { millis, days };
+            prop_assert_eq!(TimeOfDay::parse(&time.encode()), Ok(time));
+            let (_, month, day) = time.date();
+            prop_assert!((1..=12).contains(&month) && (1..=31).contains(&day));
+        }
+    }
+}
