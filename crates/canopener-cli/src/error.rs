@@ -1,0 +1,88 @@
+//! The CLI's error type and its mapping to the documented exit codes (see `cli::EXIT_CODES_HELP`).
+
+use std::io;
+use std::path::Path;
+
+use canopener_transport::TransportError;
+
+/// Exit codes, documented in `canopener --help` and the README.
+pub(crate) mod exit_code {
+    pub(crate) const SUCCESS: u8 = 0;
+    pub(crate) const INTERNAL: u8 = 1;
+    pub(crate) const USAGE: u8 = 2;
+    pub(crate) const INVALID_INPUT: u8 = 3;
+    pub(crate) const BUS: u8 = 4;
+    pub(crate) const OUTPUT: u8 = 5;
+    pub(crate) const CHECK_FAILED: u8 = 6;
+}
+
+/// Everything a command can fail with, grouped by what the user has to do about it.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum CliError {
+    /// The arguments make no sense together; clap catches most of these before we run.
+    #[error("{0}")]
+    Usage(String),
+    /// A file, frame or value given by the user could not be read.
+    #[error("{0}")]
+    InvalidInput(String),
+    /// The bus could not be opened or failed while in use.
+    #[error(transparent)]
+    Bus(#[from] TransportError),
+    /// A result could not be written.
+    #[error("{context}: {source}")]
+    Output {
+        /// What we were writing, with the path.
+        context: String,
+        /// The operating system's reason.
+        source: io::Error,
+    },
+    /// The command ran to the end and found a problem it was asked to check for.
+    #[error("{0}")]
+    CheckFailed(String),
+    /// A bug or an environment problem we did not anticipate.
+    #[error(transparent)]
+    Internal(#[from] anyhow::Error),
+}
+
+impl CliError {
+    pub(crate) fn exit_code(&self) -> u8 {
+        match self {
+            CliError::Usage(_) => exit_code::USAGE,
+            CliError::InvalidInput(_) => exit_code::INVALID_INPUT,
+            // A missing or malformed --bus is the user's argument, not the bus failing.
+            CliError::Bus(
+                TransportError::Spec(_)
+                | TransportError::NoBusGiven
+                | TransportError::EnvSpec(_)
+                | TransportError::EnvNotUnicode,
+            ) => exit_code::USAGE,
+            CliError::Bus(_) => exit_code::BUS,
+            CliError::Output { .. } => exit_code::OUTPUT,
+            CliError::CheckFailed(_) => exit_code::CHECK_FAILED,
+            CliError::Internal(_) => exit_code::INTERNAL,
+        }
+    }
+
+    pub(crate) fn output(context: impl Into<String>, source: io::Error) -> CliError {
+        CliError::Output {
+            context: context.into(),
+            source,
+        }
+    }
+
+    pub(crate) fn read_file(path: &Path, source: io::Error) -> CliError {
+        CliError::InvalidInput(format!("cannot read {}: {source}", path.display()))
+    }
+
+    /// Whether this error only means that whoever reads our stdout went away (`| head`).
+    pub(crate) fn is_broken_pipe(&self) -> bool {
+        matches!(self, CliError::Output { source, .. } if source.kind() == io::ErrorKind::BrokenPipe)
+    }
+}
+
+pub(crate) type CliResult<T = ()> = Result<T, CliError>;
+
+/// Wraps a write to stdout so that a closed pipe ends the command quietly.
+pub(crate) fn stdout_error(source: io::Error) -> CliError {
+    CliError::output("writing to stdout", source)
+}

@@ -1,0 +1,76 @@
+//! The `canopener` binary: parses the command line, runs one command, maps its outcome to an exit code.
+//!
+//! This crate is the edge of the system: it owns the terminal (progress bars, colours, JSON output), signal
+//! handling and process exit codes. Library crates below it never print or exit.
+
+mod bus_decode;
+mod bus_dump;
+mod bus_gen;
+mod bus_open;
+mod bus_replay;
+mod bus_send;
+mod bus_serve;
+mod cli;
+mod demo;
+mod error;
+mod monitor;
+mod stop;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use crate::cli::{BusCommand, Cli, Command};
+use crate::error::{CliError, exit_code};
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(err) => {
+            // clap prints help/version to stdout with exit 0 and usage errors to stderr with exit 2.
+            let _ = err.print();
+            return ExitCode::from(if err.use_stderr() {
+                exit_code::USAGE
+            } else {
+                exit_code::SUCCESS
+            });
+        }
+    };
+    init_logging(cli.verbose);
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) if err.is_broken_pipe() => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err}");
+            ExitCode::from(err.exit_code())
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<(), CliError> {
+    match cli.command {
+        Command::Demo(args) => demo::run(args),
+        Command::Bus(BusCommand::Serve(args)) => bus_serve::run(args),
+        Command::Bus(BusCommand::Dump(args)) => bus_dump::run(args),
+        Command::Bus(BusCommand::Send(args)) => bus_send::run(args),
+        Command::Bus(BusCommand::Replay(args)) => bus_replay::run(args),
+        Command::Bus(BusCommand::Gen(args)) => bus_gen::run(args),
+        Command::Bus(BusCommand::Decode(args)) => bus_decode::run(args),
+    }
+}
+
+fn init_logging(verbose: u8) {
+    let default = match verbose {
+        0 => "warn",
+        1 => "info",
+        2 => "debug",
+        _ => "trace",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .init();
+}
