@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Benchmark suite (cargo xtask bench): release builds, then bench/run.py measures everything in one run and
+# writes bench-results/results.json plus the markdown tables for BENCHMARKS.md.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+python="${CANOPENER_PYTHON:-.venv/bin/python}"
+cargo build --release --locked -p canopener-cli --bin canopener
+cargo build --release --locked -p canopener-hub --example hub_load
+mkdir -p bench-results
+"$python" bench/run.py "$@"
