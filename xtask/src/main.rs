@@ -118,14 +118,12 @@ fn bench(root: &Path, rest: &[String]) -> Result<()> {
 
 fn fuzz(root: &Path, seconds: Option<&str>) -> Result<()> {
     let seconds = seconds.unwrap_or("60");
-    let list = Command::new(cargo())
-        .current_dir(root.join("fuzz"))
-        .args(["+nightly", "fuzz", "list"])
-        .output()
-        .context("running `cargo +nightly fuzz list`; install cargo-fuzz with `cargo install cargo-fuzz`")?;
+    let list = nightly_cargo(root).args(["fuzz", "list"]).output().context(
+        "running `rustup run nightly cargo fuzz list`; install cargo-fuzz with `cargo install cargo-fuzz`",
+    )?;
     if !list.status.success() {
         bail!(
-            "`cargo +nightly fuzz list` failed: {}",
+            "`cargo fuzz list` on nightly failed (install the nightly toolchain and `cargo install cargo-fuzz`): {}",
             String::from_utf8_lossy(&list.stderr)
         );
     }
@@ -135,8 +133,7 @@ fn fuzz(root: &Path, seconds: Option<&str>) -> Result<()> {
         .filter(|t| !t.is_empty())
     {
         eprintln!("xtask: fuzzing {target} for {seconds} s");
-        run_cmd(Command::new(cargo()).current_dir(root.join("fuzz")).args([
-            "+nightly",
+        run_cmd(nightly_cargo(root).args([
             "fuzz",
             "run",
             target,
@@ -145,6 +142,16 @@ fn fuzz(root: &Path, seconds: Option<&str>) -> Result<()> {
         ]))?;
     }
     Ok(())
+}
+
+/// `cargo` on the nightly toolchain in `fuzz/`. `cargo +nightly` only works through the rustup proxy, and
+/// inside `cargo run` the `CARGO` variable points at the real cargo, so go through rustup explicitly.
+fn nightly_cargo(root: &Path) -> Command {
+    let mut command = Command::new("rustup");
+    command
+        .current_dir(root.join("fuzz"))
+        .args(["run", "nightly", "cargo"]);
+    command
 }
 
 fn cargo() -> String {
