@@ -707,6 +707,7 @@ fn quote(text: &str, from: usize, to: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::strategy::any_frame;
     use proptest::prelude::*;
 
     fn std_frame(id: u16, data: &[u8]) -> CanFrame {
@@ -1033,26 +1034,6 @@ mod tests {
                 .message
                 .contains("unexpected")
         );
-    }
-
-    fn any_frame() -> impl Strategy<Value = CanFrame> {
-        let id = prop_oneof![
-            (0u16..=0x7FF).prop_map(|raw| CanId::Standard(StandardId::new(raw).unwrap())),
-            (0u32..=0x1FFF_FFFF).prop_map(|raw| CanId::Extended(ExtendedId::new(raw).unwrap())),
-        ];
-        (
-            id,
-            any::<bool>(),
-            proptest::collection::vec(any::<u8>(), 0..=8),
-            0u8..=8,
-        )
-            .prop_map(|(id, remote, data, dlc)| {
-                if remote {
-                    CanFrame::remote(id, dlc).unwrap()
-                } else {
-                    CanFrame::new(id, &data).unwrap()
-                }
-            })
     }
 
     fn any_event() -> impl Strategy<Value = LogEvent> {

@@ -198,6 +198,7 @@ impl fmt::Debug for CanId {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::strategy::any_id;
     use proptest::prelude::*;
 
     fn std_id(raw: u16) -> CanId {
@@ -275,13 +276,6 @@ mod tests {
             }
         }
         bits
-    }
-
-    fn any_id() -> impl Strategy<Value = CanId> {
-        prop_oneof![
-            (0u16..=0x7FF).prop_map(std_id),
-            (0u32..=0x1FFF_FFFF).prop_map(ext_id)
-        ]
     }
 
     proptest! {

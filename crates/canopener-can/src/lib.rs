@@ -18,6 +18,8 @@ pub mod bits;
 pub mod candump;
 mod frame;
 mod id;
+#[cfg(any(test, feature = "_proptest"))]
+pub mod strategy;
 mod time;
 
 pub use bitrate::{Bitrate, BitrateError};

@@ -4,7 +4,7 @@
 use canopener_can::bits::{
     FIXED_TAIL_BITS, FrameBits, crc15, destuff, frame_bits, stuffed_bits, unstuffed_bits, worst_case_bits,
 };
-use canopener_can::{Bitrate, CanFrame, CanId, ExtendedId, StandardId};
+use canopener_can::{Bitrate, CanFrame, ExtendedId, StandardId};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
@@ -194,20 +194,11 @@ fn worst_case_bound_reachability() {
     assert!(longest[1] < 65 && longest[1] >= 59, "DLC 1: {}", longest[1]);
 }
 
-fn any_id() -> impl Strategy<Value = CanId> {
-    prop_oneof![
-        (0u16..=0x7FF).prop_map(|raw| CanId::Standard(StandardId::new(raw).unwrap())),
-        (0u32..=0x1FFF_FFFF).prop_map(|raw| CanId::Extended(ExtendedId::new(raw).unwrap())),
-    ]
-}
-
 fn any_frame() -> impl Strategy<Value = CanFrame> {
     prop_oneof![
-        4 => (any_id(), proptest::collection::vec(any::<u8>(), 0..=8))
-            .prop_map(|(id, data)| CanFrame::new(id, &data).unwrap()),
-        1 => (any_id(), 0u8..=8).prop_map(|(id, dlc)| CanFrame::remote(id, dlc).unwrap()),
+        5 => canopener_can::strategy::any_frame(),
         // Frames full of equal bits stuff the most; random bytes rarely produce them.
-        2 => (any_id(), 0usize..=8, prop::sample::select(vec![0x00u8, 0xFF, 0x0F, 0xF0, 0x78, 0x87]))
+        2 => (canopener_can::strategy::any_id(), 0usize..=8, prop::sample::select(vec![0x00u8, 0xFF, 0x0F, 0xF0, 0x78, 0x87]))
             .prop_map(|(id, n, byte)| CanFrame::new(id, &[byte; 8][..n]).unwrap()),
     ]
 }

@@ -426,11 +426,7 @@ fn any_frame() -> impl Strategy<Value = CanFrame> {
         // Few distinct ids so equal arbitration keys from different ports occur.
         1 => (0u16..4).prop_map(|raw| CanId::Standard(StandardId::new(raw).unwrap())),
     ];
-    prop_oneof![
-        4 => (id.clone(), proptest::collection::vec(any::<u8>(), 0..=8))
-            .prop_map(|(id, data)| CanFrame::new(id, &data).unwrap()),
-        1 => (id, 0u8..=8).prop_map(|(id, dlc)| CanFrame::remote(id, dlc).unwrap()),
-    ]
+    canopener_can::strategy::frame_with_id(id)
 }
 
 fn any_bitrate() -> impl Strategy<Value = Bitrate> {

@@ -1,27 +1,13 @@
 //! Property tests: every frame and timestamp survives write → parse, element splitting does not
 //! depend on where TCP cuts the stream, and no input makes the codec panic.
 
+use canopener_can::strategy::any_frame;
 use canopener_can::{CanFrame, CanId, Instant};
 use canopener_socketcand::{
     ClientCommand, ElementReader, ServerMessage, parse_client_command, parse_server_message,
     write_client_command, write_frame, write_send, write_server_message,
 };
 use proptest::prelude::*;
-
-fn any_id() -> impl Strategy<Value = CanId> {
-    prop_oneof![
-        (0u16..=0x7FF).prop_map(|raw| CanId::standard(raw).unwrap()),
-        (0u32..=0x1FFF_FFFF).prop_map(|raw| CanId::extended(raw).unwrap()),
-    ]
-}
-
-fn any_frame() -> impl Strategy<Value = CanFrame> {
-    prop_oneof![
-        (any_id(), prop::collection::vec(any::<u8>(), 0..=8))
-            .prop_map(|(id, data)| CanFrame::new(id, &data).unwrap()),
-        (any_id(), 0u8..=8).prop_map(|(id, dlc)| CanFrame::remote(id, dlc).unwrap()),
-    ]
-}
 
 fn micros_only(timestamp: u64) -> Instant {
     Instant::from_nanos(timestamp - timestamp % 1_000)

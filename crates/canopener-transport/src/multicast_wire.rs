@@ -235,6 +235,7 @@ fn payload<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<Vec<u8>>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use canopener_can::strategy::any_frame;
     use canopener_can::{ExtendedId, StandardId};
     use proptest::prelude::*;
     use serde::Serialize;
@@ -446,22 +447,6 @@ mod tests {
         })
         .unwrap();
         assert!(matches!(decode(&bytes), Err(DecodeError::Malformed(_))));
-    }
-
-    fn any_frame() -> impl Strategy<Value = CanFrame> {
-        let id = prop_oneof![
-            (0u16..=0x7FF).prop_map(|r| CanId::standard(r).unwrap()),
-            (0u32..=0x1FFF_FFFF).prop_map(|r| CanId::extended(r).unwrap()),
-        ];
-        (
-            id,
-            proptest::collection::vec(any::<u8>(), 0..=8),
-            proptest::option::of(0u8..=8),
-        )
-            .prop_map(|(id, data, remote_dlc)| match remote_dlc {
-                Some(dlc) => CanFrame::remote(id, dlc).unwrap(),
-                None => CanFrame::new(id, &data).unwrap(),
-            })
     }
 
     proptest! {

@@ -215,6 +215,7 @@ fn system_time_to_instant(time: SystemTime) -> Instant {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use canopener_can::strategy::any_frame;
     use proptest::prelude::*;
 
     #[test]
@@ -255,22 +256,6 @@ mod tests {
     fn kernel_timestamps_become_unix_epoch_instants() {
         let time = UNIX_EPOCH + Duration::new(1_436_509_052, 249_713_000);
         assert_eq!(system_time_to_instant(time).to_string(), "1436509052.249713");
-    }
-
-    fn any_frame() -> impl Strategy<Value = CanFrame> {
-        let id = prop_oneof![
-            (0u16..=0x7FF).prop_map(|r| CanId::standard(r).unwrap()),
-            (0u32..=0x1FFF_FFFF).prop_map(|r| CanId::extended(r).unwrap()),
-        ];
-        (
-            id,
-            proptest::collection::vec(any::<u8>(), 0..=8),
-            proptest::option::of(0u8..=8),
-        )
-            .prop_map(|(id, data, remote_dlc)| match remote_dlc {
-                Some(dlc) => CanFrame::remote(id, dlc).unwrap(),
-                None => CanFrame::new(id, &data).unwrap(),
-            })
     }
 
     proptest! {

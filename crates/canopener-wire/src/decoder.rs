@@ -1681,19 +1681,7 @@ mod tests {
                 .prop_map(|raw| CanId::Standard(StandardId::new(raw).unwrap())),
             1 => (0u32..=0x1FFF_FFFF).prop_map(|raw| CanId::Extended(ExtendedId::new(raw).unwrap())),
         ];
-        (
-            id,
-            any::<bool>(),
-            proptest::collection::vec(any::<u8>(), 0..=8),
-            0u8..=8,
-        )
-            .prop_map(|(id, remote, data, dlc)| {
-                if remote {
-                    CanFrame::remote(id, dlc).unwrap()
-                } else {
-                    CanFrame::new(id, &data).unwrap()
-                }
-            })
+        canopener_can::strategy::frame_with_id(id)
     }
 
     proptest! {
