@@ -1,0 +1,298 @@
+//! What a section name means (CiA 306 §4.4–§6), and how CiA 306 spells it.
+
+use crate::model::{CommissioningSpelling, ObjectListKind, decimal_key};
+
+/// The part of a modular device a `M<x>...` section describes (CiA 306 §6.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ModulePart {
+    /// `M<x>ModuleInfo`
+    Info,
+    /// `M<x>Comments`
+    Comments,
+    /// `M<x>FixedObjects`
+    FixedObjects,
+    /// `M<x>Fixed<index>`
+    Fixed(u16),
+    /// `M<x>Fixed<index>sub<sub>`
+    FixedSub(u16, u8),
+    /// `M<x>SubExtends`
+    SubExtends,
+    /// `M<x>SubExt<index>`
+    SubExt(u16),
+    /// `M<x>SubExt<index>sub<sub>` (not in CiA 306 V1.3; kept in case a writer uses it)
+    SubExtSub(u16, u8),
+}
+
+/// Companion sections of an object.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Companion {
+    /// `[<index>Name]`
+    Name,
+    /// `[<index>Value]`
+    Value,
+    /// `[<index>Denotation]`
+    Denotation,
+    /// `[<index>ObjectLinks]`
+    ObjectLinks,
+}
+
+impl Companion {
+    /// The suffix CiA 306 uses.
+    pub fn suffix(self) -> &'static str {
+        match self {
+            Self::Name => "Name",
+            Self::Value => "Value",
+            Self::Denotation => "Denotation",
+            Self::ObjectLinks => "ObjectLinks",
+        }
+    }
+}
+
+/// The meaning of a section name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SectionKind {
+    /// `[FileInfo]`
+    FileInfo,
+    /// `[DeviceInfo]`
+    DeviceInfo,
+    /// `[DummyUsage]`
+    DummyUsage,
+    /// `[Comments]`
+    Comments,
+    /// One of the three object lists.
+    ObjectList(ObjectListKind),
+    /// `[DeviceComissioning]` in either spelling.
+    Commissioning(CommissioningSpelling),
+    /// `[Tools]`
+    Tools,
+    /// `[Tool<n>]`
+    Tool(u32),
+    /// `[DynamicChannels]`
+    DynamicChannels,
+    /// `[SupportedModules]`
+    SupportedModules,
+    /// `[ConnectedModules]`
+    ConnectedModules,
+    /// `[<index>]`
+    Object(u16),
+    /// `[<index>sub<sub>]`
+    Sub(u16, u8),
+    /// `[<index>Name]` and friends.
+    Companion(u16, Companion),
+    /// `M<x>...`
+    Module(u32, ModulePart),
+    /// Anything else.
+    Unknown,
+}
+
+impl SectionKind {
+    /// The section kind that decides duplicates (both commissioning spellings are one section).
+    pub fn identity(self) -> SectionKind {
+        match self {
+            Self::Commissioning(_) => Self::Commissioning(CommissioningSpelling::DeviceComissioning),
+            other => other,
+        }
+    }
+}
+
+/// Classifies a section name (case-insensitive, CiA 306 §4.2).
+pub fn classify(name: &str) -> SectionKind {
+    let lower = name.to_ascii_lowercase();
+    let fixed = match lower.as_str() {
+        "fileinfo" => Some(SectionKind::FileInfo),
+        "deviceinfo" => Some(SectionKind::DeviceInfo),
+        "dummyusage" => Some(SectionKind::DummyUsage),
+        "comments" => Some(SectionKind::Comments),
+        "mandatoryobjects" => Some(SectionKind::ObjectList(ObjectListKind::Mandatory)),
+        "optionalobjects" => Some(SectionKind::ObjectList(ObjectListKind::Optional)),
+        "manufacturerobjects" => Some(SectionKind::ObjectList(ObjectListKind::Manufacturer)),
+        "devicecomissioning" => Some(SectionKind::Commissioning(
+            CommissioningSpelling::DeviceComissioning,
+        )),
+        "devicecommissioning" => Some(SectionKind::Commissioning(
+            CommissioningSpelling::DeviceCommissioning,
+        )),
+        "tools" => Some(SectionKind::Tools),
+        "dynamicchannels" => Some(SectionKind::DynamicChannels),
+        "supportedmodules" => Some(SectionKind::SupportedModules),
+        "connectedmodules" => Some(SectionKind::ConnectedModules),
+        _ => None,
+    };
+    if let Some(kind) = fixed {
+        return kind;
+    }
+    if let Some(n) = lower.strip_prefix("tool").and_then(decimal_key) {
+        return SectionKind::Tool(n);
+    }
+    if let Some(kind) = classify_module(&lower) {
+        return kind;
+    }
+    classify_object(&lower).unwrap_or(SectionKind::Unknown)
+}
+
+/// The name CiA 306 gives a section of this kind (`None` for unknown sections).
+pub fn canonical_name(kind: SectionKind) -> Option<String> {
+    Some(match kind {
+        SectionKind::FileInfo => "FileInfo".to_owned(),
+        SectionKind::DeviceInfo => "DeviceInfo".to_owned(),
+        SectionKind::DummyUsage => "DummyUsage".to_owned(),
+        SectionKind::Comments => "Comments".to_owned(),
+        SectionKind::ObjectList(list) => list.section_name().to_owned(),
+        SectionKind::Commissioning(spelling) => spelling.section_name().to_owned(),
+        SectionKind::Tools => "Tools".to_owned(),
+        SectionKind::Tool(n) => format!("Tool{n}"),
+        SectionKind::DynamicChannels => "DynamicChannels".to_owned(),
+        SectionKind::SupportedModules => "SupportedModules".to_owned(),
+        SectionKind::ConnectedModules => "ConnectedModules".to_owned(),
+        SectionKind::Object(index) => format!("{index:X}"),
+        SectionKind::Sub(index, sub) => format!("{index:X}sub{sub:X}"),
+        SectionKind::Companion(index, c) => format!("{index:X}{}", c.suffix()),
+        SectionKind::Module(x, part) => match part {
+            ModulePart::Info => format!("M{x}ModuleInfo"),
+            ModulePart::Comments => format!("M{x}Comments"),
+            ModulePart::FixedObjects => format!("M{x}FixedObjects"),
+            ModulePart::Fixed(i) => format!("M{x}Fixed{i:X}"),
+            ModulePart::FixedSub(i, s) => format!("M{x}Fixed{i:X}sub{s:X}"),
+            ModulePart::SubExtends => format!("M{x}SubExtends"),
+            ModulePart::SubExt(i) => format!("M{x}SubExt{i:X}"),
+            ModulePart::SubExtSub(i, s) => format!("M{x}SubExt{i:X}sub{s:X}"),
+        },
+        SectionKind::Unknown => return None,
+    })
+}
+
+/// Whether a name has the `<index>sub<sub>` form with a sub-index that does not fit in 8 bits.
+pub fn is_sub_index_out_of_range(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    let Some(at) = lower.find("sub") else { return false };
+    let (head, tail) = (&lower[..at], &lower[at + 3..]);
+    parse_hex(head, 4).is_some()
+        && !tail.is_empty()
+        && tail.bytes().all(|b| b.is_ascii_hexdigit())
+        && tail.trim_start_matches('0').len() > 2
+}
+
+fn classify_module(lower: &str) -> Option<SectionKind> {
+    let rest = lower.strip_prefix('m')?;
+    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+    let x = decimal_key(rest.get(..digits)?)?;
+    let part = rest.get(digits..)?;
+    let part = match part {
+        "moduleinfo" => ModulePart::Info,
+        "comments" => ModulePart::Comments,
+        "fixedobjects" => ModulePart::FixedObjects,
+        "subextends" => ModulePart::SubExtends,
+        _ => {
+            if let Some(obj) = part.strip_prefix("subext") {
+                match parse_object_ref(obj)? {
+                    (index, None) => ModulePart::SubExt(index),
+                    (index, Some(sub)) => ModulePart::SubExtSub(index, sub),
+                }
+            } else if let Some(obj) = part.strip_prefix("fixed") {
+                match parse_object_ref(obj)? {
+                    (index, None) => ModulePart::Fixed(index),
+                    (index, Some(sub)) => ModulePart::FixedSub(index, sub),
+                }
+            } else {
+                return None;
+            }
+        }
+    };
+    Some(SectionKind::Module(x, part))
+}
+
+fn classify_object(lower: &str) -> Option<SectionKind> {
+    for (suffix, companion) in [
+        ("objectlinks", Companion::ObjectLinks),
+        ("denotation", Companion::Denotation),
+        ("value", Companion::Value),
+        ("name", Companion::Name),
+    ] {
+        if let Some(head) = lower.strip_suffix(suffix) {
+            return Some(SectionKind::Companion(parse_hex(head, 4)?, companion));
+        }
+    }
+    Some(match parse_object_ref(lower)? {
+        (index, None) => SectionKind::Object(index),
+        (index, Some(sub)) => SectionKind::Sub(index, sub),
+    })
+}
+
+fn parse_object_ref(text: &str) -> Option<(u16, Option<u8>)> {
+    match text.find("sub") {
+        Some(at) => {
+            let index = parse_hex(text.get(..at)?, 4)?;
+            let sub = parse_hex(text.get(at + 3..)?, 2)?;
+            Some((index, Some(u8::try_from(sub).ok()?)))
+        }
+        None => Some((parse_hex(text, 4)?, None)),
+    }
+}
+
+/// Parses up to `digits` significant hex digits (leading zeros allowed, reported by the caller).
+fn parse_hex(text: &str, digits: usize) -> Option<u16> {
+    if text.is_empty() || text.len() > 8 || !text.bytes().all(|b| b.is_ascii_hexdigit()) {
+        return None;
+    }
+    let significant = text.trim_start_matches('0');
+    if significant.len() > digits {
+        return None;
+    }
+    u16::from_str_radix(text, 16).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classifies_every_cia306_section() {
+        use SectionKind::*;
+        assert_eq!(classify("FileInfo"), FileInfo);
+        assert_eq!(
+            classify("DEVICECOMMISSIONING"),
+            Commissioning(CommissioningSpelling::DeviceCommissioning)
+        );
+        assert_eq!(classify("1018"), Object(0x1018));
+        assert_eq!(classify("1a00sub1F"), Sub(0x1A00, 0x1F));
+        assert_eq!(classify("1018SUB1"), Sub(0x1018, 1));
+        assert_eq!(classify("1018sub01"), Sub(0x1018, 1));
+        assert_eq!(
+            classify("1A00Denotation"),
+            Companion(0x1A00, self::Companion::Denotation)
+        );
+        assert_eq!(
+            classify("5800ObjectLinks"),
+            Companion(0x5800, self::Companion::ObjectLinks)
+        );
+        assert_eq!(classify("2000Name"), Companion(0x2000, self::Companion::Name));
+        assert_eq!(classify("M1ModuleInfo"), Module(1, ModulePart::Info));
+        assert_eq!(
+            classify("M12Fixed6423sub2"),
+            Module(12, ModulePart::FixedSub(0x6423, 2))
+        );
+        assert_eq!(classify("M2SubExt6000"), Module(2, ModulePart::SubExt(0x6000)));
+        assert_eq!(classify("Tool3"), Tool(3));
+        assert_eq!(classify("Supported Objects"), Unknown);
+        assert_eq!(classify("10000"), Unknown);
+        assert_eq!(classify("1018sub100"), Unknown);
+        assert_eq!(classify("StandardDataTypes"), Unknown);
+        assert!(is_sub_index_out_of_range("D000sub101"));
+        assert!(!is_sub_index_out_of_range("D000sub10"));
+    }
+
+    #[test]
+    fn canonical_names_round_trip() {
+        for name in [
+            "1018",
+            "1A00sub1F",
+            "2000Name",
+            "M1Fixed6423sub2",
+            "DeviceComissioning",
+            "Tool2",
+            "1018sub0",
+        ] {
+            assert_eq!(canonical_name(classify(name)).as_deref(), Some(name));
+        }
+    }
+}
