@@ -35,7 +35,12 @@ Exit codes:
   3  invalid input: a file, frame or value could not be read (the message names file:line)
   4  bus error: the CAN bus could not be opened, or the connection was lost
   5  output error: a result could not be written (file exists, disk full, permission)
-  6  check failed: the command ran and found a problem (e.g. frames lost in `demo`)";
+  6  check failed: the command ran and found a problem (e.g. frames lost in `demo`)
+
+`eds` commands follow diff(1) instead:
+  0  success (`eds diff`: both files describe the same device and object dictionary)
+  1  `eds diff`: the files differ
+  2  any trouble: bad arguments, a file that cannot be read, refused or written";
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum Command {
@@ -49,6 +54,143 @@ pub(crate) enum Command {
     /// Talk to CAN buses: serve a hub, monitor, send, replay, generate load, decode logs.
     #[command(subcommand)]
     Bus(BusCommand),
+    /// Read, show, convert, format and compare EDS/DCF files (CiA 306) and XDD/XDC files (CiA 311).
+    #[command(subcommand)]
+    Eds(EdsCommand),
+}
+
+#[derive(Debug, Subcommand)]
+pub(crate) enum EdsCommand {
+    /// Show the object dictionary of an EDS, DCF, XDD/XDC or canopener JSON file as a table.
+    #[command(after_help = "Examples:
+  canopener eds show device.eds
+  canopener eds show device.eds --object 1018        # one object (0x1018, 1018h and 1018 all mean 1018h)
+  canopener eds show device.eds --node-id 5          # also resolve $NODEID formulas for node 5
+  canopener eds show device.xdd --format json | jq '.objects[] | select(.pdo_mapping)'")]
+    Show(EdsShowArgs),
+    /// Convert between EDS, DCF, XDD/XDC and canopener's JSON form.
+    #[command(after_help = "Examples:
+  canopener eds convert device.eds --to json -o device.json
+  canopener eds convert device.eds --to dcf --node-id 5 --bitrate 250 -o node5.dcf
+  canopener eds convert node5.dcf --to eds                # drop the DCF additions, print to stdout
+  canopener eds convert device.eds --to xdd -o device.xdd # CiA 311 v1.1 (an XDC when the input is a DCF)
+  canopener eds convert device.xdd --to eds -o device.eds")]
+    Convert(EdsConvertArgs),
+    /// Rewrite a file as canonical CiA 306 text (section order, key spelling, CR/LF; values and comments kept).
+    #[command(after_help = "Examples:
+  canopener eds fmt device.eds                   # canonical text on stdout
+  canopener eds fmt device.eds -o clean.eds
+  canopener eds fmt device.eds --in-place        # keeps device.eds.bak
+  canopener eds fmt device.eds --check           # exit 1 if the file is not canonical")]
+    Fmt(EdsFmtArgs),
+    /// Semantic difference of two EDS/DCF/XDD files: objects and attributes added, removed or changed.
+    #[command(after_help = "Examples:
+  canopener eds diff firmware-1.2.eds firmware-1.3.eds
+  canopener eds diff vendor.eds vendor.xdd             # formats may differ; notation and layout do not count
+  canopener eds diff a.eds b.eds --format json | jq '.changes[] | select(.significant)'
+Exit status: 0 same device and object dictionary ([FileInfo] metadata may differ), 1 different, 2 trouble.")]
+    Diff(EdsDiffArgs),
+}
+
+/// How `eds` commands report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ReportFormat {
+    /// Text for people.
+    Human,
+    /// One JSON document for machines.
+    Json,
+}
+
+/// What `eds convert` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ConvertTarget {
+    /// canopener's versioned JSON form of the model (docs/eds-json.md).
+    Json,
+    /// A CiA 306 EDS (from a DCF: the DCF additions removed).
+    Eds,
+    /// A CiA 306 DCF for one node (needs --node-id and --bitrate unless the input is a DCF).
+    Dcf,
+    /// A CiA 311 v1.1 XDD, or an XDC when the input is a DCF.
+    Xdd,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct EdsShowArgs {
+    /// The file: EDS, DCF, XDD, XDC or canopener JSON.
+    pub(crate) file: PathBuf,
+    /// Show only this object (hexadecimal: 1018, 0x1018 or 1018h).
+    #[arg(long, value_parser = parse_index, value_name = "INDEX")]
+    pub(crate) object: Option<u16>,
+    /// Resolve $NODEID formulas for this node-ID (a DCF's own node-ID is used by default).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=127), value_name = "N")]
+    pub(crate) node_id: Option<u8>,
+    /// List every loading diagnostic, not just the summary.
+    #[arg(long)]
+    pub(crate) diagnostics: bool,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Human)]
+    pub(crate) format: ReportFormat,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct EdsConvertArgs {
+    /// The file: EDS, DCF, XDD, XDC or canopener JSON.
+    pub(crate) file: PathBuf,
+    /// The format to write.
+    #[arg(long, value_enum)]
+    pub(crate) to: ConvertTarget,
+    /// Write here (atomically) instead of stdout; never the input file.
+    #[arg(short, long, value_name = "OUT")]
+    pub(crate) output: Option<PathBuf>,
+    /// Node-ID of the DCF (1..127).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=127), value_name = "N")]
+    pub(crate) node_id: Option<u16>,
+    /// Bit rate of the DCF in kbit/s (10, 20, 50, 125, 250, 500, 800, 1000).
+    #[arg(long, value_name = "KBIT")]
+    pub(crate) bitrate: Option<u16>,
+    /// List every loading diagnostic, not just the summary.
+    #[arg(long)]
+    pub(crate) diagnostics: bool,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct EdsFmtArgs {
+    /// The EDS or DCF file.
+    pub(crate) file: PathBuf,
+    /// Write here (atomically) instead of stdout.
+    #[arg(short, long, value_name = "OUT", conflicts_with_all = ["in_place", "check"])]
+    pub(crate) output: Option<PathBuf>,
+    /// Replace the file itself, keeping the original as FILE.bak.
+    #[arg(long, conflicts_with = "check")]
+    pub(crate) in_place: bool,
+    /// Write nothing; exit 1 if the file is not in canonical form.
+    #[arg(long)]
+    pub(crate) check: bool,
+    /// List every loading diagnostic, not just the summary.
+    #[arg(long)]
+    pub(crate) diagnostics: bool,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct EdsDiffArgs {
+    /// The first (old) file.
+    pub(crate) a: PathBuf,
+    /// The second (new) file.
+    pub(crate) b: PathBuf,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Human)]
+    pub(crate) format: ReportFormat,
+}
+
+/// Reads an object index as CANopen tools write it: hexadecimal, with or without `0x` or `h`.
+pub(crate) fn parse_index(text: &str) -> Result<u16, String> {
+    let t = text.trim();
+    let digits = t
+        .strip_prefix("0x")
+        .or_else(|| t.strip_prefix("0X"))
+        .or_else(|| t.strip_suffix('h'))
+        .or_else(|| t.strip_suffix('H'))
+        .unwrap_or(t);
+    u16::from_str_radix(digits, 16)
+        .map_err(|_| format!("'{text}' is not an object index; write e.g. 1018, 0x1018 or 1018h"))
 }
 
 #[derive(Debug, Subcommand)]

@@ -42,6 +42,12 @@ pub(crate) enum CliError {
     /// A bug or an environment problem we did not anticipate.
     #[error(transparent)]
     Internal(#[from] anyhow::Error),
+    /// An `eds` command could not read, accept or write a file (exit 2, as diff(1) does for trouble).
+    #[error("{0}")]
+    EdsTrouble(String),
+    /// The command has already reported its result and ends with this exit code (e.g. `eds diff` → 1).
+    #[error("")]
+    Exit(u8),
 }
 
 impl CliError {
@@ -60,6 +66,8 @@ impl CliError {
             CliError::Output { .. } => exit_code::OUTPUT,
             CliError::CheckFailed(_) => exit_code::CHECK_FAILED,
             CliError::Internal(_) => exit_code::INTERNAL,
+            CliError::EdsTrouble(_) => exit_code::USAGE,
+            CliError::Exit(code) => *code,
         }
     }
 

@@ -12,15 +12,22 @@ mod bus_send;
 mod bus_serve;
 mod cli;
 mod demo;
+mod eds_convert;
+mod eds_diff;
+mod eds_fmt;
+mod eds_input;
+mod eds_input_xdd;
+mod eds_show;
 mod error;
 mod monitor;
+mod output_file;
 mod stop;
 
 use std::process::ExitCode;
 
 use clap::Parser;
 
-use crate::cli::{BusCommand, Cli, Command};
+use crate::cli::{BusCommand, Cli, Command, EdsCommand};
 use crate::error::{CliError, exit_code};
 
 fn main() -> ExitCode {
@@ -40,6 +47,7 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) if err.is_broken_pipe() => ExitCode::SUCCESS,
+        Err(CliError::Exit(code)) => ExitCode::from(code),
         Err(err) => {
             eprintln!("error: {err}");
             ExitCode::from(err.exit_code())
@@ -56,6 +64,10 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bus(BusCommand::Replay(args)) => bus_replay::run(args),
         Command::Bus(BusCommand::Gen(args)) => bus_gen::run(args),
         Command::Bus(BusCommand::Decode(args)) => bus_decode::run(args),
+        Command::Eds(EdsCommand::Show(args)) => eds_show::run(args),
+        Command::Eds(EdsCommand::Convert(args)) => eds_convert::run(args),
+        Command::Eds(EdsCommand::Fmt(args)) => eds_fmt::run(args),
+        Command::Eds(EdsCommand::Diff(args)) => eds_diff::run(args),
     }
 }
 

@@ -7,6 +7,8 @@
 )]
 mod support;
 
+mod eds;
+
 use std::process::Output;
 use std::time::Duration;
 
