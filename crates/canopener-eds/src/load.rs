@@ -47,6 +47,8 @@ pub fn build(document: &Document, diagnostics: &mut Vec<Diagnostic>) -> Eds {
         diags: diagnostics,
         eds: Eds::default(),
         key_case_seen: HashSet::new(),
+        list_sections: BTreeMap::new(),
+        seen_buffer: Vec::new(),
     };
     loader.run();
     loader.eds
@@ -57,18 +59,23 @@ struct Loader<'a> {
     diags: &'a mut Vec<Diagnostic>,
     eds: Eds,
     key_case_seen: HashSet<String>,
+    /// Section index of each object list, to point at its entries without a name lookup.
+    list_sections: BTreeMap<ObjectListKind, usize>,
+    /// Reused between sections, so reading a section allocates nothing but the values it keeps.
+    seen_buffer: Vec<(&'a str, usize)>,
 }
 
 /// Where an object's sections are, to point diagnostics at them.
 #[derive(Default)]
 struct Places {
-    objects: HashMap<u16, usize>,
-    subs: HashMap<(u16, u8), usize>,
+    objects: BTreeMap<u16, usize>,
+    subs: BTreeMap<(u16, u8), usize>,
 }
 
-impl Loader<'_> {
+impl<'a> Loader<'a> {
     fn run(&mut self) {
         let doc = self.doc;
+        // Objects and sub-objects (nearly every section) are told apart through `places`; the rest here.
         let mut first_of: HashMap<(SectionKind, String), usize> = HashMap::new();
         let mut places = Places::default();
         let mut subs: Vec<(u16, u8, usize)> = Vec::new();
@@ -78,15 +85,18 @@ impl Loader<'_> {
             let name = doc.section_name(section);
             let kind = section_name::classify(name);
             // Unknown sections are told apart by name; known ones by meaning (`[1018]` = `[01018]`).
-            let identity = (
-                kind.identity(),
-                if kind == SectionKind::Unknown {
-                    name.to_ascii_lowercase()
-                } else {
-                    String::new()
-                },
-            );
-            if let Some(&first) = first_of.get(&identity) {
+            let identity = match kind {
+                SectionKind::Object(_) | SectionKind::Sub(..) => None,
+                SectionKind::Unknown => Some((kind, name.to_ascii_lowercase())),
+                _ => Some((kind.identity(), String::new())),
+            };
+            let first = match (kind, &identity) {
+                (SectionKind::Object(index), _) => places.objects.get(&index).copied(),
+                (SectionKind::Sub(index, sub), _) => places.subs.get(&(index, sub)).copied(),
+                (_, Some(identity)) => first_of.get(identity).copied(),
+                _ => None,
+            };
+            if let Some(first) = first {
                 let first_line = doc.sections().get(first).map_or(0, |s| s.header_line + 1);
                 self.push(
                     Diagnostic::new(
@@ -101,19 +111,31 @@ impl Loader<'_> {
                 );
                 continue;
             }
-            first_of.insert(identity, i);
+            match (kind, identity) {
+                (SectionKind::Object(index), _) => {
+                    places.objects.insert(index, i);
+                }
+                (SectionKind::Sub(index, sub), _) => {
+                    places.subs.insert((index, sub), i);
+                }
+                (_, Some(identity)) => {
+                    first_of.insert(identity, i);
+                }
+                _ => {}
+            }
             self.check_section_spelling(section, kind);
             match kind {
-                SectionKind::FileInfo => self.eds.file_info = self.keyed::<FileInfoKeys>(section).0,
-                SectionKind::DeviceInfo => self.eds.device_info = self.keyed::<DeviceInfoKeys>(section).0,
+                SectionKind::FileInfo => self.eds.file_info = self.keyed::<FileInfoKeys>(section),
+                SectionKind::DeviceInfo => self.eds.device_info = self.keyed::<DeviceInfoKeys>(section),
                 SectionKind::DummyUsage => self.eds.dummy_usage = Some(self.properties(section)),
                 SectionKind::Comments => self.eds.comments = Some(self.properties(section)),
                 SectionKind::ObjectList(list) => {
+                    self.list_sections.insert(list, i);
                     let props = self.properties(section);
                     self.eds.object_lists.insert(list, ObjectList(props));
                 }
                 SectionKind::Commissioning(spelling) => {
-                    self.eds.commissioning = Some(self.keyed::<CommissioningKeys>(section).0);
+                    self.eds.commissioning = Some(self.keyed::<CommissioningKeys>(section));
                     self.eds.commissioning_spelling = spelling;
                 }
                 SectionKind::Tools => self.eds.tools = Some(self.properties(section)),
@@ -125,7 +147,7 @@ impl Loader<'_> {
                 SectionKind::SupportedModules => self.eds.supported_modules = Some(self.properties(section)),
                 SectionKind::ConnectedModules => self.eds.connected_modules = Some(self.properties(section)),
                 SectionKind::Object(index) => {
-                    let attributes = self.keyed::<AttributeKeys>(section).0;
+                    let attributes = self.keyed::<AttributeKeys>(section);
                     self.eds.objects.insert(
                         index,
                         Object {
@@ -133,7 +155,6 @@ impl Loader<'_> {
                             ..Object::default()
                         },
                     );
-                    places.objects.insert(index, i);
                 }
                 SectionKind::Sub(index, sub) => subs.push((index, sub, i)),
                 SectionKind::Companion(index, companion) => companions.push((index, companion, i)),
@@ -161,7 +182,7 @@ impl Loader<'_> {
             }
         }
         self.check_mandatory_sections(&first_of);
-        self.attach_subs(subs, &mut places);
+        self.attach_subs(subs);
         self.attach_companions(companions);
         self.load_modules(module_parts);
         self.expand_compact_sub_obj(&places);
@@ -212,12 +233,15 @@ impl Loader<'_> {
         self.diags.push(diagnostic);
     }
 
-    fn section_at(&self, i: usize) -> Option<&Section> {
+    fn section_at(&self, i: usize) -> Option<&'a Section> {
         self.doc.sections().get(i)
     }
 
     fn check_section_spelling(&mut self, section: &Section, kind: SectionKind) {
         let name = self.doc.section_name(section);
+        if section_name::is_canonical_object_name(name, kind) == Some(true) {
+            return;
+        }
         let Some(canonical) = section_name::canonical_name(kind) else {
             return;
         };
@@ -270,12 +294,16 @@ impl Loader<'_> {
     }
 
     /// Reads a section with a fixed key set.
-    fn keyed<K: KeySet>(&mut self, section: &Section) -> (K::Target, ()) {
+    fn keyed<K: KeySet>(&mut self, section: &Section) -> K::Target {
         let doc = self.doc;
         let section_name = doc.section_name(section);
         let mut target = K::Target::default();
-        let mut seen: HashMap<String, usize> = HashMap::new();
-        for &line in &section.entries {
+        let mut seen = KeysSeen {
+            keys: std::mem::take(&mut self.seen_buffer),
+            index: None,
+        };
+        seen.keys.clear();
+        for &line in doc.entries(section) {
             let Some((key, value)) = doc.entry(line) else {
                 continue;
             };
@@ -320,16 +348,21 @@ impl Loader<'_> {
                 }
             }
         }
-        (target, ())
+        self.seen_buffer = seen.keys;
+        target
     }
 
     /// Reads a section with free keys (lists, comments, ...).
     fn properties(&mut self, section: &Section) -> Properties {
         let doc = self.doc;
         let section_name = doc.section_name(section);
-        let mut seen = HashMap::new();
+        let mut seen = KeysSeen {
+            keys: std::mem::take(&mut self.seen_buffer),
+            index: None,
+        };
+        seen.keys.clear();
         let mut out = Vec::with_capacity(section.entries.len());
-        for &line in &section.entries {
+        for &line in doc.entries(section) {
             let Some((key, value)) = doc.entry(line) else {
                 continue;
             };
@@ -340,19 +373,14 @@ impl Loader<'_> {
                 });
             }
         }
+        self.seen_buffer = seen.keys;
         Properties(out)
     }
 
     /// Records a key; reports it and returns false when it repeats an earlier key of the section.
-    fn first_key(
-        &mut self,
-        seen: &mut HashMap<String, usize>,
-        section: &str,
-        key: &str,
-        line: usize,
-    ) -> bool {
-        match seen.get(&key.to_ascii_lowercase()) {
-            Some(&first) => {
+    fn first_key(&mut self, seen: &mut KeysSeen<'a>, section: &str, key: &'a str, line: usize) -> bool {
+        match seen.first(key) {
+            Some(first) => {
                 let kept = self.doc.entry(first).map_or("", |(_, v)| v);
                 self.push(
                     Diagnostic::new(
@@ -371,20 +399,20 @@ impl Loader<'_> {
                 false
             }
             None => {
-                seen.insert(key.to_ascii_lowercase(), line);
+                seen.insert(key, line);
                 true
             }
         }
     }
 
-    fn attach_subs(&mut self, subs: Vec<(u16, u8, usize)>, places: &mut Places) {
+    fn attach_subs(&mut self, subs: Vec<(u16, u8, usize)>) {
         for (index, sub, i) in subs {
-            let Some(section) = self.section_at(i).cloned() else {
+            let Some(section) = self.section_at(i) else {
                 continue;
             };
-            let attributes = self.keyed::<AttributeKeys>(&section).0;
+            let attributes = self.keyed::<AttributeKeys>(section);
             if !self.eds.objects.contains_key(&index) {
-                let name = self.doc.section_name(&section).to_owned();
+                let name = self.doc.section_name(section).to_owned();
                 self.push(
                     Diagnostic::new(
                         Code::OrphanSubObject,
@@ -412,19 +440,18 @@ impl Loader<'_> {
                         origin: Origin::Explicit,
                     },
                 );
-                places.subs.insert((index, sub), i);
             }
         }
     }
 
     fn attach_companions(&mut self, companions: Vec<(u16, Companion, usize)>) {
         for (index, companion, i) in companions {
-            let Some(section) = self.section_at(i).cloned() else {
+            let Some(section) = self.section_at(i) else {
                 continue;
             };
-            let props = self.properties(&section);
+            let props = self.properties(section);
             if !self.eds.objects.contains_key(&index) {
-                let name = self.doc.section_name(&section).to_owned();
+                let name = self.doc.section_name(section).to_owned();
                 self.push(
                     Diagnostic::new(
                         Code::OrphanCompanion,
@@ -464,11 +491,11 @@ impl Loader<'_> {
         let mut reported = HashSet::new();
         let mut fixed_subs = Vec::new();
         for (x, part, i) in parts {
-            let Some(section) = self.section_at(i).cloned() else {
+            let Some(section) = self.section_at(i) else {
                 continue;
             };
             if declared.is_none_or(|n| i128::from(x) > n || x == 0) && reported.insert(x) {
-                let name = self.doc.section_name(&section).to_owned();
+                let name = self.doc.section_name(section).to_owned();
                 self.push(
                     Diagnostic::new(
                         Code::UnlistedModule,
@@ -495,23 +522,23 @@ impl Loader<'_> {
             let _ = module;
             match part {
                 ModulePart::Info => {
-                    let info = self.keyed::<ModuleInfoKeys>(&section).0;
+                    let info = self.keyed::<ModuleInfoKeys>(section);
                     self.module(x).info = info;
                 }
                 ModulePart::Comments => {
-                    let p = self.properties(&section);
+                    let p = self.properties(section);
                     self.module(x).comments = Some(p);
                 }
                 ModulePart::FixedObjects => {
-                    let p = self.properties(&section);
+                    let p = self.properties(section);
                     self.module(x).fixed_objects = Some(p);
                 }
                 ModulePart::SubExtends => {
-                    let p = self.properties(&section);
+                    let p = self.properties(section);
                     self.module(x).sub_extends = Some(p);
                 }
                 ModulePart::Fixed(index) => {
-                    let attributes = self.keyed::<AttributeKeys>(&section).0;
+                    let attributes = self.keyed::<AttributeKeys>(section);
                     self.module(x).fixed.insert(
                         index,
                         Object {
@@ -521,7 +548,7 @@ impl Loader<'_> {
                     );
                 }
                 ModulePart::SubExt(index) => {
-                    let attributes = self.keyed::<AttributeKeys>(&section).0;
+                    let attributes = self.keyed::<AttributeKeys>(section);
                     self.module(x).sub_ext.insert(
                         index,
                         Object {
@@ -534,7 +561,7 @@ impl Loader<'_> {
             }
         }
         for (x, part, index, sub, section) in fixed_subs {
-            let attributes = self.keyed::<AttributeKeys>(&section).0;
+            let attributes = self.keyed::<AttributeKeys>(section);
             let module = self.module(x);
             let map = if matches!(part, ModulePart::FixedSub(..)) {
                 &mut module.fixed
@@ -569,11 +596,7 @@ impl Loader<'_> {
             let Some(raw) = object.attributes.compact_sub_obj.clone() else {
                 continue;
             };
-            let section = places
-                .objects
-                .get(&index)
-                .and_then(|&i| self.section_at(i))
-                .cloned();
+            let section = places.objects.get(&index).and_then(|&i| self.section_at(i));
             let line = section
                 .as_ref()
                 .and_then(|s| self.doc.find_entry(s, "CompactSubObj"));
@@ -723,6 +746,14 @@ impl Loader<'_> {
         }
     }
 
+    fn list_key_span(&self, list: ObjectListKind, key: &str) -> Span {
+        self.list_sections
+            .get(&list)
+            .and_then(|&i| self.doc.sections().get(i))
+            .and_then(|s| self.doc.find_entry(s, key))
+            .map_or(Span::default(), |l| self.doc.key_span(l))
+    }
+
     fn find_key_span(&self, section: &str, key: &str) -> Span {
         self.doc
             .section(section)
@@ -789,7 +820,7 @@ impl Loader<'_> {
             let entries: Vec<(u32, String)> = list.0.numbered().map(|(n, v)| (n, v.to_owned())).collect();
             match list.declared_count().map(|c| (c, int_of(c))) {
                 Some((_, Some(count))) if count != entries.len() as i128 => {
-                    let span = self.find_key_span(section_name, "SupportedObjects");
+                    let span = self.list_key_span(kind, "SupportedObjects");
                     self.push(
                         Diagnostic::new(
                             Code::MalformedObjectList,
@@ -803,7 +834,7 @@ impl Loader<'_> {
                     );
                 }
                 Some((raw, None)) => {
-                    let span = self.find_key_span(section_name, "SupportedObjects");
+                    let span = self.list_key_span(kind, "SupportedObjects");
                     self.push(
                         Diagnostic::new(
                             Code::MalformedObjectList,
@@ -821,7 +852,7 @@ impl Loader<'_> {
                 {
                     continue;
                 }
-                let span = self.find_key_span(section_name, &p.key);
+                let span = self.list_key_span(kind, &p.key);
                 self.push(
                     Diagnostic::new(
                         Code::MalformedObjectList,
@@ -837,7 +868,7 @@ impl Loader<'_> {
             for (n, value) in entries {
                 let key = n.to_string();
                 let Some(index) = int_of(&value).and_then(|v| u16::try_from(v).ok()) else {
-                    let span = self.find_key_span(section_name, &key);
+                    let span = self.list_key_span(kind, &key);
                     self.push(
                         Diagnostic::new(
                             Code::MalformedObjectList,
@@ -849,7 +880,7 @@ impl Loader<'_> {
                     continue;
                 };
                 if listed.insert(index, kind).is_some() {
-                    let span = self.find_key_span(section_name, &key);
+                    let span = self.list_key_span(kind, &key);
                     self.push(
                         Diagnostic::new(
                             Code::MalformedObjectList,
@@ -865,7 +896,7 @@ impl Loader<'_> {
                     .get(&index)
                     .is_some_and(|o| o.origin != Origin::Orphan);
                 if !exists {
-                    let span = self.find_key_span(section_name, &key);
+                    let span = self.list_key_span(kind, &key);
                     self.push(
                         Diagnostic::new(
                             Code::ListedObjectMissing,
@@ -907,41 +938,24 @@ impl Loader<'_> {
     }
 
     fn check_objects(&mut self, places: &Places) {
-        let objects: Vec<(u16, Object)> = self.eds.objects.iter().map(|(i, o)| (*i, o.clone())).collect();
-        for (index, object) in objects {
+        // The map is moved out while it is checked, so no object is cloned; it goes back unchanged.
+        let objects = std::mem::take(&mut self.eds.objects);
+        let mut checker = Checker {
+            doc: self.doc,
+            objects: &objects,
+            diags: &mut *self.diags,
+        };
+        for (&index, object) in &objects {
             if object.origin != Origin::Explicit {
                 continue;
             }
-            let section = places
+            if let Some(section) = places
                 .objects
                 .get(&index)
-                .and_then(|&i| self.section_at(i))
-                .cloned();
-            if let Some(section) = &section {
-                self.check_attributes(&object.attributes, section, None);
-                let explicit = object
-                    .subs
-                    .iter()
-                    .filter(|(s, sub)| sub.origin == Origin::Explicit && **s != 0xFF)
-                    .count();
-                if let Some(declared) = object.attributes.sub_number()
-                    && object.attributes.compact_sub_obj() == 0
-                    && declared != explicit as u64
-                {
-                    let line = self.doc.find_entry(section, "SubNumber");
-                    let span = line.map_or(self.doc.line_span(section.header_line), |l| {
-                        self.doc.value_span(l)
-                    });
-                    let name = self.doc.section_name(section).to_owned();
-                    self.push(
-                        Diagnostic::new(
-                            Code::SubNumberMismatch,
-                            span,
-                            format!("SubNumber={declared} but {explicit} sub-object section(s) are present"),
-                        )
-                        .at(Some(&name), Some("SubNumber")),
-                    );
-                }
+                .and_then(|&i| self.doc.sections().get(i))
+            {
+                checker.check_attributes(&object.attributes, section, None);
+                checker.check_sub_number(object, section);
             }
             for (sub, sub_object) in &object.subs {
                 if sub_object.origin != Origin::Explicit {
@@ -950,156 +964,13 @@ impl Loader<'_> {
                 if let Some(section) = places
                     .subs
                     .get(&(index, *sub))
-                    .and_then(|&i| self.section_at(i))
-                    .cloned()
+                    .and_then(|&i| self.doc.sections().get(i))
                 {
-                    self.check_attributes(&sub_object.attributes, &section, Some(&object));
+                    checker.check_attributes(&sub_object.attributes, section, Some(object));
                 }
             }
         }
-    }
-
-    /// Key obligations (CiA 306 §4.6.3.2 table) and typed values of one section.
-    fn check_attributes(&mut self, a: &Attributes, section: &Section, parent: Option<&Object>) {
-        let doc = self.doc;
-        let name = doc.section_name(section).to_owned();
-        let header = doc.line_span(section.header_line);
-        let value_span = |key: &str| doc.find_entry(section, key).map_or(header, |l| doc.value_span(l));
-        for key in [
-            "ObjectType",
-            "DataType",
-            "AccessType",
-            "PDOMapping",
-            "SubNumber",
-            "CompactSubObj",
-            "ObjFlags",
-        ] {
-            let Some(text) = a.get(key) else { continue };
-            if let Some(head) = crate::model::strip_inline_comment(text) {
-                self.push(
-                    Diagnostic::new(
-                        Code::InlineComment,
-                        value_span(key),
-                        format!(
-                            "{key}: `{}` after the value was ignored; CiA 306 has no inline comments",
-                            &text[head.len()..].trim()
-                        ),
-                    )
-                    .at(Some(&name), Some(key)),
-                );
-            }
-        }
-        let object_type = a.object_type();
-        if object_type.is_none() {
-            let raw = a.object_type.clone().unwrap_or_default();
-            self.push(
-                Diagnostic::new(Code::UnknownObjectType, value_span("ObjectType"), format!("ObjectType `{raw}` is not defined"))
-                    .at(Some(&name), Some("ObjectType"))
-                    .with_help("use 0x7 (VAR), 0x8 (ARRAY), 0x9 (RECORD), 0x2 (DOMAIN), 0x5 (DEFTYPE) or 0x6 (DEFSTRUCT)"),
-            );
-        }
-        let compact = a.compact_sub_obj() != 0;
-        let structured = object_type.is_some_and(ObjectType::has_subs);
-        let mut required: Vec<&str> = vec!["ParameterName"];
-        match object_type {
-            Some(ObjectType::Var | ObjectType::DefType) => required.extend(["DataType", "AccessType"]),
-            Some(ObjectType::Array | ObjectType::Record | ObjectType::DefStruct) if parent.is_none() => {
-                if compact {
-                    required.extend(["DataType", "AccessType"]);
-                } else {
-                    required.push("SubNumber");
-                }
-            }
-            _ => {}
-        }
-        if structured && parent.is_none() && !compact && a.sub_number.is_none() {
-            // Reported below as missing SubNumber; nothing else to add.
-        }
-        for key in required {
-            if a.get(key).is_none_or(|v| v.trim().is_empty()) {
-                let kind = object_type.map_or("object".to_owned(), |t| t.to_string());
-                self.push(
-                    Diagnostic::new(Code::MissingKey, header, format!("{kind} [{name}] has no `{key}`"))
-                        .at(Some(&name), Some(key))
-                        .with_help(format!(
-                            "CiA 306 §4.6.3.2 makes `{key}` mandatory here; python canopen and lely fail without it"
-                        )),
-                );
-            }
-        }
-        if let Some(raw) = a.access_type.as_deref()
-            && !raw.trim().is_empty()
-            && a.access_type().is_none()
-        {
-            self.push(
-                Diagnostic::new(
-                    Code::UnknownAccessType,
-                    value_span("AccessType"),
-                    format!("AccessType `{raw}` is not defined"),
-                )
-                .at(Some(&name), Some("AccessType"))
-                .with_help("use ro, wo, rw, rwr, rww or const"),
-            );
-        }
-        let data_type = match (a.data_type.as_deref(), a.data_type()) {
-            (Some(raw), None) if !raw.trim().is_empty() => {
-                self.push(
-                    Diagnostic::new(
-                        Code::UnknownDataType,
-                        value_span("DataType"),
-                        format!("DataType `{raw}` is not a number"),
-                    )
-                    .at(Some(&name), Some("DataType")),
-                );
-                None
-            }
-            (_, Some(t)) => {
-                let resolved = self.eds.resolve_data_type(t);
-                if resolved.kind().is_none() && object_type != Some(ObjectType::DefType) {
-                    self.push(
-                        Diagnostic::new(
-                            Code::UnknownDataType,
-                            value_span("DataType"),
-                            format!(
-                                "DataType 0x{:04X} is neither a CiA 301 type nor defined in this file",
-                                t.0
-                            ),
-                        )
-                        .at(Some(&name), Some("DataType")),
-                    );
-                }
-                Some(resolved)
-            }
-            _ => None,
-        };
-        let Some(data_type) = data_type else { return };
-        for key in ["DefaultValue", "LowLimit", "HighLimit", "ParameterValue"] {
-            let Some(text) = a.get(key) else { continue };
-            if text.to_ascii_uppercase().contains("$NODEID") && !data_type.is_integer() {
-                self.push(
-                    Diagnostic::new(
-                        Code::NodeIdOnNonInteger,
-                        value_span(key),
-                        format!(
-                            "`{text}` uses $NODEID on a {data_type} entry; CiA 306 allows it only on integers"
-                        ),
-                    )
-                    .at(Some(&name), Some(key)),
-                );
-                continue;
-            }
-            // Strings of DOMAIN type are often file names or empty placeholders; only check non-empty octets.
-            if matches!(data_type.kind(), Some(TypeKind::Domain)) && key != "ParameterValue" {
-                continue;
-            }
-            let parsed = value::parse_value(text, data_type);
-            for issue in parsed.issues {
-                self.push(
-                    Diagnostic::new(issue.code, value_span(key), format!("{key}: {}", issue.message))
-                        .at(Some(&name), Some(key)),
-                );
-            }
-        }
+        self.eds.objects = objects;
     }
 
     fn check_pdo_pairs(&mut self, places: &Places) {
@@ -1137,6 +1008,189 @@ impl Loader<'_> {
                     )
                     .at(Some(&format!("{present:X}")), None)
                     .with_help("CiA 301 PDOs need both their communication and mapping objects; lely's dcfchk crashes here"),
+                );
+            }
+        }
+    }
+}
+
+/// Per-section checks that read the object map while the loader owns it.
+struct Checker<'a, 'd> {
+    doc: &'a Document,
+    objects: &'a BTreeMap<u16, Object>,
+    diags: &'d mut Vec<Diagnostic>,
+}
+
+impl Checker<'_, '_> {
+    fn push(&mut self, diagnostic: Diagnostic) {
+        self.diags.push(diagnostic);
+    }
+
+    /// `SubNumber` counts the sub-objects present, sub 0 included and FFh excluded (CiA 306 §4.6.3.2).
+    fn check_sub_number(&mut self, object: &Object, section: &Section) {
+        let explicit = object
+            .subs
+            .iter()
+            .filter(|(s, sub)| sub.origin == Origin::Explicit && **s != 0xFF)
+            .count();
+        if let Some(declared) = object.attributes.sub_number()
+            && object.attributes.compact_sub_obj() == 0
+            && declared != explicit as u64
+        {
+            let line = self.doc.find_entry(section, "SubNumber");
+            let span = line.map_or(self.doc.line_span(section.header_line), |l| {
+                self.doc.value_span(l)
+            });
+            let name = self.doc.section_name(section);
+            self.push(
+                Diagnostic::new(
+                    Code::SubNumberMismatch,
+                    span,
+                    format!("SubNumber={declared} but {explicit} sub-object section(s) are present"),
+                )
+                .at(Some(name), Some("SubNumber")),
+            );
+        }
+    }
+
+    /// Key obligations (CiA 306 §4.6.3.2 table) and typed values of one section.
+    fn check_attributes(&mut self, a: &Attributes, section: &Section, parent: Option<&Object>) {
+        let doc = self.doc;
+        let name = doc.section_name(section);
+        let header = doc.line_span(section.header_line);
+        let value_span = |key: &str| doc.find_entry(section, key).map_or(header, |l| doc.value_span(l));
+        for (key, text) in [
+            ("ObjectType", &a.object_type),
+            ("DataType", &a.data_type),
+            ("AccessType", &a.access_type),
+            ("PDOMapping", &a.pdo_mapping),
+            ("SubNumber", &a.sub_number),
+            ("CompactSubObj", &a.compact_sub_obj),
+            ("ObjFlags", &a.obj_flags),
+        ] {
+            let Some(text) = text.as_deref() else { continue };
+            if let Some(head) = crate::model::strip_inline_comment(text) {
+                self.push(
+                    Diagnostic::new(
+                        Code::InlineComment,
+                        value_span(key),
+                        format!(
+                            "{key}: `{}` after the value was ignored; CiA 306 has no inline comments",
+                            &text[head.len()..].trim()
+                        ),
+                    )
+                    .at(Some(name), Some(key)),
+                );
+            }
+        }
+        let object_type = a.object_type();
+        if object_type.is_none() {
+            let raw = a.object_type.clone().unwrap_or_default();
+            self.push(
+                Diagnostic::new(Code::UnknownObjectType, value_span("ObjectType"), format!("ObjectType `{raw}` is not defined"))
+                    .at(Some(name), Some("ObjectType"))
+                    .with_help("use 0x7 (VAR), 0x8 (ARRAY), 0x9 (RECORD), 0x2 (DOMAIN), 0x5 (DEFTYPE) or 0x6 (DEFSTRUCT)"),
+            );
+        }
+        let compact = a.compact_sub_obj() != 0;
+        let required: &[&str] = match object_type {
+            Some(ObjectType::Var | ObjectType::DefType) => &["ParameterName", "DataType", "AccessType"],
+            Some(ObjectType::Array | ObjectType::Record | ObjectType::DefStruct) if parent.is_none() => {
+                if compact {
+                    &["ParameterName", "DataType", "AccessType"]
+                } else {
+                    &["ParameterName", "SubNumber"]
+                }
+            }
+            _ => &["ParameterName"],
+        };
+        for &key in required {
+            if a.get(key).is_none_or(|v| v.trim().is_empty()) {
+                let kind = object_type.map_or("object".to_owned(), |t| t.to_string());
+                self.push(
+                    Diagnostic::new(Code::MissingKey, header, format!("{kind} [{name}] has no `{key}`"))
+                        .at(Some(name), Some(key))
+                        .with_help(format!(
+                            "CiA 306 §4.6.3.2 makes `{key}` mandatory here; python canopen and lely fail without it"
+                        )),
+                );
+            }
+        }
+        if let Some(raw) = a.access_type.as_deref()
+            && !raw.trim().is_empty()
+            && a.access_type().is_none()
+        {
+            self.push(
+                Diagnostic::new(
+                    Code::UnknownAccessType,
+                    value_span("AccessType"),
+                    format!("AccessType `{raw}` is not defined"),
+                )
+                .at(Some(name), Some("AccessType"))
+                .with_help("use ro, wo, rw, rwr, rww or const"),
+            );
+        }
+        let data_type = match (a.data_type.as_deref(), a.data_type()) {
+            (Some(raw), None) if !raw.trim().is_empty() => {
+                self.push(
+                    Diagnostic::new(
+                        Code::UnknownDataType,
+                        value_span("DataType"),
+                        format!("DataType `{raw}` is not a number"),
+                    )
+                    .at(Some(name), Some("DataType")),
+                );
+                None
+            }
+            (_, Some(t)) => {
+                let resolved = crate::model::resolve_data_type_in(self.objects, t);
+                if resolved.kind().is_none() && object_type != Some(ObjectType::DefType) {
+                    self.push(
+                        Diagnostic::new(
+                            Code::UnknownDataType,
+                            value_span("DataType"),
+                            format!(
+                                "DataType 0x{:04X} is neither a CiA 301 type nor defined in this file",
+                                t.0
+                            ),
+                        )
+                        .at(Some(name), Some("DataType")),
+                    );
+                }
+                Some(resolved)
+            }
+            _ => None,
+        };
+        let Some(data_type) = data_type else { return };
+        for (key, text) in [
+            ("DefaultValue", &a.default_value),
+            ("LowLimit", &a.low_limit),
+            ("HighLimit", &a.high_limit),
+            ("ParameterValue", &a.parameter_value),
+        ] {
+            let Some(text) = text.as_deref() else { continue };
+            if value::mentions_nodeid(text) && !data_type.is_integer() {
+                self.push(
+                    Diagnostic::new(
+                        Code::NodeIdOnNonInteger,
+                        value_span(key),
+                        format!(
+                            "`{text}` uses $NODEID on a {data_type} entry; CiA 306 allows it only on integers"
+                        ),
+                    )
+                    .at(Some(name), Some(key)),
+                );
+                continue;
+            }
+            // Strings of DOMAIN type are often file names or empty placeholders; only check non-empty octets.
+            if matches!(data_type.kind(), Some(TypeKind::Domain)) && key != "ParameterValue" {
+                continue;
+            }
+            let parsed = value::parse_value(text, data_type);
+            for issue in parsed.issues {
+                self.push(
+                    Diagnostic::new(issue.code, value_span(key), format!("{key}: {}", issue.message))
+                        .at(Some(name), Some(key)),
                 );
             }
         }
@@ -1251,6 +1305,45 @@ fn generated_sub(name: &str, t: DataType, access: &str, default: &str, origin: O
     }
 }
 
+/// The keys already read in a section, to find repeats without allocating for the usual short section.
+#[derive(Default)]
+struct KeysSeen<'a> {
+    keys: Vec<(&'a str, usize)>,
+    /// Lower-cased keys, built once a section is long (object lists with thousands of entries).
+    index: Option<HashMap<String, usize>>,
+}
+
+impl<'a> KeysSeen<'a> {
+    const LINEAR_LIMIT: usize = 24;
+
+    fn first(&self, key: &str) -> Option<usize> {
+        match &self.index {
+            Some(index) => index.get(&key.to_ascii_lowercase()).copied(),
+            None => self
+                .keys
+                .iter()
+                .find(|(k, _)| k.eq_ignore_ascii_case(key))
+                .map(|(_, line)| *line),
+        }
+    }
+
+    fn insert(&mut self, key: &'a str, line: usize) {
+        if let Some(index) = &mut self.index {
+            index.insert(key.to_ascii_lowercase(), line);
+            return;
+        }
+        self.keys.push((key, line));
+        if self.keys.len() > Self::LINEAR_LIMIT {
+            self.index = Some(
+                self.keys
+                    .drain(..)
+                    .map(|(k, l)| (k.to_ascii_lowercase(), l))
+                    .collect(),
+            );
+        }
+    }
+}
+
 /// A section type with a fixed set of known keys.
 trait KeySet {
     type Target: Default;
@@ -1266,8 +1359,7 @@ macro_rules! key_set {
             type Target = $target;
             $(const RESERVED: &'static [&'static str] = $reserved;)?
             fn slot<'t>(target: &'t mut $target, key: &str) -> Option<(&'t mut Option<String>, &'static str)> {
-                let canonical = <$target>::KEYS.iter().find(|k| k.eq_ignore_ascii_case(key))?;
-                target.slot_mut(key).map(|slot| (slot, *canonical))
+                target.slot_with_key(key)
             }
             fn extra(target: &mut $target) -> &mut Vec<Property> {
                 &mut target.extra

@@ -104,6 +104,12 @@ macro_rules! keyed_section {
                 None
             }
 
+            /// The slot for a known key and the key's canonical spelling, in one pass.
+            pub fn slot_with_key(&mut self, key: &str) -> Option<(&mut Option<String>, &'static str)> {
+                $(if key.eq_ignore_ascii_case($key) { return Some((&mut self.$field, $key)); })*
+                None
+            }
+
             /// The value of a key, known or extra (case-insensitive).
             pub fn get(&self, key: &str) -> Option<&str> {
                 $(if key.eq_ignore_ascii_case($key) { return self.$field.as_deref(); })*
@@ -481,7 +487,7 @@ pub struct RawSection {
 }
 
 /// Which spelling a DCF used for its commissioning section.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
 pub enum CommissioningSpelling {
     /// `[DeviceComissioning]`, the spelling of CiA 306.
     #[default]
@@ -651,27 +657,7 @@ impl Eds {
     /// Resolves a data type to a basic CiA 301 type, following `DEFTYPE` objects in the file
     /// (CANFestival writes custom types that way; their sub 1 or value names the base type).
     pub fn resolve_data_type(&self, data_type: DataType) -> DataType {
-        if data_type.kind().is_some() {
-            return data_type;
-        }
-        let Some(def) = self.objects.get(&data_type.0) else {
-            return data_type;
-        };
-        let base = def
-            .attributes
-            .default_value
-            .as_deref()
-            .or_else(|| {
-                def.subs
-                    .get(&1)
-                    .and_then(|s| s.attributes.default_value.as_deref())
-            })
-            .and_then(int_of)
-            .and_then(|v| u16::try_from(v).ok());
-        match base.map(DataType) {
-            Some(t) if t.kind().is_some() => t,
-            _ => data_type,
-        }
+        resolve_data_type_in(&self.objects, data_type)
     }
 
     /// The typed default value of an object (sub `None`) or sub-object.
@@ -683,6 +669,31 @@ impl Eds {
         };
         let data_type = attributes.data_type().map(|t| self.resolve_data_type(t));
         typed(attributes.default_value.as_deref(), data_type).value
+    }
+}
+
+/// [`Eds::resolve_data_type`] over an object map (the loader checks objects while it owns the map).
+pub(crate) fn resolve_data_type_in(objects: &BTreeMap<u16, Object>, data_type: DataType) -> DataType {
+    if data_type.kind().is_some() {
+        return data_type;
+    }
+    let Some(def) = objects.get(&data_type.0) else {
+        return data_type;
+    };
+    let base = def
+        .attributes
+        .default_value
+        .as_deref()
+        .or_else(|| {
+            def.subs
+                .get(&1)
+                .and_then(|s| s.attributes.default_value.as_deref())
+        })
+        .and_then(int_of)
+        .and_then(|v| u16::try_from(v).ok());
+    match base.map(DataType) {
+        Some(t) if t.kind().is_some() => t,
+        _ => data_type,
     }
 }
 

@@ -3,7 +3,7 @@
 use crate::model::{CommissioningSpelling, ObjectListKind, decimal_key};
 
 /// The part of a modular device a `M<x>...` section describes (CiA 306 §6.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum ModulePart {
     /// `M<x>ModuleInfo`
     Info,
@@ -24,7 +24,7 @@ pub enum ModulePart {
 }
 
 /// Companion sections of an object.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Companion {
     /// `[<index>Name]`
     Name,
@@ -49,7 +49,7 @@ impl Companion {
 }
 
 /// The meaning of a section name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum SectionKind {
     /// `[FileInfo]`
     FileInfo,
@@ -172,6 +172,27 @@ pub fn is_sub_index_out_of_range(name: &str) -> bool {
         && tail.trim_start_matches('0').len() > 2
 }
 
+/// Whether `name` is already spelt as CiA 306 spells `kind`, decided without allocating for the
+/// object, sub-object and companion sections that make up nearly every file; `None` for other kinds.
+pub fn is_canonical_object_name(name: &str, kind: SectionKind) -> Option<bool> {
+    fn hex_len(v: u16) -> usize {
+        if v == 0 {
+            1
+        } else {
+            (16 - v.leading_zeros() as usize).div_ceil(4)
+        }
+    }
+    // The name already classified as `kind`, so only leading zeros or the case of `sub` can differ.
+    Some(match kind {
+        SectionKind::Object(i) => name.len() == hex_len(i),
+        SectionKind::Sub(i, s) => {
+            name.len() == hex_len(i) + 3 + hex_len(u16::from(s)) && name.contains("sub")
+        }
+        SectionKind::Companion(i, c) => name.len() == hex_len(i) + c.suffix().len(),
+        _ => return None,
+    })
+}
+
 fn classify_module(lower: &str) -> Option<SectionKind> {
     let rest = lower.strip_prefix('m')?;
     let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
@@ -279,6 +300,29 @@ mod tests {
         assert_eq!(classify("StandardDataTypes"), Unknown);
         assert!(is_sub_index_out_of_range("D000sub101"));
         assert!(!is_sub_index_out_of_range("D000sub10"));
+    }
+
+    #[test]
+    fn fast_canonical_check_agrees_with_canonical_name() {
+        for name in [
+            "1018",
+            "01018",
+            "1A00sub1F",
+            "1a00sub1f",
+            "1018SUB1",
+            "1018sub01",
+            "0sub0",
+            "2000Name",
+            "02000Name",
+        ] {
+            let kind = classify(name);
+            let slow = canonical_name(kind).is_some_and(|c| {
+                c == name
+                    || (c.eq_ignore_ascii_case(name) && name.contains("sub"))
+                    || (c.eq_ignore_ascii_case(name) && !matches!(kind, SectionKind::Sub(..)))
+            });
+            assert_eq!(is_canonical_object_name(name, kind), Some(slow), "{name}");
+        }
     }
 
     #[test]

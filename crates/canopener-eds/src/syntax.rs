@@ -11,6 +11,7 @@
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::ops::Range;
+use std::sync::OnceLock;
 
 use crate::diag::{Code, Diagnostic, Span};
 use crate::text::{self, Encoding, Unencodable};
@@ -85,8 +86,8 @@ pub struct Section {
     pub name: Range<usize>,
     /// Indices of the lines after the header up to (not including) the next header.
     pub body: Range<usize>,
-    /// Indices of the entry lines in the body, in order.
-    pub entries: Vec<usize>,
+    /// The entry lines of the body, as a range of [`Document::entry_lines`] (use [`Document::entries`]).
+    pub entries: Range<usize>,
 }
 
 /// A parsed EDS/DCF file that can be written back byte for byte.
@@ -96,7 +97,10 @@ pub struct Document {
     encoding: Encoding,
     lines: Vec<Line>,
     sections: Vec<Section>,
-    by_name: HashMap<String, Vec<usize>>,
+    /// Indices of every entry line inside a section, in order; sections own ranges of it.
+    entry_lines: Vec<usize>,
+    /// Section indices by lower-cased name, built on the first lookup (most loads never need it).
+    by_name: OnceLock<HashMap<String, Vec<usize>>>,
 }
 
 impl Document {
@@ -137,7 +141,8 @@ impl Document {
             encoding,
             lines,
             sections: Vec::new(),
-            by_name: HashMap::new(),
+            entry_lines: Vec::new(),
+            by_name: OnceLock::new(),
         };
         document.index_sections(diagnostics);
         document
@@ -165,9 +170,16 @@ impl Document {
 
     /// Indices (into [`Document::sections`]) of the sections with this name, compared case-insensitively.
     pub fn sections_named(&self, name: &str) -> &[usize] {
-        self.by_name
-            .get(&name.to_ascii_lowercase())
-            .map_or(&[], Vec::as_slice)
+        let by_name = self.by_name.get_or_init(|| {
+            let mut map: HashMap<String, Vec<usize>> = HashMap::new();
+            for (i, section) in self.sections.iter().enumerate() {
+                map.entry(self.slice(&section.name).to_ascii_lowercase())
+                    .or_default()
+                    .push(i);
+            }
+            map
+        });
+        by_name.get(&name.to_ascii_lowercase()).map_or(&[], Vec::as_slice)
     }
 
     /// The first section with this name (case-insensitive).
@@ -190,10 +202,19 @@ impl Document {
         }
     }
 
+    /// The line indices of a section's entries, in order.
+    pub fn entries(&self, section: &Section) -> &[usize] {
+        self.entry_lines.get(section.entries.clone()).unwrap_or(&[])
+    }
+
+    /// Every entry line inside a section, in file order.
+    pub fn entry_lines(&self) -> &[usize] {
+        &self.entry_lines
+    }
+
     /// The line index of the first entry with this key (case-insensitive) in a section.
     pub fn find_entry(&self, section: &Section, key: &str) -> Option<usize> {
-        section
-            .entries
+        self.entries(section)
             .iter()
             .copied()
             .find(|&l| self.entry(l).is_some_and(|(k, _)| k.eq_ignore_ascii_case(key)))
@@ -284,17 +305,19 @@ impl Document {
                 LineKind::Header { name } => {
                     if let Some(mut done) = current.take() {
                         done.body.end = i;
+                        done.entries.end = self.entry_lines.len();
                         self.sections.push(done);
                     }
+                    let first_entry = self.entry_lines.len();
                     current = Some(Section {
                         header_line: i,
                         name: name.clone(),
                         body: i + 1..i + 1,
-                        entries: Vec::new(),
+                        entries: first_entry..first_entry,
                     });
                 }
                 LineKind::Entry { key, .. } => match current.as_mut() {
-                    Some(section) => section.entries.push(i),
+                    Some(_) => self.entry_lines.push(i),
                     None => diagnostics.push(
                         Diagnostic::new(
                             Code::EntryOutsideSection,
@@ -312,11 +335,8 @@ impl Document {
         }
         if let Some(mut done) = current.take() {
             done.body.end = self.lines.len();
+            done.entries.end = self.entry_lines.len();
             self.sections.push(done);
-        }
-        for (i, section) in self.sections.iter().enumerate() {
-            let name = self.slice(&section.name).to_ascii_lowercase();
-            self.by_name.entry(name).or_default().push(i);
         }
     }
 }
@@ -448,35 +468,10 @@ fn strip_suffix_in_place(out: &mut String, suffix: &str) {
 
 fn split_lines(text: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<Line> {
     let bytes = text.as_bytes();
-    let mut lines = Vec::with_capacity(text.len() / 20 + 1);
-    let mut start = 0;
-    let mut i = 0;
-    while i < bytes.len() {
-        match bytes[i] {
-            b'\n' => {
-                lines.push((start, i, LineEnding::Lf));
-                i += 1;
-                start = i;
-            }
-            b'\r' => {
-                if bytes.get(i + 1) == Some(&b'\n') {
-                    lines.push((start, i, LineEnding::CrLf));
-                    i += 2;
-                } else {
-                    lines.push((start, i, LineEnding::Cr));
-                    i += 1;
-                }
-                start = i;
-            }
-            _ => i += 1,
-        }
-    }
-    if start < bytes.len() {
-        lines.push((start, bytes.len(), LineEnding::None));
-    }
-    let mut out = Vec::with_capacity(lines.len());
+    let mut out: Vec<Line> = Vec::with_capacity(text.len() / 24 + 1);
     let (mut saw_lf, mut saw_crlf, mut reported_cr) = (false, false, false);
-    for (number, (start, end, ending)) in lines.into_iter().enumerate() {
+    let mut emit = |start: usize, end: usize, ending: LineEnding, diagnostics: &mut Vec<Diagnostic>| {
+        let number = out.len();
         saw_lf |= ending == LineEnding::Lf;
         saw_crlf |= ending == LineEnding::CrLf;
         if ending == LineEnding::Cr && !reported_cr {
@@ -497,9 +492,37 @@ fn split_lines(text: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<Line> {
             ending,
             kind,
         });
+    };
+    let mut start = 0;
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'\n' => {
+                emit(start, i, LineEnding::Lf, diagnostics);
+                i += 1;
+                start = i;
+            }
+            b'\r' if bytes.get(i + 1) == Some(&b'\n') => {
+                emit(start, i, LineEnding::CrLf, diagnostics);
+                i += 2;
+                start = i;
+            }
+            b'\r' => {
+                emit(start, i, LineEnding::Cr, diagnostics);
+                i += 1;
+                start = i;
+            }
+            _ => i += 1,
+        }
+    }
+    if start < bytes.len() {
+        emit(start, bytes.len(), LineEnding::None, diagnostics);
     }
     if saw_lf && saw_crlf {
-        let first = out.iter().position(|l| l.ending != out[0].ending).unwrap_or(0);
+        let first = out
+            .iter()
+            .position(|l| out.first().is_some_and(|f| l.ending != f.ending))
+            .unwrap_or(0);
         diagnostics.push(Diagnostic::new(
             Code::MixedLineEndings,
             Span::new(u32_of(first + 1), 1, 0),
@@ -517,11 +540,11 @@ fn classify(
     diagnostics: &mut Vec<Diagnostic>,
 ) -> LineKind {
     let content = &text[start..end];
-    let trimmed = content.trim_start();
+    let trimmed = content.trim_ascii_start();
     let indent = content.len() - trimmed.len();
     let line_span =
         |column: usize, len: usize| Span::new(u32_of(number + 1), u32_of(column + 1), u32_of(len));
-    if trimmed.trim_end().is_empty() {
+    if trimmed.is_empty() {
         return LineKind::Blank;
     }
     let first = trimmed.as_bytes()[0];
@@ -624,10 +647,11 @@ fn classify(
     LineKind::Entry { key, value }
 }
 
+/// Trims ASCII white space (CiA 306 files are ASCII; Unicode-aware trimming costs a char decode per byte).
 fn trim_range(text: &str, range: Range<usize>) -> Range<usize> {
-    let slice = &text[range.clone()];
-    let leading = slice.len() - slice.trim_start().len();
-    let trimmed_len = slice.trim().len();
+    let bytes = &text.as_bytes()[range.clone()];
+    let leading = bytes.len() - bytes.trim_ascii_start().len();
+    let trimmed_len = bytes.trim_ascii().len();
     range.start + leading..range.start + leading + trimmed_len
 }
 

@@ -208,6 +208,13 @@ pub fn parse_integer(text: &str, issues: &mut Vec<Issue>) -> Option<IntLiteral> 
     })
 }
 
+/// Whether a value mentions `$NODEID` in any letter case.
+pub fn mentions_nodeid(text: &str) -> bool {
+    text.as_bytes()
+        .windows(7)
+        .any(|w| w.eq_ignore_ascii_case(b"$NODEID"))
+}
+
 /// Reads `text` as a value of `data_type` (`None` for types without a value syntax: records, unknown).
 pub fn parse_value(text: &str, data_type: DataType) -> Parsed {
     let mut parsed = Parsed::default();
@@ -276,7 +283,7 @@ fn parse_typed(text: &str, data_type: DataType, kind: TypeKind, issues: &mut Vec
         }
         TypeKind::Signed(bits) | TypeKind::Unsigned(bits) => {
             let signed = matches!(kind, TypeKind::Signed(_));
-            if text.to_ascii_uppercase().contains("$NODEID") {
+            if mentions_nodeid(text) {
                 return parse_formula(text, bits, signed, issues);
             }
             let mut local = Vec::new();

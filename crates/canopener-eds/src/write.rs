@@ -209,7 +209,7 @@ fn sync_section(
     if !appended.is_empty() {
         editor.append_to_section(section, appended);
     }
-    for &line in &section.entries {
+    for &line in document.entries(section) {
         if let Some((key, _)) = document.entry(line)
             && !model_keys.contains(&key.to_ascii_lowercase())
         {
