@@ -10,7 +10,9 @@ use std::fmt;
 
 use serde::Serialize;
 
-use crate::model::{Attributes, Eds, Object, Origin, Properties, int_of};
+use crate::model::{
+    Attributes, Eds, Object, Origin, Properties, REPRESENTATION_KEYS, SUB_CARRIED_KEYS, int_of,
+};
 use crate::types::DataType;
 use crate::value::parse_value;
 
@@ -242,8 +244,12 @@ fn compare_pairs(
             (Some((k, va)), Some((_, vb))) if !same_text_value(va, vb) => {
                 Some((ChangeKind::Changed, k, Some(va.clone()), Some(vb.clone())))
             }
-            (Some((k, va)), None) if !va.is_empty() => Some((ChangeKind::Removed, k, Some(va.clone()), None)),
-            (None, Some((k, vb))) if !vb.is_empty() => Some((ChangeKind::Added, k, None, Some(vb.clone()))),
+            (Some((k, va)), None) if !absent_means(k, va) => {
+                Some((ChangeKind::Removed, k, Some(va.clone()), None))
+            }
+            (None, Some((k, vb))) if !absent_means(k, vb) => {
+                Some((ChangeKind::Added, k, None, Some(vb.clone())))
+            }
             _ => None,
         };
         if let Some((kind, k, old, new)) = change {
@@ -257,6 +263,32 @@ fn compare_pairs(
             });
         }
     }
+}
+
+/// Keys whose absence means 0 (CiA 306 §4.5: a flag not set, no compact PDOs, no dynamic channels), so
+/// `CompactPDO=0` on one side and nothing on the other describe the same device.
+const ZERO_WHEN_ABSENT: &[&str] = &[
+    "CompactPDO",
+    "DynamicChannelsSupported",
+    "GroupMessaging",
+    "LSS_Supported",
+    "SimpleBootUpMaster",
+    "SimpleBootUpSlave",
+    "CANopenSafetySupported",
+    "BaudRate_10",
+    "BaudRate_20",
+    "BaudRate_50",
+    "BaudRate_125",
+    "BaudRate_250",
+    "BaudRate_500",
+    "BaudRate_800",
+    "BaudRate_1000",
+];
+
+/// Whether a key present on one side only says nothing the absent side does not.
+fn absent_means(key: &str, value: &str) -> bool {
+    value.trim().is_empty()
+        || (ZERO_WHEN_ABSENT.iter().any(|k| k.eq_ignore_ascii_case(key)) && int_of(value) == Some(0))
 }
 
 fn same_text_value(a: &str, b: &str) -> bool {
@@ -324,19 +356,6 @@ fn removed_or_added(kind: ChangeKind, section: String, attributes: &Attributes) 
         significant: true,
     }
 }
-
-/// Keys that only say how the file is written, not what the dictionary contains.
-const REPRESENTATION_KEYS: &[&str] = &["SubNumber", "CompactSubObj"];
-
-/// Keys of an ARRAY/RECORD object that describe its sub-objects.
-const SUB_CARRIED_KEYS: &[&str] = &[
-    "DataType",
-    "AccessType",
-    "DefaultValue",
-    "PDOMapping",
-    "LowLimit",
-    "HighLimit",
-];
 
 fn compare_attributes(
     section: &str,
@@ -454,6 +473,17 @@ mod tests {
             2,
             "FileName and ModificationDate are listed: {d:#?}"
         );
+    }
+
+    #[test]
+    fn zero_flags_equal_absent_flags() {
+        let b = A.replace(
+            "VendorNumber=0x10\n",
+            "VendorNumber=0x10\nCompactPDO=0\nLSS_Supported=0\n",
+        );
+        assert!(diff(&load(A.as_bytes()).eds, &load(b.as_bytes()).eds).is_equivalent());
+        let c = A.replace("VendorNumber=0x10\n", "VendorNumber=0x10\nLSS_Supported=1\n");
+        assert!(!diff(&load(A.as_bytes()).eds, &load(c.as_bytes()).eds).is_equivalent());
     }
 
     #[test]

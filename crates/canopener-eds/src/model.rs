@@ -356,6 +356,21 @@ impl Attributes {
     }
 }
 
+/// Keys that only say how a file is written, not what the dictionary contains: `SubNumber` follows from
+/// the sub-objects present, `CompactSubObj` is a compact form of them (CiA 306 §4.6.3.2, §4.6.3.4.2).
+pub const REPRESENTATION_KEYS: &[&str] = &["SubNumber", "CompactSubObj"];
+
+/// Keys an ARRAY/RECORD object carries only for its sub-objects (a compact array writes them on the
+/// object; an explicit one on each sub-object).
+pub const SUB_CARRIED_KEYS: &[&str] = &[
+    "DataType",
+    "AccessType",
+    "DefaultValue",
+    "PDOMapping",
+    "LowLimit",
+    "HighLimit",
+];
+
 /// Reads an integer without reporting issues (the loader reports them once). Text after a `;`
 /// is ignored when the whole does not read, as `0x0006 ; UNSIGNED16` is meant as 6.
 pub fn int_of(text: &str) -> Option<i128> {
@@ -640,7 +655,13 @@ impl Ord for ObjectListKind {
 impl Eds {
     /// Whether this is a DCF (it has a commissioning section or `LastEDS`).
     pub fn is_dcf(&self) -> bool {
-        self.commissioning.is_some() || self.file_info.last_eds.is_some()
+        // CANopenNode writes an empty `LastEDS=` into plain EDS files; only a named template counts.
+        self.commissioning.is_some()
+            || self
+                .file_info
+                .last_eds
+                .as_deref()
+                .is_some_and(|s| !s.trim().is_empty())
     }
 
     /// The node-ID of a DCF, if given and valid.

@@ -255,3 +255,36 @@ fn binary_garbage_loads_without_panicking() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn xdd_round_trip_and_powerlink_refusal() {
+    let dir = temp_dir("eds-xdd");
+    let baseline = fixture("baseline.eds");
+    let xdd = dir.join("baseline.xdd");
+    let back = dir.join("back.eds");
+    let made = run(&["eds", "convert", arg(&baseline), "--to", "xdd", "-o", arg(&xdd)]);
+    assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    let text = std::fs::read_to_string(&xdd).unwrap();
+    assert!(text.contains("ISO15745ProfileContainer") && text.contains("CANopenObjectList"), "{text}");
+    assert_eq!(run(&["eds", "convert", arg(&xdd), "--to", "eds", "-o", arg(&back)]).status.code(), Some(0));
+    let same = run(&["eds", "diff", arg(&baseline), arg(&xdd)]);
+    assert_eq!(same.status.code(), Some(0), "{}", stdout(&same));
+    assert_eq!(run(&["eds", "diff", arg(&baseline), arg(&back)]).status.code(), Some(0));
+    let shown = run(&["eds", "show", arg(&xdd), "--object", "1018"]);
+    assert!(stdout(&shown).contains("Vendor-ID"), "{}", stdout(&shown));
+
+    let powerlink = dir.join("powerlink.xdd");
+    std::fs::write(
+        &powerlink,
+        r#"<?xml version="1.0"?><ISO15745ProfileContainer xmlns="http://www.ethernet-powerlink.org"></ISO15745ProfileContainer>"#,
+    )
+    .unwrap();
+    let refused = run(&["eds", "show", arg(&powerlink)]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(stderr(&refused).contains("Ethernet POWERLINK"), "{}", stderr(&refused));
+    let broken = dir.join("broken.xdd");
+    std::fs::write(&broken, "<ISO15745ProfileContainer><unclosed>").unwrap();
+    let bad = run(&["eds", "show", arg(&broken)]);
+    assert_eq!(bad.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&dir);
+}

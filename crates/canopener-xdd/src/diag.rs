@@ -1,0 +1,200 @@
+//! Diagnostics produced while reading an XDD/XDC: a stable code, a severity, a message and a
+//! 1-based line/column in the XML text.
+//!
+//! Codes are stable across releases (tools and CI filters match on them). The `X` series belongs to
+//! the XDD reader; the EDS loader uses the `P` series with the same [`Severity`].
+
+use std::fmt;
+
+use canopener_eds::Severity;
+
+macro_rules! codes {
+    ($($(#[$doc:meta])* $variant:ident = $code:literal, $slug:literal, $severity:ident;)*) => {
+        /// The stable identity of an XDD reading diagnostic.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        pub enum XddCode {
+            $($(#[$doc])* $variant,)*
+        }
+
+        impl XddCode {
+            /// Every code, in numeric order.
+            pub const ALL: &'static [XddCode] = &[$(XddCode::$variant,)*];
+
+            /// The stable code, e.g. `X013`.
+            pub fn as_str(self) -> &'static str {
+                match self { $(XddCode::$variant => $code,)* }
+            }
+
+            /// A short kebab-case name, e.g. `sub-number-mismatch`.
+            pub fn slug(self) -> &'static str {
+                match self { $(XddCode::$variant => $slug,)* }
+            }
+
+            /// The severity this code is reported with.
+            pub fn severity(self) -> Severity {
+                match self { $(XddCode::$variant => Severity::$severity,)* }
+            }
+
+            /// Looks a code up by its stable string (`X013`) or its slug.
+            pub fn from_name(name: &str) -> Option<XddCode> {
+                XddCode::ALL.iter().copied().find(|c| c.as_str().eq_ignore_ascii_case(name) || c.slug() == name)
+            }
+        }
+    };
+}
+
+codes! {
+    /// The root element is in no namespace (EdsDcfNet writes such files); CiA 311 files are not
+    /// schema-valid that way, but the reader matches local names and reads it anyway.
+    NoNamespace = "X001", "no-namespace", Warning;
+    /// A CANopenEditor project wrapper (`.nxdd`); the single device inside was read.
+    ProjectWrapper = "X002", "project-wrapper", Info;
+    /// A profile, the object list or another part the reader needs is missing.
+    MissingPart = "X003", "missing-part", Error;
+    /// A `ProfileBody` without a CANopen `xsi:type`; its role was taken from its content.
+    ProfileType = "X004", "profile-type", Warning;
+    /// A `uniqueID` used twice; CiA 311 uses xsd:ID, unique in the document. The first is used.
+    DuplicateUniqueId = "X005", "duplicate-unique-id", Error;
+    /// A `uniqueIDRef` or `dataTypeIDRef` that names nothing (or the wrong kind of element).
+    UnresolvedReference = "X006", "unresolved-reference", Error;
+    /// An `index` or `subIndex` that is not a hex number in range; the entry is skipped.
+    InvalidIndex = "X010", "invalid-index", Error;
+    /// The same index or sub-index twice; the first one is used.
+    DuplicateEntry = "X011", "duplicate-entry", Error;
+    /// A hexBinary value with `0x`, an odd number of digits or an unusual width; read leniently.
+    HexNotation = "X012", "hex-notation", Info;
+    /// `subNumber` disagrees with the `CANopenSubObject` children; the children count.
+    SubNumberMismatch = "X013", "sub-number-mismatch", Warning;
+    /// A `CANopenObject` or `CANopenSubObject` without the required `name`.
+    MissingName = "X014", "missing-name", Warning;
+    /// A missing or unreadable `objectType`.
+    InvalidObjectType = "X015", "invalid-object-type", Error;
+    /// A `dataType` that is not a hex number, or an object whose data type cannot be determined.
+    InvalidDataType = "X020", "invalid-data-type", Error;
+    /// The object attribute and the referenced parameter say different things; the attribute is used.
+    ConflictingValues = "X021", "conflicting-values", Warning;
+    /// `access="noAccess"` has no CiA 306 access type; `AccessType` is left out.
+    NoAccess = "X022", "no-access", Info;
+    /// A token outside its CiA 311 vocabulary (access, PDOmapping, boolean, baud rate, ...).
+    UnknownToken = "X023", "unknown-token", Warning;
+    /// A `BITSTRING` parameter without an inline `dataType`: read as OCTET_STRING, or DOMAIN when it
+    /// has no default value (the CANopenEditor convention).
+    AmbiguousBitstring = "X024", "ambiguous-bitstring", Info;
+    /// Data type, access, default, limits or PDO mapping on an ARRAY/RECORD object itself; CiA 306
+    /// gives these keys to sub-objects only, so they are not carried into the EDS model.
+    ParentValuesIgnored = "X025", "parent-values-ignored", Info;
+    /// An OCTET_STRING or DOMAIN value written as space-separated bytes (`C8 3D BB`); joined as CiA
+    /// 306 writes it (`C83DBB`).
+    SpacedOctets = "X026", "spaced-octets", Info;
+    /// A `fileCreationDate`/`Time` or modification date/time that is not xsd:date/xsd:time.
+    DateTimeNotation = "X030", "date-time-notation", Warning;
+    /// A vendor or product ID in a questionable notation, or two sources that disagree.
+    IdNotation = "X031", "id-notation", Warning;
+    /// A baud rate that has no CiA 306 key (`100 Kbps`, `auto-baudRate`).
+    BaudRateWithoutKey = "X032", "baud-rate-without-key", Info;
+    /// An attribute CiA 311 does not define (CANopenEditor extensions and the like).
+    NonStandardAttribute = "X034", "non-standard-attribute", Info;
+    /// A `deviceCommissioning` value that is not usable as written (node-ID outside 1..=127, ...).
+    Commissioning = "X035", "commissioning", Warning;
+    /// A `dummy@entry` outside `Dummy0001=0` ... `Dummy0007=1`.
+    InvalidDummy = "X036", "invalid-dummy", Warning;
+    /// `key=value|...` pairs in `productText` (a Faulhaber/libedssharp convention) mapped to EDS keys.
+    PackedDescription = "X037", "packed-description", Info;
+    /// Text with line breaks, which an EDS value cannot hold; joined with spaces.
+    LineBreaks = "X038", "line-breaks", Info;
+    /// `property` elements (CANopenNode's `CO_*` and others) that have no CiA 306 key.
+    UnmappedProperties = "X039", "unmapped-properties", Info;
+    /// An object CANopenNode marks `CO_disabled`: CANopenEditor leaves it out of the device and of its
+    /// EDS export; the reader keeps it, as CiA 311 describes it.
+    DisabledObject = "X040", "disabled-object", Info;
+    /// A canopener side-channel property that could not be applied.
+    SideChannel = "X041", "side-channel", Warning;
+}
+
+impl fmt::Display for XddCode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// One finding about an XDD/XDC file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct XddDiagnostic {
+    /// The stable code.
+    pub code: XddCode,
+    /// The severity (that of the code).
+    pub severity: Severity,
+    /// What is wrong and what the reader did about it.
+    pub message: String,
+    /// 1-based line of the element or attribute concerned.
+    pub line: u32,
+    /// 1-based column (in characters).
+    pub column: u32,
+}
+
+impl XddDiagnostic {
+    /// A diagnostic with the code's severity.
+    pub fn new(code: XddCode, line: u32, column: u32, message: impl Into<String>) -> Self {
+        Self {
+            code,
+            severity: code.severity(),
+            message: message.into(),
+            line,
+            column,
+        }
+    }
+}
+
+impl fmt::Display for XddDiagnostic {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}:{}: {}[{}]: {}",
+            self.line, self.column, self.severity, self.code, self.message
+        )
+    }
+}
+
+/// A finding before it has a position: the mapping functions report these and the reader places them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Note {
+    pub code: XddCode,
+    pub message: String,
+}
+
+impl Note {
+    pub(crate) fn new(code: XddCode, message: impl Into<String>) -> Self {
+        Self {
+            code,
+            message: message.into(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_are_unique_sorted_and_x_prefixed() {
+        let names: Vec<&str> = XddCode::ALL.iter().map(|c| c.as_str()).collect();
+        let mut sorted = names.clone();
+        sorted.sort_unstable();
+        sorted.dedup();
+        assert_eq!(names, sorted);
+        assert!(names.iter().all(|n| n.starts_with('X') && n.len() == 4));
+        let mut slugs: Vec<&str> = XddCode::ALL.iter().map(|c| c.slug()).collect();
+        slugs.sort_unstable();
+        slugs.dedup();
+        assert_eq!(slugs.len(), XddCode::ALL.len());
+    }
+
+    #[test]
+    fn lookup_and_display() {
+        assert_eq!(XddCode::from_name("x013"), Some(XddCode::SubNumberMismatch));
+        assert_eq!(XddCode::from_name("no-access"), Some(XddCode::NoAccess));
+        assert_eq!(XddCode::from_name("X999"), None);
+        let d = XddDiagnostic::new(XddCode::NoAccess, 3, 7, "noAccess on 1001");
+        assert_eq!(d.to_string(), "3:7: info[X022]: noAccess on 1001");
+    }
+}

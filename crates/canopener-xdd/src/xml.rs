@@ -1,0 +1,253 @@
+//! The small amount of XML text handling the crate needs: escaping for the writer, characters XML 1.0
+//! cannot carry, line/column positions for the reader, and an indenting element writer.
+//!
+//! The writer emits a fixed, known set of names, so a full XML serialiser would add a dependency for
+//! little gain; escaping is the only delicate part and is tested here (XML 1.0 §2.2, §2.4, §3.3.3).
+
+use std::fmt::Write as _;
+
+/// Whether XML 1.0 can carry a character at all (XML 1.0 §2.2 `Char`).
+pub(crate) fn is_xml_char(c: char) -> bool {
+    matches!(c, '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}' | '\u{10000}'..)
+}
+
+/// Replaces characters XML cannot carry with U+FFFD (the side channel keeps the original).
+pub(crate) fn sanitize(text: &str) -> String {
+    text.chars()
+        .map(|c| if is_xml_char(c) { c } else { '\u{FFFD}' })
+        .collect()
+}
+
+/// Escapes text for a double-quoted attribute value. Tab, CR and LF become character references so
+/// that attribute-value normalisation (XML 1.0 §3.3.3) gives them back unchanged.
+pub(crate) fn escape_attribute(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\t' => out.push_str("&#x9;"),
+            '\n' => out.push_str("&#xA;"),
+            '\r' => out.push_str("&#xD;"),
+            c if is_xml_char(c) => out.push(c),
+            _ => out.push('\u{FFFD}'),
+        }
+    }
+    out
+}
+
+/// Escapes element content. CR becomes a reference because parsers turn CR LF into LF (XML 1.0 §2.11).
+pub(crate) fn escape_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '\r' => out.push_str("&#xD;"),
+            c if is_xml_char(c) => out.push(c),
+            _ => out.push('\u{FFFD}'),
+        }
+    }
+    out
+}
+
+/// Encodes a side-channel value so that it survives XML: `%` and characters XML cannot carry become
+/// `%XXXX` (the UTF-16 code unit in hex; these characters are all in the BMP).
+pub(crate) fn percent_encode(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c == '%' || !is_xml_char(c) {
+            let _ = write!(out, "%{:04X}", u32::from(c));
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// Reverses [`percent_encode`]; `None` if the text is not a valid encoding.
+pub(crate) fn percent_decode(text: &str) -> Option<String> {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(at) = rest.find('%') {
+        out.push_str(rest.get(..at)?);
+        let digits = rest.get(at + 1..at + 5)?;
+        if !digits.bytes().all(|b| b.is_ascii_hexdigit()) {
+            return None;
+        }
+        out.push(char::from_u32(u32::from_str_radix(digits, 16).ok()?)?);
+        rest = rest.get(at + 5..)?;
+    }
+    out.push_str(rest);
+    Some(out)
+}
+
+/// Whether text needs [`percent_encode`] to survive as an attribute value.
+pub(crate) fn needs_encoding(text: &str) -> bool {
+    text.chars().any(|c| !is_xml_char(c))
+}
+
+/// Maps byte offsets of a text to 1-based line and character column.
+#[derive(Debug)]
+pub(crate) struct Positions<'a> {
+    text: &'a str,
+    line_starts: Vec<usize>,
+}
+
+impl<'a> Positions<'a> {
+    /// Indexes the line starts of `text` (LF, CR LF and bare CR end a line).
+    pub(crate) fn new(text: &'a str) -> Self {
+        let bytes = text.as_bytes();
+        let mut line_starts = vec![0];
+        for (i, &b) in bytes.iter().enumerate() {
+            let ends_line = b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n'));
+            if ends_line {
+                line_starts.push(i + 1);
+            }
+        }
+        Self { text, line_starts }
+    }
+
+    /// The 1-based line and column of a byte offset (clamped to the text).
+    pub(crate) fn at(&self, offset: usize) -> (u32, u32) {
+        let offset = offset.min(self.text.len());
+        let line = self
+            .line_starts
+            .partition_point(|&s| s <= offset)
+            .saturating_sub(1);
+        let start = self.line_starts.get(line).copied().unwrap_or(0);
+        let column = self
+            .text
+            .get(start..offset)
+            .map_or(offset - start, |s| s.chars().count());
+        (
+            u32::try_from(line + 1).unwrap_or(u32::MAX),
+            u32::try_from(column + 1).unwrap_or(u32::MAX),
+        )
+    }
+}
+
+/// An indenting writer of elements with escaped attributes.
+#[derive(Debug, Default)]
+pub(crate) struct XmlOut {
+    buf: String,
+    depth: usize,
+}
+
+impl XmlOut {
+    pub(crate) fn raw_line(&mut self, line: &str) {
+        self.indent();
+        self.buf.push_str(line);
+        self.buf.push('\n');
+    }
+
+    fn indent(&mut self) {
+        for _ in 0..self.depth {
+            self.buf.push_str("  ");
+        }
+    }
+
+    fn start_tag(&mut self, name: &str, attrs: &[(&str, String)]) {
+        self.indent();
+        self.buf.push('<');
+        self.buf.push_str(name);
+        for (key, value) in attrs {
+            let _ = write!(self.buf, " {key}=\"{}\"", escape_attribute(value));
+        }
+    }
+
+    /// `<name a="v">` and one level deeper.
+    pub(crate) fn open(&mut self, name: &str, attrs: &[(&str, String)]) {
+        self.start_tag(name, attrs);
+        self.buf.push_str(">\n");
+        self.depth += 1;
+    }
+
+    /// `</name>` one level up.
+    pub(crate) fn close(&mut self, name: &str) {
+        self.depth = self.depth.saturating_sub(1);
+        self.indent();
+        let _ = writeln!(self.buf, "</{name}>");
+    }
+
+    /// `<name a="v" />`, the CANopenEditor (.NET XmlSerializer) spelling of an empty element.
+    pub(crate) fn empty(&mut self, name: &str, attrs: &[(&str, String)]) {
+        self.start_tag(name, attrs);
+        self.buf.push_str(" />\n");
+    }
+
+    /// `<name a="v">text</name>`.
+    pub(crate) fn text(&mut self, name: &str, attrs: &[(&str, String)], text: &str) {
+        self.start_tag(name, attrs);
+        let _ = writeln!(self.buf, ">{}</{name}>", escape_text(text));
+    }
+
+    pub(crate) fn finish(self) -> String {
+        self.buf
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn attribute_escaping_survives_a_parser() {
+        let nasty = "a&b<c>d\"e'f\tg\nh\ri  j";
+        let xml = format!("<e v=\"{}\"/>", escape_attribute(nasty));
+        let doc = roxmltree::Document::parse(&xml).expect("escaped attribute parses");
+        assert_eq!(doc.root_element().attribute("v"), Some(nasty));
+    }
+
+    #[test]
+    fn text_escaping_survives_a_parser() {
+        let nasty = "x < y && z > w\r\nnext ]]> line";
+        let xml = format!("<e>{}</e>", escape_text(nasty));
+        let doc = roxmltree::Document::parse(&xml).expect("escaped text parses");
+        assert_eq!(doc.root_element().text(), Some(nasty));
+    }
+
+    #[test]
+    fn characters_xml_cannot_carry_are_replaced_or_encoded() {
+        assert_eq!(sanitize("a\u{1}b\u{FFFE}"), "a\u{FFFD}b\u{FFFD}");
+        assert_eq!(escape_attribute("\u{0}"), "\u{FFFD}");
+        assert!(needs_encoding("bell\u{7}"));
+        assert!(!needs_encoding("tab\tok"));
+        let original = "50% \u{1}\u{1F}\u{FFFF} done";
+        let encoded = percent_encode(original);
+        assert_eq!(encoded, "50%0025 %0001%001F%FFFF done");
+        assert!(!needs_encoding(&encoded));
+        assert_eq!(percent_decode(&encoded).as_deref(), Some(original));
+        assert_eq!(percent_decode("bad %zz12"), None);
+        assert_eq!(percent_decode("short %12"), None);
+    }
+
+    #[test]
+    fn positions_count_lines_and_characters() {
+        let text = "ab\nµc\r\nd\re";
+        let p = Positions::new(text);
+        assert_eq!(p.at(0), (1, 1));
+        assert_eq!(p.at(1), (1, 2));
+        assert_eq!(p.at(3), (2, 1));
+        assert_eq!(p.at(5), (2, 2), "µ is one character of two bytes");
+        assert_eq!(p.at(8), (3, 1));
+        assert_eq!(p.at(10), (4, 1));
+        assert_eq!(p.at(999), (4, 2));
+    }
+
+    #[test]
+    fn writer_indents_and_escapes() {
+        let mut out = XmlOut::default();
+        out.open("a", &[("x", "1&2".to_owned())]);
+        out.empty("b", &[]);
+        out.text("c", &[("lang", "en".to_owned())], "<hi>");
+        out.close("a");
+        assert_eq!(
+            out.finish(),
+            "<a x=\"1&amp;2\">\n  <b />\n  <c lang=\"en\">&lt;hi&gt;</c>\n</a>\n"
+        );
+    }
+}
