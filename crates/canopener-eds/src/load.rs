@@ -5,7 +5,7 @@
 //! [`Eds::other_sections`]; compact forms (CiA 306 §4.6.3.4) are expanded into generated objects and
 //! sub-objects marked with their [`Origin`], which the writers do not emit again.
 
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 
 use crate::diag::{Code, Diagnostic, Span};
 use crate::model::{
@@ -786,9 +786,7 @@ impl<'a> Loader<'a> {
         for (count, comm_base, map_base, receive) in
             [(rx, 0x1400u16, 0x1600u16, true), (tx, 0x1800, 0x1A00, false)]
         {
-            let explicit = (0..512u16)
-                .filter(|n| self.eds.objects.contains_key(&(comm_base + n)))
-                .count();
+            let explicit = self.eds.objects.range(comm_base..comm_base + 0x200).count();
             let mut implied = usize::try_from(count).unwrap_or(0).saturating_sub(explicit);
             let mut n = 0u16;
             while implied > 0 && n < 512 {
@@ -975,18 +973,19 @@ impl<'a> Loader<'a> {
 
     fn check_pdo_pairs(&mut self, places: &Places) {
         for (comm_base, map_base, what) in [(0x1400u16, 0x1600u16, "RPDO"), (0x1800, 0x1A00, "TPDO")] {
-            for n in 0..512u16 {
+            // Only PDO numbers some object uses are looked at; scanning all 512 costs small files dearly.
+            let present = |base: u16| -> BTreeSet<u16> {
+                self.eds
+                    .objects
+                    .range(base..base + 0x200)
+                    .filter(|(_, o)| o.origin != Origin::Orphan)
+                    .map(|(i, _)| i - base)
+                    .collect()
+            };
+            let (comms, maps) = (present(comm_base), present(map_base));
+            for n in comms.union(&maps).copied().collect::<Vec<u16>>() {
                 let (comm, map) = (comm_base + n, map_base + n);
-                let has_comm = self
-                    .eds
-                    .objects
-                    .get(&comm)
-                    .is_some_and(|o| o.origin != Origin::Orphan);
-                let has_map = self
-                    .eds
-                    .objects
-                    .get(&map)
-                    .is_some_and(|o| o.origin != Origin::Orphan);
+                let (has_comm, has_map) = (comms.contains(&n), maps.contains(&n));
                 if has_comm == has_map {
                     continue;
                 }
