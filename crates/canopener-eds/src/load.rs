@@ -17,6 +17,10 @@ use crate::syntax::{Document, Section};
 use crate::types::{DataType, ObjectType, TypeKind};
 use crate::value;
 
+/// Where a finding points when it has no section of its own (a generated object, a missing key): the
+/// start of the file, so every span names a real line.
+const FILE_START: Span = Span { line: 1, column: 1, len: 0 };
+
 /// A loaded file: the lossless document, the model and what was found on the way.
 #[derive(Debug, Clone)]
 pub struct Loaded {
@@ -600,7 +604,7 @@ impl<'a> Loader<'a> {
             let line = section
                 .as_ref()
                 .and_then(|s| self.doc.find_entry(s, "CompactSubObj"));
-            let span = line.map_or(Span::default(), |l| self.doc.value_span(l));
+            let span = line.map_or(FILE_START, |l| self.doc.value_span(l));
             let at = section.as_ref().map(|s| self.doc.section_name(s).to_owned());
             let n = match int_of(&raw) {
                 Some(n) => n,
@@ -751,14 +755,14 @@ impl<'a> Loader<'a> {
             .get(&list)
             .and_then(|&i| self.doc.sections().get(i))
             .and_then(|s| self.doc.find_entry(s, key))
-            .map_or(Span::default(), |l| self.doc.key_span(l))
+            .map_or(FILE_START, |l| self.doc.key_span(l))
     }
 
     fn find_key_span(&self, section: &str, key: &str) -> Span {
         self.doc
             .section(section)
             .and_then(|s| self.doc.find_entry(s, key))
-            .map_or(Span::default(), |l| self.doc.key_span(l))
+            .map_or(FILE_START, |l| self.doc.key_span(l))
     }
 
     /// CiA 306 §4.6.3.4.1: with `CompactPDO`, the PDOs `NrOfRXPDO`/`NrOfTXPDO` promise but the file does
@@ -919,7 +923,7 @@ impl<'a> Loader<'a> {
                 .objects
                 .get(&index)
                 .and_then(|&i| self.section_at(i))
-                .map_or(Span::default(), |s| self.doc.line_span(s.header_line));
+                .map_or(FILE_START, |s| self.doc.line_span(s.header_line));
             let list = ObjectListKind::for_index(index).section_name();
             self.push(
                 Diagnostic::new(
@@ -998,7 +1002,7 @@ impl<'a> Loader<'a> {
                     .objects
                     .get(&present)
                     .and_then(|&i| self.section_at(i))
-                    .map_or(Span::default(), |s| self.doc.line_span(s.header_line));
+                    .map_or(FILE_START, |s| self.doc.line_span(s.header_line));
                 self.push(
                     Diagnostic::new(
                         Code::PdoPairIncomplete,
