@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Benchmark suite (cargo xtask bench): release builds, then bench/run.py measures everything in one run and
-# writes bench-results/results.json plus the markdown tables for BENCHMARKS.md.
+# writes bench-results/results.json plus the markdown tables for BENCHMARKS.md; bench/eds_load.py then times
+# EDS loading against python canopen (bench-results/eds_load.md and .json).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 python="${CANOPENER_PYTHON:-.venv/bin/python}"
 cargo build --release --locked -p canopener-cli --bin canopener
 cargo build --release --locked -p canopener-hub --example hub_load
+cargo build --release --locked -p canopener-eds --example load_timing
 mkdir -p bench-results
 "$python" bench/run.py "$@"
+"$python" bench/eds_load.py "$@"
