@@ -19,7 +19,11 @@ use crate::value;
 
 /// Where a finding points when it has no section of its own (a generated object, a missing key): the
 /// start of the file, so every span names a real line.
-const FILE_START: Span = Span { line: 1, column: 1, len: 0 };
+const FILE_START: Span = Span {
+    line: 1,
+    column: 1,
+    len: 0,
+};
 
 /// A loaded file: the lossless document, the model and what was found on the way.
 #[derive(Debug, Clone)]

@@ -163,7 +163,10 @@ impl DataType {
 
     /// Whether values are integers (INTEGERn, UNSIGNEDn): the only types a `$NODEID` formula may describe.
     pub const fn is_integer(self) -> bool {
-        matches!(self.numeric_kind(), Some(NumericKind::Signed | NumericKind::Unsigned))
+        matches!(
+            self.numeric_kind(),
+            Some(NumericKind::Signed | NumericKind::Unsigned)
+        )
     }
 
     /// The size of a value in bits, or `None` for the variable-length types (strings, DOMAIN) and

@@ -265,11 +265,22 @@ fn xdd_round_trip_and_powerlink_refusal() {
     let made = run(&["eds", "convert", arg(&baseline), "--to", "xdd", "-o", arg(&xdd)]);
     assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
     let text = std::fs::read_to_string(&xdd).unwrap();
-    assert!(text.contains("ISO15745ProfileContainer") && text.contains("CANopenObjectList"), "{text}");
-    assert_eq!(run(&["eds", "convert", arg(&xdd), "--to", "eds", "-o", arg(&back)]).status.code(), Some(0));
+    assert!(
+        text.contains("ISO15745ProfileContainer") && text.contains("CANopenObjectList"),
+        "{text}"
+    );
+    assert_eq!(
+        run(&["eds", "convert", arg(&xdd), "--to", "eds", "-o", arg(&back)])
+            .status
+            .code(),
+        Some(0)
+    );
     let same = run(&["eds", "diff", arg(&baseline), arg(&xdd)]);
     assert_eq!(same.status.code(), Some(0), "{}", stdout(&same));
-    assert_eq!(run(&["eds", "diff", arg(&baseline), arg(&back)]).status.code(), Some(0));
+    assert_eq!(
+        run(&["eds", "diff", arg(&baseline), arg(&back)]).status.code(),
+        Some(0)
+    );
     let shown = run(&["eds", "show", arg(&xdd), "--object", "1018"]);
     assert!(stdout(&shown).contains("Vendor-ID"), "{}", stdout(&shown));
 
@@ -281,7 +292,11 @@ fn xdd_round_trip_and_powerlink_refusal() {
     .unwrap();
     let refused = run(&["eds", "show", arg(&powerlink)]);
     assert_eq!(refused.status.code(), Some(2));
-    assert!(stderr(&refused).contains("Ethernet POWERLINK"), "{}", stderr(&refused));
+    assert!(
+        stderr(&refused).contains("Ethernet POWERLINK"),
+        "{}",
+        stderr(&refused)
+    );
     let broken = dir.join("broken.xdd");
     std::fs::write(&broken, "<ISO15745ProfileContainer><unclosed>").unwrap();
     let bad = run(&["eds", "show", arg(&broken)]);
