@@ -771,55 +771,49 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     fn boolean(&mut self, node: Node<'a, 'input>, name: &str) -> Option<bool> {
-        let attr = node.attribute_node(name)?;
-        match parse_bool(attr.value()) {
-            Some((value, false)) => Some(value),
-            Some((value, true)) => {
-                self.push(
-                    attr.range().start,
-                    XddCode::UnknownToken,
-                    format!(
-                        "{name} `{}` is not an xsd:boolean (true, false); read as {value}",
-                        attr.value()
-                    ),
-                );
-                Some(value)
-            }
-            None => {
-                self.push(
-                    attr.range().start,
-                    XddCode::UnknownToken,
-                    format!("{name} `{}` is not a boolean; the default applies", attr.value()),
-                );
-                None
-            }
-        }
+        self.lenient_attribute(
+            node,
+            name,
+            parse_bool,
+            "is not an xsd:boolean (true, false)",
+            "is not a boolean",
+        )
     }
 
     fn number(&mut self, node: Node<'a, 'input>, name: &str) -> Option<u64> {
+        self.lenient_attribute(
+            node,
+            name,
+            parse_unsigned,
+            "is hexadecimal where CiA 311 has a decimal number",
+            "is not a number",
+        )
+    }
+
+    /// Reads an attribute with `parse`, which also says whether it had to be lenient; lenient and
+    /// unreadable values are reported (the latter fall back to the schema default).
+    fn lenient_attribute<T: std::fmt::Display>(
+        &mut self,
+        node: Node<'a, 'input>,
+        name: &str,
+        parse: fn(&str) -> Option<(T, bool)>,
+        lenient: &str,
+        unreadable: &str,
+    ) -> Option<T> {
         let attr = node.attribute_node(name)?;
-        match parse_unsigned(attr.value()) {
-            Some((value, false)) => Some(value),
-            Some((value, true)) => {
-                self.push(
-                    attr.range().start,
-                    XddCode::UnknownToken,
-                    format!(
-                        "{name} `{}` is hexadecimal where CiA 311 has a decimal number; read as {value}",
-                        attr.value()
-                    ),
-                );
-                Some(value)
-            }
-            None => {
-                self.push(
-                    attr.range().start,
-                    XddCode::UnknownToken,
-                    format!("{name} `{}` is not a number; the default applies", attr.value()),
-                );
-                None
-            }
-        }
+        let (message, value) = match parse(attr.value()) {
+            Some((value, false)) => return Some(value),
+            Some((value, true)) => (
+                format!("{name} `{}` {lenient}; read as {value}", attr.value()),
+                Some(value),
+            ),
+            None => (
+                format!("{name} `{}` {unreadable}; the default applies", attr.value()),
+                None,
+            ),
+        };
+        self.push(attr.range().start, XddCode::UnknownToken, message);
+        value
     }
 
     /// Records attributes CiA 311 does not define for an element (reported once per kind).
