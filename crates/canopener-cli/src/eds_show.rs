@@ -2,8 +2,8 @@
 
 use std::fmt::Write as _;
 
+use canopener_eds::ObjectType;
 use canopener_eds::model::{Attributes, Eds, Origin};
-use canopener_eds::{DataType, ObjectType};
 use serde::Serialize;
 
 use crate::cli::{EdsShowArgs, ReportFormat};
@@ -195,7 +195,7 @@ fn row(
         object_type: a
             .object_type()
             .map_or_else(|| a.object_type.clone().unwrap_or_default(), |t| t.to_string()),
-        data_type: data_type.filter(|_| value_keys).map(type_name),
+        data_type: data_type.filter(|_| value_keys).map(|t| t.to_string()),
         access: a.access_type.clone().filter(|_| value_keys),
         pdo_mapping: a.pdo_mapping(),
         default: a.default_value.clone().filter(|_| value_keys),
@@ -210,10 +210,6 @@ fn row(
             Origin::Orphan => "orphan",
         },
     }
-}
-
-fn type_name(t: DataType) -> String {
-    t.to_string()
 }
 
 fn table(rows: &[Row], out: &mut String) {

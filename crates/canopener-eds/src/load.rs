@@ -526,8 +526,6 @@ impl<'a> Loader<'a> {
                 }
                 _ => {}
             }
-            let module = self.eds.modules.entry(x).or_default();
-            let _ = module;
             match part {
                 ModulePart::Info => {
                     let info = self.keyed::<ModuleInfoKeys>(section);
@@ -664,7 +662,7 @@ impl<'a> Loader<'a> {
                     254
                 }
             };
-            self.check_compact_companions(index, count, &at);
+            self.check_compact_companions(index, count);
             let Some(object) = self.eds.objects.get_mut(&index) else {
                 continue;
             };
@@ -717,7 +715,7 @@ impl<'a> Loader<'a> {
         }
     }
 
-    fn check_compact_companions(&mut self, index: u16, count: u8, _at: &Option<String>) {
+    fn check_compact_companions(&mut self, index: u16, count: u8) {
         let Some(object) = self.eds.objects.get(&index) else {
             return;
         };
