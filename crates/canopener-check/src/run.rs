@@ -1,0 +1,69 @@
+//! Running the checks on one file and selecting which ones count.
+
+use canopener_eds::Loaded;
+
+use crate::context::Context;
+use crate::finding::Finding;
+use crate::registry::{self, CheckInfo};
+
+/// Which checks to report: `--only`, `--skip`, `--tag`.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Selection {
+    /// Report only these codes (or slugs); empty means all.
+    pub only: Vec<String>,
+    /// Never report these codes (or slugs).
+    pub skip: Vec<String>,
+    /// Report only checks carrying one of these tags (built-ins: their group name); empty means all.
+    pub tags: Vec<String>,
+}
+
+impl Selection {
+    /// Whether a check with this code, slug and tags is selected.
+    pub fn selects(&self, code: &str, slug: &str, tags: &[&str]) -> bool {
+        let named = |list: &[String]| {
+            list.iter()
+                .any(|n| n.eq_ignore_ascii_case(code) || n == slug)
+        };
+        (self.only.is_empty() || named(&self.only))
+            && !named(&self.skip)
+            && (self.tags.is_empty() || self.tags.iter().any(|t| tags.contains(&t.as_str())))
+    }
+
+    /// Whether a built-in check is selected.
+    pub fn selects_builtin(&self, info: &CheckInfo) -> bool {
+        self.selects(info.code, info.slug, &[info.group.name()])
+    }
+}
+
+/// The built-in findings for one file, sorted by position.
+#[derive(Debug, Clone, Default)]
+pub struct FileCheck {
+    /// Every finding, sorted by line, column, code.
+    pub findings: Vec<Finding>,
+}
+
+/// Runs every built-in check on a loaded file and keeps the selected findings.
+///
+/// `file_name` is the file's name without directories (for the `FileName` check).
+pub fn check(loaded: &Loaded, file_name: Option<&str>, selection: &Selection) -> FileCheck {
+    let cx = Context::new(loaded, file_name);
+    let mut findings = Vec::new();
+    crate::parse_codes::run(&cx, &mut findings);
+    crate::group_a::run(&cx, &mut findings);
+    crate::group_b::run(&cx, &mut findings);
+    crate::group_c::run(&cx, &mut findings);
+    crate::group_d::run(&cx, &mut findings);
+    crate::group_e::run(&cx, &mut findings);
+    crate::group_f::run(&cx, &mut findings);
+    crate::group_g::run(&cx, &mut findings);
+    crate::group_h::run(&cx, &mut findings);
+    crate::group_i::run(&cx, &mut findings);
+    crate::group_j::run(&cx, &mut findings);
+    crate::group_k::run(&cx, &mut findings);
+    crate::portability::run(&cx, &mut findings);
+    findings.retain(|f| {
+        registry::lookup(&f.code).is_none_or(|info| selection.selects_builtin(info))
+    });
+    findings.sort_by(|a, b| (a.span.line, a.span.column, &a.code).cmp(&(b.span.line, b.span.column, &b.code)));
+    FileCheck { findings }
+}

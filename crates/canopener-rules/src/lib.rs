@@ -1,0 +1,1 @@
+//! User rule packs for the EDS checker.
