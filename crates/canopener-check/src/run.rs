@@ -61,9 +61,14 @@ pub fn check(loaded: &Loaded, file_name: Option<&str>, selection: &Selection) ->
     crate::group_j::run(&cx, &mut findings);
     crate::group_k::run(&cx, &mut findings);
     crate::portability::run(&cx, &mut findings);
-    findings.retain(|f| {
-        registry::lookup(&f.code).is_none_or(|info| selection.selects_builtin(info))
-    });
+    if *selection != Selection::default() {
+        let dropped: std::collections::HashSet<&str> = registry::builtin()
+            .into_iter()
+            .filter(|info| !selection.selects_builtin(info))
+            .map(|info| info.code)
+            .collect();
+        findings.retain(|f| !dropped.contains(f.code.as_str()));
+    }
     findings.sort_by(|a, b| (a.span.line, a.span.column, &a.code).cmp(&(b.span.line, b.span.column, &b.code)));
     FileCheck { findings }
 }

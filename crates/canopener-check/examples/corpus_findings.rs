@@ -1,0 +1,71 @@
+//! Runs the built-in checks over every EDS/DCF of a directory and prints how often each code fires,
+//! with up to N examples per code, so severities can be reviewed against real vendor files.
+//!
+//! `cargo run -p canopener-check --example corpus_findings -- [DIR] [--code CODE] [--examples N]`
+//! (DIR defaults to `../shared/corpus/eds` from the workspace root).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use canopener_check::Selection;
+
+fn main() {
+    let mut dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/corpus/eds"));
+    let mut only: Option<String> = None;
+    let mut examples = 3usize;
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--code" => only = args.next(),
+            "--examples" => examples = args.next().and_then(|n| n.parse().ok()).unwrap_or(3),
+            other => dir = PathBuf::from(other),
+        }
+    }
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("eds") || e.eq_ignore_ascii_case("dcf"))
+        })
+        .collect();
+    paths.sort();
+    let mut by_code: BTreeMap<String, (usize, usize, Vec<String>)> = BTreeMap::new();
+    let mut severities: BTreeMap<String, String> = BTreeMap::new();
+    for path in &paths {
+        let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let loaded = canopener_eds::load(&bytes);
+        let name = path.file_name().and_then(|n| n.to_str());
+        let found = canopener_check::check(&loaded, name, &Selection::default()).findings;
+        let mut seen_here = std::collections::BTreeSet::new();
+        for f in found {
+            if only.as_deref().is_some_and(|c| !c.eq_ignore_ascii_case(&f.code)) {
+                continue;
+            }
+            severities.insert(f.code.clone(), f.severity.to_string());
+            let entry = by_code.entry(f.code.clone()).or_default();
+            entry.0 += 1;
+            if seen_here.insert(f.code.clone()) {
+                entry.1 += 1;
+            }
+            if entry.2.len() < examples {
+                entry.2.push(format!(
+                    "{}:{}:{} [{}] {}",
+                    name.unwrap_or("?"),
+                    f.span.line,
+                    f.span.column,
+                    f.section.as_deref().unwrap_or("-"),
+                    f.message
+                ));
+            }
+        }
+    }
+    println!("{} files in {}", paths.len(), dir.display());
+    for (code, (count, files, samples)) in &by_code {
+        println!("{code} {:<7} {count:>5} findings in {files:>3} files", severities[code]);
+        for s in samples {
+            println!("    {s}");
+        }
+    }
+}
