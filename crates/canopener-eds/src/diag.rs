@@ -84,9 +84,9 @@ macro_rules! codes {
 
 codes! {
     /// The file is not valid UTF-8 and was decoded as Windows-1252 (CiA 306 §4.2 wants ASCII).
-    Windows1252 = "P001", "windows-1252-fallback", Warning;
+    Windows1252 = "P001", "windows-1252-fallback", Error;
     /// The file starts with a UTF-8 byte order mark, which python canopen and lely cannot read.
-    ByteOrderMark = "P002", "utf8-bom", Info;
+    ByteOrderMark = "P002", "utf8-bom", Error;
     /// The file mixes LF and CR/LF line endings.
     MixedLineEndings = "P003", "mixed-line-endings", Info;
     /// A bare CR ends a line; CiA 306 §4.2 allows only LF or CR/LF.
@@ -96,7 +96,7 @@ codes! {
     /// A line that is neither blank, a comment, a section header nor `key=value`.
     NotAnEntry = "P011", "not-an-entry", Error;
     /// A section header or key that does not start in column 1.
-    Indented = "P012", "indented-line", Warning;
+    Indented = "P012", "indented-line", Error;
     /// White space between a key and its `=` (CiA 306 §4.2: the key is immediately followed by `=`).
     SpaceBeforeEquals = "P013", "space-before-equals", Warning;
     /// A comment that does not start with `;` in column 1.
@@ -128,11 +128,11 @@ codes! {
     /// An object list names an index that has no section.
     ListedObjectMissing = "P042", "listed-object-missing", Error;
     /// An object section that no object list names.
-    UnlistedObject = "P043", "unlisted-object", Warning;
+    UnlistedObject = "P043", "unlisted-object", Error;
     /// An object list entry that is not an index, or a list whose count disagrees with its entries.
     MalformedObjectList = "P044", "malformed-object-list", Error;
     /// `SubNumber` disagrees with the sub-object sections present.
-    SubNumberMismatch = "P045", "sub-number-mismatch", Warning;
+    SubNumberMismatch = "P045", "sub-number-mismatch", Error;
     /// A companion section entry (`[xxxxName]`, `[xxxxValue]`) outside 1..=CompactSubObj or not decimal.
     CompactEntryOutOfRange = "P046", "compact-entry-out-of-range", Error;
     /// A number that is not decimal, `0x` hexadecimal or `0` octal (CiA 306 §4.2).

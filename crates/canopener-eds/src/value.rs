@@ -87,7 +87,7 @@ impl Value {
     pub fn resolve(&self, node_id: u8) -> Option<i128> {
         match self {
             Self::Integer { value, .. } => Some(*value),
-            Self::NodeRelative { offset, .. } => Some(offset + i128::from(node_id)),
+            Self::NodeRelative { offset, .. } => offset.checked_add(i128::from(node_id)),
             Self::Boolean { value } => Some(i128::from(*value)),
             _ => None,
         }
@@ -380,7 +380,7 @@ fn parse_formula(text: &str, bits: u32, signed: bool, issues: &mut Vec<Issue>) -
     }
     let (min, max) = range_of(bits, signed);
     // lely's rule: the formula must fit for every node-ID 1..=127.
-    if offset + 1 < min || offset + 127 > max {
+    if offset.saturating_add(1) < min || offset.saturating_add(127) > max {
         issues.push(Issue {
             code: Code::OutOfRange,
             message: format!("`{text}` leaves the {bits}-bit range for some node-ID 1..=127"),
@@ -657,5 +657,19 @@ mod tests {
         );
         assert_eq!(value("", DataType::UNSIGNED8), (None, vec![]));
         assert_eq!(value("anything", DataType(0x0040)), (None, vec![]));
+    }
+
+    #[test]
+    fn huge_nodeid_offsets_are_out_of_range_not_an_overflow() {
+        let parsed = parse_value(
+            "$NODEID+170141183460469231731687303715884105700",
+            DataType::UNSIGNED32,
+        );
+        assert!(parsed.issues.iter().any(|i| i.code == Code::OutOfRange));
+        let huge = Value::NodeRelative {
+            offset: i128::MAX,
+            radix: Radix::Decimal,
+        };
+        assert_eq!(huge.resolve(1), None);
     }
 }

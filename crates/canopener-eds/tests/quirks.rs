@@ -545,7 +545,7 @@ fn listed_object_without_a_section_is_reported_at_its_list_entry() {
 fn unlisted_object_is_loaded_and_reported() {
     let q = Quirk::load("unlisted-object");
     assert_eq!(q.default_value(0x1017, None), Some(int(1000, Radix::Decimal)));
-    q.assert_diagnostics(&[(Code::UnlistedObject, Severity::Warning, q.line_of("[1017]"))]);
+    q.assert_diagnostics(&[(Code::UnlistedObject, Severity::Error, q.line_of("[1017]"))]);
     q.assert_model_is_baseline_with(|eds| {
         eds.object_lists.insert(
             ObjectListKind::Optional,
@@ -571,11 +571,7 @@ fn sub_number_above_the_sub_sections_present_is_reported() {
     let q = Quirk::load("sub-number-too-high");
     assert_eq!(q.eds().objects[&0x1018].attributes.sub_number(), Some(6));
     assert_eq!(q.eds().objects[&0x1018].subs.len(), 5);
-    q.assert_diagnostics(&[(
-        Code::SubNumberMismatch,
-        Severity::Warning,
-        q.line_of("SubNumber=6"),
-    )]);
+    q.assert_diagnostics(&[(Code::SubNumberMismatch, Severity::Error, q.line_of("SubNumber=6"))]);
     q.assert_model_is_baseline_with(|eds| attributes(eds, 0x1018, None).sub_number = Some("6".to_owned()));
 }
 
@@ -711,7 +707,7 @@ fn utf8_bom_is_kept_and_the_content_reads_as_the_baseline() {
     let q = Quirk::load("bom");
     assert!(q.bytes.starts_with(b"\xEF\xBB\xBF[FileInfo]"));
     assert_eq!(q.loaded.document.encoding(), Encoding::Utf8Bom);
-    q.assert_diagnostics(&[(Code::ByteOrderMark, Severity::Info, 1)]);
+    q.assert_diagnostics(&[(Code::ByteOrderMark, Severity::Error, 1)]);
     q.assert_model_is_baseline_with(|_| {});
 }
 
@@ -722,7 +718,7 @@ fn latin1_degree_sign_is_decoded_as_windows_1252() {
     let line = q.line_of(b"ParameterName=Temperature setpoint \xB0C");
     assert_eq!(q.loaded.document.encoding(), Encoding::Windows1252);
     assert_eq!(q.eds().objects[&0x2001].name(), "Temperature setpoint \u{B0}C");
-    q.assert_diagnostics(&[(Code::Windows1252, Severity::Warning, line)]);
+    q.assert_diagnostics(&[(Code::Windows1252, Severity::Error, line)]);
     let column = u32::try_from("ParameterName=Temperature setpoint ".len() + 1).unwrap();
     assert_eq!(q.loaded.diagnostics[0].span.column, column);
     q.assert_model_is_baseline_with(|eds| {
