@@ -63,7 +63,10 @@ fn main() {
     }
     println!("{} files in {}", paths.len(), dir.display());
     for (code, (count, files, samples)) in &by_code {
-        println!("{code} {:<7} {count:>5} findings in {files:>3} files", severities[code]);
+        println!(
+            "{code} {:<7} {count:>5} findings in {files:>3} files",
+            severities[code]
+        );
         for s in samples {
             println!("    {s}");
         }

@@ -113,7 +113,13 @@ impl<'a> Context<'a> {
     /// A finding about a section, or about one key of it when `key` is given. The span is the
     /// value of the entry (or the header when the key is missing); section and key are reported as
     /// written, falling back to the canonical names.
-    pub fn finding(&self, info: &CheckInfo, kind: SectionKind, key: Option<&str>, message: impl Into<String>) -> Finding {
+    pub fn finding(
+        &self,
+        info: &CheckInfo,
+        kind: SectionKind,
+        key: Option<&str>,
+        message: impl Into<String>,
+    ) -> Finding {
         let section = self.display_name(kind);
         match key {
             Some(key) => {

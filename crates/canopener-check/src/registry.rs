@@ -169,3 +169,64 @@ pub fn lookup(name: &str) -> Option<&'static CheckInfo> {
         .into_iter()
         .find(|c| c.code.eq_ignore_ascii_case(name) || c.slug == name)
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeSet;
+
+    use super::*;
+
+    #[test]
+    fn codes_and_slugs_are_unique() {
+        let all = builtin();
+        let codes: BTreeSet<&str> = all.iter().map(|c| c.code).collect();
+        let slugs: BTreeSet<&str> = all.iter().map(|c| c.slug).collect();
+        assert_eq!(codes.len(), all.len(), "a code is defined twice");
+        assert_eq!(slugs.len(), all.len(), "a slug is used twice");
+    }
+
+    #[test]
+    fn every_check_of_the_reference_list_is_implemented() {
+        let covered: BTreeSet<u8> = builtin()
+            .iter()
+            .flat_map(|c| c.reference.iter().copied())
+            .collect();
+        let missing: Vec<u8> = (1..=65).filter(|n| !covered.contains(n)).collect();
+        assert!(
+            missing.is_empty(),
+            "checks of eds-format-and-checks.md §10 without a code: {missing:?}"
+        );
+        assert!(
+            covered.iter().all(|n| (1..=65).contains(n)),
+            "a reference number outside 1..=65"
+        );
+    }
+
+    #[test]
+    fn every_check_is_documented_and_in_its_series() {
+        for check in builtin() {
+            assert!(
+                !check.title.is_empty() && !check.explanation.trim().is_empty(),
+                "{} undocumented",
+                check.code
+            );
+            assert!(
+                !check.spec.is_empty(),
+                "{} names no specification clause",
+                check.code
+            );
+            let series_ok = match check.group {
+                Group::Portability => check.code.starts_with('T'),
+                _ => check.code.starts_with('P') || check.code.starts_with('C'),
+            };
+            assert!(
+                series_ok,
+                "{} is in the wrong series for {}",
+                check.code, check.group
+            );
+        }
+        assert_eq!(lookup("c537").map(|c| c.slug), Some("sub0-not-highest-sub-index"));
+        assert_eq!(lookup("duplicate-section").map(|c| c.code), Some("P020"));
+        assert!(lookup("C999").is_none());
+    }
+}

@@ -20,10 +20,7 @@ pub struct Selection {
 impl Selection {
     /// Whether a check with this code, slug and tags is selected.
     pub fn selects(&self, code: &str, slug: &str, tags: &[&str]) -> bool {
-        let named = |list: &[String]| {
-            list.iter()
-                .any(|n| n.eq_ignore_ascii_case(code) || n == slug)
-        };
+        let named = |list: &[String]| list.iter().any(|n| n.eq_ignore_ascii_case(code) || n == slug);
         (self.only.is_empty() || named(&self.only))
             && !named(&self.skip)
             && (self.tags.is_empty() || self.tags.iter().any(|t| tags.contains(&t.as_str())))
@@ -69,6 +66,18 @@ pub fn check(loaded: &Loaded, file_name: Option<&str>, selection: &Selection) ->
             .collect();
         findings.retain(|f| !dropped.contains(f.code.as_str()));
     }
-    findings.sort_by(|a, b| (a.span.line, a.span.column, &a.code).cmp(&(b.span.line, b.span.column, &b.code)));
+    findings
+        .sort_by(|a, b| (a.span.line, a.span.column, &a.code).cmp(&(b.span.line, b.span.column, &b.code)));
     FileCheck { findings }
+}
+
+/// The findings with one code on an EDS text (for the groups' unit tests).
+#[cfg(test)]
+pub(crate) fn findings_with_code(text: &str, code: &str) -> Vec<Finding> {
+    let loaded = canopener_eds::load(text.as_bytes());
+    check(&loaded, None, &Selection::default())
+        .findings
+        .into_iter()
+        .filter(|f| f.code == code)
+        .collect()
 }
