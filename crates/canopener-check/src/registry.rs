@@ -170,6 +170,62 @@ pub fn lookup(name: &str) -> Option<&'static CheckInfo> {
         .find(|c| c.code.eq_ignore_ascii_case(name) || c.slug == name)
 }
 
+/// The catalogue of every built-in check as Markdown: `docs/checks.md`, where SARIF `helpUri` links
+/// and the HTML report point (`#c301` anchors). Kept in sync by a test.
+pub fn catalogue_markdown() -> String {
+    let all = builtin();
+    let mut out = String::from(
+        "# canopener's EDS/DCF checks\n\n\
+         Generated from the check registry (`crates/canopener-check/src/registry.rs`); do not edit by hand:\n\
+         `CANOPENER_UPDATE_DOCS=1 cargo test -p canopener-check --test docs` rewrites it.\n\
+         `canopener eds explain CODE` prints the same page on a terminal.\n\n\
+         Series: `P` found while loading, `C1xx`-`C9xx` checks by group of eds-format-and-checks.md §10\n\
+         (1 syntax, 2 FileInfo, 3 DeviceInfo and DummyUsage, 4 object lists, 5 object sections, 6 values,\n\
+         7 CiA 301, 8 DCF and modules, 9 reference profiles), `T` portability (how other tools misread a file).\n\n",
+    );
+    out.push_str(&format!(
+        "{} checks.\n\n| code | severity | group | fix | title |\n|---|---|---|---|---|\n",
+        all.len()
+    ));
+    for check in &all {
+        out.push_str(&format!(
+            "| [{}](#{}) | {} | {} | {} | {} |\n",
+            check.code,
+            check.code.to_ascii_lowercase(),
+            check.severity,
+            check.group,
+            if check.fixable { "yes" } else { "" },
+            check.title.replace('|', "\\|")
+        ));
+    }
+    for check in &all {
+        out.push_str(&format!(
+            "\n## {}\n\n`{}` · {} · {} · {}{}\n\n",
+            check.code,
+            check.slug,
+            check.severity,
+            check.group,
+            check.spec,
+            if check.fixable {
+                " · fixed by `canopener eds fix`"
+            } else {
+                ""
+            }
+        ));
+        out.push_str(&format!("**{}**\n\n", check.title));
+        let numbers: Vec<String> = check.reference.iter().map(u8::to_string).collect();
+        if !numbers.is_empty() {
+            out.push_str(&format!(
+                "Implements checks {} of eds-format-and-checks.md §10.\n\n",
+                numbers.join(", ")
+            ));
+        }
+        out.push_str(check.explanation.trim());
+        out.push('\n');
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use std::collections::BTreeSet;

@@ -38,8 +38,9 @@ Exit codes:
   6  check failed: the command ran and found a problem (e.g. frames lost in `demo`)
 
 `eds` commands follow diff(1) instead:
-  0  success (`eds diff`: both files describe the same device and object dictionary)
-  1  `eds diff`: the files differ
+  0  success (`eds diff`: both files describe the same device and object dictionary;
+     `eds check`/`eds fix`: no errors, or no warnings either with --deny warnings)
+  1  `eds diff`: the files differ; `eds check`/`eds fix`: errors found (or warnings with --deny warnings)
   2  any trouble: bad arguments, a file that cannot be read, refused or written";
 
 #[derive(Debug, Subcommand)]
@@ -90,6 +91,159 @@ pub(crate) enum EdsCommand {
   canopener eds diff a.eds b.eds --format json | jq '.changes[] | select(.significant)'
 Exit status: 0 same device and object dictionary ([FileInfo] metadata may differ), 1 different, 2 trouble.")]
     Diff(EdsDiffArgs),
+    /// Check EDS/DCF files against CiA 306/301, reference profiles, tool portability and rule packs.
+    #[command(after_help = "Examples:
+  canopener eds check device.eds
+  canopener eds check vendor/ 'more/*.dcf' --format sarif -o eds.sarif   # directories and globs, in parallel
+  canopener eds check device.eds --deny warnings                  # CI: warnings fail too
+  canopener eds check device.eds --rules project.toml --tag naming   # your own rules, only one tag
+  canopener eds check device.eds --skip T001,T004 --format json | jq '.summary'
+  canopener eds check vendor/ --format html -o report.html        # one self-contained page
+Exit status: 0 no errors, 1 errors found (or warnings with --deny warnings), 2 a file could not be read,
+or bad arguments.")]
+    Check(EdsCheckArgs),
+    /// Print the explanation of a check: what it verifies, why, the specification clause, how to fix it.
+    #[command(after_help = "Examples:
+  canopener eds explain C301
+  canopener eds explain sub-number-mismatch          # slugs work too
+  canopener eds explain paper/no-blank-names --rules seed-paper.toml")]
+    Explain(EdsExplainArgs),
+    /// List checks: built-in and from rule packs.
+    #[command(subcommand)]
+    Rules(EdsRulesCommand),
+    /// Apply the safe fixes (SubNumber, object lists, sub-index 0, section names, key spelling, rule-pack fixes).
+    #[command(after_help = "Examples:
+  canopener eds fix device.eds --dry-run             # show a unified diff, write nothing
+  canopener eds fix device.eds -o fixed.eds
+  canopener eds fix device.eds --in-place            # keeps device.eds.bak
+  canopener eds fix device.eds --in-place --only P045,P044
+  canopener eds fix device.eds --rules seed-paper.toml --dry-run
+Every untouched line stays byte-identical. Fixes that change what the file says about the device
+(e.g. a sub-index 0 default) are marked as such. Exit status: 0 no errors remain, 1 errors remain
+(or warnings with --deny warnings), 2 trouble.")]
+    Fix(EdsFixArgs),
+}
+
+/// `eds rules` subcommands.
+#[derive(Debug, Subcommand)]
+pub(crate) enum EdsRulesCommand {
+    /// Show every check, built-in and user, with its code, severity, tags and title.
+    #[command(after_help = "Examples:
+  canopener eds rules list
+  canopener eds rules list --tag portability
+  canopener eds rules list --rules seed-paper.toml --format json")]
+    List(EdsRulesListArgs),
+}
+
+/// Which checks run: shared by `eds check`, `eds fix` and `eds rules list`.
+#[derive(Debug, Clone, Args)]
+pub(crate) struct CheckSelectionArgs {
+    /// A rule pack (TOML, see crates/canopener-rules/README.md); repeatable.
+    #[arg(long = "rules", value_name = "PACK")]
+    pub(crate) rules: Vec<PathBuf>,
+    /// Only these checks (codes, slugs or rule ids, comma-separated).
+    #[arg(long, value_delimiter = ',', value_name = "CODES")]
+    pub(crate) only: Vec<String>,
+    /// Never these checks (codes, slugs or rule ids, comma-separated).
+    #[arg(long, value_delimiter = ',', value_name = "CODES")]
+    pub(crate) skip: Vec<String>,
+    /// Only checks with this tag (built-ins are tagged with their group, e.g. cia301, portability); repeatable.
+    #[arg(long, value_name = "TAG")]
+    pub(crate) tag: Vec<String>,
+}
+
+/// What `eds check` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum CheckFormat {
+    /// Compiler-style diagnostics with the source line, a caret and help.
+    Human,
+    /// One JSON document (docs/check-json.md).
+    Json,
+    /// SARIF 2.1.0 for GitHub/GitLab code scanning.
+    Sarif,
+    /// JUnit XML: one test case per check per file.
+    Junit,
+    /// One self-contained HTML page with filters and explanations.
+    Html,
+}
+
+/// What else fails `eds check` besides errors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum DenyLevel {
+    /// Warnings fail too.
+    Warnings,
+}
+
+/// When to color human output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ColorChoice {
+    /// When writing to a terminal and NO_COLOR is not set.
+    Auto,
+    /// Always.
+    Always,
+    /// Never.
+    Never,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct EdsCheckArgs {
+    /// Files, directories (every .eds/.dcf below) or glob patterns.
+    #[arg(required = true, value_name = "FILE|DIR|GLOB")]
+    pub(crate) inputs: Vec<String>,
+    #[command(flatten)]
+    pub(crate) selection: CheckSelectionArgs,
+    #[arg(long, value_enum, default_value_t = CheckFormat::Human)]
+    pub(crate) format: CheckFormat,
+    /// Write the report here (atomically) instead of stdout.
+    #[arg(short, long, value_name = "OUT")]
+    pub(crate) output: Option<PathBuf>,
+    /// Fail (exit 1) on warnings too.
+    #[arg(long, value_enum, value_name = "LEVEL")]
+    pub(crate) deny: Option<DenyLevel>,
+    #[arg(long, value_enum, default_value_t = ColorChoice::Auto)]
+    pub(crate) color: ColorChoice,
+    /// No per-code summary table at the end of human output.
+    #[arg(long)]
+    pub(crate) no_summary: bool,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct EdsExplainArgs {
+    /// A code (C301, P020, T004), a slug (sub-number-mismatch) or a rule id from --rules.
+    pub(crate) code: String,
+    /// A rule pack whose rules can be explained too; repeatable.
+    #[arg(long = "rules", value_name = "PACK")]
+    pub(crate) rules: Vec<PathBuf>,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Human)]
+    pub(crate) format: ReportFormat,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct EdsRulesListArgs {
+    #[command(flatten)]
+    pub(crate) selection: CheckSelectionArgs,
+    #[arg(long, value_enum, default_value_t = ReportFormat::Human)]
+    pub(crate) format: ReportFormat,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct EdsFixArgs {
+    /// The EDS or DCF file.
+    pub(crate) file: PathBuf,
+    /// Write the fixed file here (atomically) instead of stdout; never the input file.
+    #[arg(short, long, value_name = "OUT", conflicts_with = "in_place")]
+    pub(crate) output: Option<PathBuf>,
+    /// Rewrite the input file, keeping FILE.bak.
+    #[arg(long)]
+    pub(crate) in_place: bool,
+    /// Print a unified diff of the fixes and write nothing.
+    #[arg(long)]
+    pub(crate) dry_run: bool,
+    #[command(flatten)]
+    pub(crate) selection: CheckSelectionArgs,
+    /// Exit 1 when warnings remain too.
+    #[arg(long, value_enum, value_name = "LEVEL")]
+    pub(crate) deny: Option<DenyLevel>,
 }
 
 /// How `eds` commands report.

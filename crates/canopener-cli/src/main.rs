@@ -12,11 +12,16 @@ mod bus_send;
 mod bus_serve;
 mod cli;
 mod demo;
+mod eds_check;
+mod eds_check_inputs;
 mod eds_convert;
 mod eds_diff;
+mod eds_explain;
+mod eds_fix;
 mod eds_fmt;
 mod eds_input;
 mod eds_input_xdd;
+mod eds_rules;
 mod eds_show;
 mod error;
 mod monitor;
@@ -27,7 +32,12 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-use crate::cli::{BusCommand, Cli, Command, EdsCommand};
+use crate::cli::{BusCommand, Cli, Command, EdsCommand, EdsRulesCommand};
+
+// Loading and checking EDS files makes many small allocations (one owned string per value); mimalloc
+// serves them markedly faster than glibc's allocator (measured in BENCHMARKS.md).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 use crate::error::{CliError, exit_code};
 
 fn main() -> ExitCode {
@@ -68,6 +78,10 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Eds(EdsCommand::Convert(args)) => eds_convert::run(args),
         Command::Eds(EdsCommand::Fmt(args)) => eds_fmt::run(args),
         Command::Eds(EdsCommand::Diff(args)) => eds_diff::run(args),
+        Command::Eds(EdsCommand::Check(args)) => eds_check::run(args),
+        Command::Eds(EdsCommand::Explain(args)) => eds_explain::run(args),
+        Command::Eds(EdsCommand::Rules(EdsRulesCommand::List(args))) => eds_rules::list(args),
+        Command::Eds(EdsCommand::Fix(args)) => eds_fix::run(args),
     }
 }
 

@@ -8,6 +8,7 @@
 mod support;
 
 mod eds;
+mod eds_check;
 
 use std::process::Output;
 use std::time::Duration;
