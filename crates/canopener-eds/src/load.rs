@@ -6,6 +6,7 @@
 //! sub-objects marked with their [`Origin`], which the writers do not emit again.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
+use std::hash::{BuildHasherDefault, Hash, Hasher};
 
 use crate::diag::{Code, Diagnostic, Span};
 use crate::model::{
@@ -73,11 +74,42 @@ struct Loader<'a> {
     seen_buffer: Vec<(&'a str, usize)>,
 }
 
-/// Where an object's sections are, to point diagnostics at them.
+/// Where an object's sections are, to point diagnostics at them. Looked up once or twice per section
+/// and never iterated, so hash maps with [`IndexHasher`] serve better than ordered maps.
 #[derive(Default)]
 struct Places {
-    objects: BTreeMap<u16, usize>,
-    subs: BTreeMap<(u16, u8), usize>,
+    objects: HashMap<u16, usize, BuildHasherDefault<IndexHasher>>,
+    subs: HashMap<(u16, u8), usize, BuildHasherDefault<IndexHasher>>,
+}
+
+/// A multiplicative hash for the small keys of [`Places`] and [`KeysSeen`]: SipHash's resistance to
+/// chosen keys buys nothing here and costs more than the rest of the lookup.
+#[derive(Default)]
+struct IndexHasher(u64);
+
+impl IndexHasher {
+    fn add(&mut self, n: u64) {
+        self.0 = (self.0.rotate_left(16) ^ n).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
+
+impl Hasher for IndexHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        bytes.iter().for_each(|&b| self.add(u64::from(b)));
+    }
+
+    fn write_u8(&mut self, n: u8) {
+        self.add(u64::from(n));
+    }
+
+    fn write_u16(&mut self, n: u16) {
+        self.add(u64::from(n));
+    }
+
+    fn finish(&self) -> u64 {
+        // The product's high bits are the well-mixed ones; the table indexes with the low bits.
+        self.0.rotate_left(32)
+    }
 }
 
 impl<'a> Loader<'a> {
@@ -1098,19 +1130,23 @@ impl Checker<'_, '_> {
             );
         }
         let compact = a.compact_sub_obj() != 0;
-        let required: &[&str] = match object_type {
-            Some(ObjectType::Var | ObjectType::DefType) => &["ParameterName", "DataType", "AccessType"],
+        // Each key with its field: what `a.get(key)` finds, without matching the key against every field.
+        let name_key = ("ParameterName", &a.parameter_name);
+        let type_key = ("DataType", &a.data_type);
+        let access_key = ("AccessType", &a.access_type);
+        let required: &[(&str, &Option<String>)] = match object_type {
+            Some(ObjectType::Var | ObjectType::DefType) => &[name_key, type_key, access_key],
             Some(ObjectType::Array | ObjectType::Record | ObjectType::DefStruct) if parent.is_none() => {
                 if compact {
-                    &["ParameterName", "DataType", "AccessType"]
+                    &[name_key, type_key, access_key]
                 } else {
-                    &["ParameterName", "SubNumber"]
+                    &[name_key, ("SubNumber", &a.sub_number)]
                 }
             }
-            _ => &["ParameterName"],
+            _ => &[name_key],
         };
-        for &key in required {
-            if a.get(key).is_none_or(|v| v.trim().is_empty()) {
+        for &(key, text) in required {
+            if text.as_deref().is_none_or(|v| value::trim(v).is_empty()) {
                 let kind = object_type.map_or("object".to_owned(), |t| t.to_string());
                 self.push(
                     Diagnostic::new(Code::MissingKey, header, format!("{kind} [{name}] has no `{key}`"))
@@ -1122,7 +1158,7 @@ impl Checker<'_, '_> {
             }
         }
         if let Some(raw) = a.access_type.as_deref()
-            && !raw.trim().is_empty()
+            && !value::trim(raw).is_empty()
             && a.access_type().is_none()
         {
             self.push(
@@ -1136,7 +1172,7 @@ impl Checker<'_, '_> {
             );
         }
         let data_type = match (a.data_type.as_deref(), a.data_type()) {
-            (Some(raw), None) if !raw.trim().is_empty() => {
+            (Some(raw), None) if !value::trim(raw).is_empty() => {
                 self.push(
                     Diagnostic::new(
                         Code::UnknownDataType,
@@ -1314,8 +1350,9 @@ fn generated_sub(name: &str, t: DataType, access: &str, default: &str, origin: O
 #[derive(Default)]
 struct KeysSeen<'a> {
     keys: Vec<(&'a str, usize)>,
-    /// Lower-cased keys, built once a section is long (object lists with thousands of entries).
-    index: Option<HashMap<String, usize>>,
+    /// The keys by case-insensitive hash, built once a section is long (object lists with thousands of
+    /// entries).
+    index: Option<HashMap<Caseless<'a>, usize, BuildHasherDefault<IndexHasher>>>,
 }
 
 impl<'a> KeysSeen<'a> {
@@ -1323,7 +1360,7 @@ impl<'a> KeysSeen<'a> {
 
     fn first(&self, key: &str) -> Option<usize> {
         match &self.index {
-            Some(index) => index.get(&key.to_ascii_lowercase()).copied(),
+            Some(index) => index.get(&Caseless(key)).copied(),
             None => self
                 .keys
                 .iter()
@@ -1334,17 +1371,37 @@ impl<'a> KeysSeen<'a> {
 
     fn insert(&mut self, key: &'a str, line: usize) {
         if let Some(index) = &mut self.index {
-            index.insert(key.to_ascii_lowercase(), line);
+            index.insert(Caseless(key), line);
             return;
         }
         self.keys.push((key, line));
         if self.keys.len() > Self::LINEAR_LIMIT {
-            self.index = Some(
-                self.keys
-                    .drain(..)
-                    .map(|(k, l)| (k.to_ascii_lowercase(), l))
-                    .collect(),
-            );
+            self.index = Some(self.keys.drain(..).map(|(k, l)| (Caseless(k), l)).collect());
+        }
+    }
+}
+
+/// A key compared and hashed ignoring ASCII case, so long sections index their keys without
+/// allocating a lower-cased copy of each.
+struct Caseless<'a>(&'a str);
+
+impl PartialEq for Caseless<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.eq_ignore_ascii_case(other.0)
+    }
+}
+
+impl Eq for Caseless<'_> {}
+
+impl Hash for Caseless<'_> {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        // Lower-cased one stack buffer at a time: the bytes `to_ascii_lowercase` would give.
+        let mut buffer = [0u8; 32];
+        for chunk in self.0.as_bytes().chunks(buffer.len()) {
+            let lower = &mut buffer[..chunk.len()];
+            lower.copy_from_slice(chunk);
+            lower.make_ascii_lowercase();
+            state.write(lower);
         }
     }
 }

@@ -106,12 +106,23 @@ macro_rules! keyed_section {
 
             /// The slot for a known key and the key's canonical spelling, in one pass.
             pub fn slot_with_key(&mut self, key: &str) -> Option<(&mut Option<String>, &'static str)> {
+                // Nearly every key is spelt canonically: exact comparisons (a length test, then
+                // `memcmp`) find it sooner than case-folding comparisons byte by byte.
+                match key {
+                    $($key => return Some((&mut self.$field, $key)),)*
+                    _ => {}
+                }
                 $(if key.eq_ignore_ascii_case($key) { return Some((&mut self.$field, $key)); })*
                 None
             }
 
             /// The value of a key, known or extra (case-insensitive).
             pub fn get(&self, key: &str) -> Option<&str> {
+                // Exact spelling first, as in `slot_with_key`.
+                match key {
+                    $($key => return self.$field.as_deref(),)*
+                    _ => {}
+                }
                 $(if key.eq_ignore_ascii_case($key) { return self.$field.as_deref(); })*
                 self.extra.iter().find(|p| p.key.eq_ignore_ascii_case(key)).map(|p| p.value.as_str())
             }
@@ -306,7 +317,7 @@ keyed_section! {
 impl Attributes {
     /// The object type; a missing `ObjectType` means VAR (CiA 306 §4.6.3.2). `None` if unreadable.
     pub fn object_type(&self) -> Option<ObjectType> {
-        match self.object_type.as_deref().map(str::trim) {
+        match self.object_type.as_deref().map(value::trim) {
             None | Some("") => Some(ObjectType::Var),
             Some(text) => ObjectType::from_code(u64::try_from(int_of(text)?).ok()?),
         }
@@ -321,7 +332,7 @@ impl Attributes {
 
     /// The access type, if present and valid.
     pub fn access_type(&self) -> Option<AccessType> {
-        let raw = self.access_type.as_deref()?.trim();
+        let raw = value::trim(self.access_type.as_deref()?);
         AccessType::parse(raw).or_else(|| AccessType::parse(strip_inline_comment(raw)?))
     }
 
@@ -349,7 +360,7 @@ impl Attributes {
 
     /// `ObjFlags` as a number (0 when missing).
     pub fn obj_flags(&self) -> Option<u32> {
-        match self.obj_flags.as_deref().map(str::trim) {
+        match self.obj_flags.as_deref().map(value::trim) {
             None | Some("") => Some(0),
             Some(text) => u32::try_from(int_of(text)?).ok(),
         }

@@ -97,8 +97,18 @@ impl SectionKind {
 
 /// Classifies a section name (case-insensitive, CiA 306 §4.2).
 pub fn classify(name: &str) -> SectionKind {
-    let lower = name.to_ascii_lowercase();
-    let fixed = match lower.as_str() {
+    // Every section is classified on load; lower-casing the (short) name on the stack saves an
+    // allocation per section.
+    let mut buffer = [0u8; 64];
+    let owned;
+    let lower = match lowercase_on_stack(name, &mut buffer) {
+        Some(lower) => lower,
+        None => {
+            owned = name.to_ascii_lowercase();
+            owned.as_str()
+        }
+    };
+    let fixed = match lower {
         "fileinfo" => Some(SectionKind::FileInfo),
         "deviceinfo" => Some(SectionKind::DeviceInfo),
         "dummyusage" => Some(SectionKind::DummyUsage),
@@ -124,10 +134,19 @@ pub fn classify(name: &str) -> SectionKind {
     if let Some(n) = lower.strip_prefix("tool").and_then(decimal_key) {
         return SectionKind::Tool(n);
     }
-    if let Some(kind) = classify_module(&lower) {
+    if let Some(kind) = classify_module(lower) {
         return kind;
     }
-    classify_object(&lower).unwrap_or(SectionKind::Unknown)
+    classify_object(lower).unwrap_or(SectionKind::Unknown)
+}
+
+/// `name.to_ascii_lowercase()` in `buffer`, or `None` when the name does not fit.
+fn lowercase_on_stack<'b>(name: &str, buffer: &'b mut [u8; 64]) -> Option<&'b str> {
+    let bytes = buffer.get_mut(..name.len())?;
+    bytes.copy_from_slice(name.as_bytes());
+    bytes.make_ascii_lowercase();
+    // ASCII lower-casing keeps UTF-8 valid, so this always succeeds.
+    std::str::from_utf8(bytes).ok()
 }
 
 /// The name CiA 306 gives a section of this kind (`None` for unknown sections).
@@ -164,7 +183,7 @@ pub fn canonical_name(kind: SectionKind) -> Option<String> {
 /// Whether a name has the `<index>sub<sub>` form with a sub-index that does not fit in 8 bits.
 pub fn is_sub_index_out_of_range(name: &str) -> bool {
     let lower = name.to_ascii_lowercase();
-    let Some(at) = lower.find("sub") else { return false };
+    let Some(at) = find_sub(&lower) else { return false };
     let (head, tail) = (&lower[..at], &lower[at + 3..]);
     parse_hex(head, 4).is_some()
         && !tail.is_empty()
@@ -240,7 +259,7 @@ fn classify_object(lower: &str) -> Option<SectionKind> {
 }
 
 fn parse_object_ref(text: &str) -> Option<(u16, Option<u8>)> {
-    match text.find("sub") {
+    match find_sub(text) {
         Some(at) => {
             let index = parse_hex(text.get(..at)?, 4)?;
             let sub = parse_hex(text.get(at + 3..)?, 2)?;
@@ -250,16 +269,27 @@ fn parse_object_ref(text: &str) -> Option<(u16, Option<u8>)> {
     }
 }
 
-/// Parses up to `digits` significant hex digits (leading zeros allowed, reported by the caller).
+/// The byte offset of the first `sub` in a lower-cased name, as `str::find("sub")` gives it; the
+/// substring searcher `find` sets up costs more than scanning a name of a dozen bytes.
+fn find_sub(lower: &str) -> Option<usize> {
+    lower.as_bytes().windows(3).position(|w| w == b"sub")
+}
+
+/// Parses up to `digits` (at most 4) significant hex digits (leading zeros allowed, reported by the caller).
 fn parse_hex(text: &str, digits: usize) -> Option<u16> {
-    if text.is_empty() || text.len() > 8 || !text.bytes().all(|b| b.is_ascii_hexdigit()) {
+    if text.is_empty() || text.len() > 8 {
         return None;
     }
-    let significant = text.trim_start_matches('0');
-    if significant.len() > digits {
+    // At most eight hex digits always fit in a u32.
+    let mut value = 0u32;
+    for b in text.bytes() {
+        value = value << 4 | char::from(b).to_digit(16)?;
+    }
+    // No more than `digits` significant digits, i.e. below 16^digits.
+    if value >= 1 << (4 * digits) {
         return None;
     }
-    u16::from_str_radix(text, 16).ok()
+    u16::try_from(value).ok()
 }
 
 #[cfg(test)]
@@ -300,6 +330,27 @@ mod tests {
         assert_eq!(classify("StandardDataTypes"), Unknown);
         assert!(is_sub_index_out_of_range("D000sub101"));
         assert!(!is_sub_index_out_of_range("D000sub10"));
+    }
+
+    #[test]
+    fn parse_hex_limits_significant_digits() {
+        assert_eq!(parse_hex("00001018", 4), Some(0x1018));
+        assert_eq!(parse_hex("000010180", 4), None);
+        assert_eq!(parse_hex("10180", 4), None);
+        assert_eq!(parse_hex("0FF", 2), Some(0xFF));
+        assert_eq!(parse_hex("100", 2), None);
+        assert_eq!(parse_hex("", 4), None);
+        assert_eq!(parse_hex("+1", 4), None);
+        assert_eq!(parse_hex("1g", 4), None);
+        assert_eq!(find_sub("1a00sub1f"), Some(4));
+        assert_eq!(find_sub("su"), None);
+    }
+
+    #[test]
+    fn long_names_are_classified_too() {
+        let long = format!("{}1018", "0".repeat(70));
+        assert_eq!(classify(&long), SectionKind::Unknown);
+        assert_eq!(classify(&"X".repeat(80)), SectionKind::Unknown);
     }
 
     #[test]

@@ -468,9 +468,32 @@ fn strip_suffix_in_place(out: &mut String, suffix: &str) {
 
 fn split_lines(text: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<Line> {
     let bytes = text.as_bytes();
-    let mut out: Vec<Line> = Vec::with_capacity(text.len() / 24 + 1);
+    // One vectorised pass for the exact line count is cheaper than regrowing a vector of 400k lines
+    // (byte-sized counters over chunks that cannot overflow them vectorise well).
+    let newlines: usize = bytes
+        .chunks(255)
+        .map(|chunk| usize::from(chunk.iter().fold(0u8, |n, &b| n + u8::from(b == b'\n'))))
+        .sum();
+    let mut out: Vec<Line> = Vec::with_capacity(newlines + 1);
     let (mut saw_lf, mut saw_crlf, mut reported_cr) = (false, false, false);
-    let mut emit = |start: usize, end: usize, ending: LineEnding, diagnostics: &mut Vec<Diagnostic>| {
+    let mut start = 0;
+    while start < bytes.len() {
+        // Fast path for the `Key=value` line that makes up most of a file: a run of key characters
+        // from column 1 followed directly by `=` is exactly the entry `classify` accepts without a
+        // diagnostic, so the line is scanned once and its key needs no trimming.
+        let key_len = bytes[start..]
+            .iter()
+            .position(|&b| !is_key_byte(b))
+            .unwrap_or(bytes.len() - start);
+        let eq = (key_len > 0 && bytes.get(start + key_len) == Some(&b'=')).then_some(start + key_len);
+        // Key characters are never line breaks, so the search for the line end resumes after them.
+        let end = line_end(bytes, eq.map_or(start + key_len, |eq| eq + 1));
+        let (ending, next) = match bytes.get(end) {
+            Some(b'\n') => (LineEnding::Lf, end + 1),
+            Some(_) if bytes.get(end + 1) == Some(&b'\n') => (LineEnding::CrLf, end + 2),
+            Some(_) => (LineEnding::Cr, end + 1),
+            None => (LineEnding::None, end),
+        };
         let number = out.len();
         saw_lf |= ending == LineEnding::Lf;
         saw_crlf |= ending == LineEnding::CrLf;
@@ -485,38 +508,20 @@ fn split_lines(text: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<Line> {
                 .with_help("CiA 306 §4.2 allows LF or CR/LF line endings"),
             );
         }
-        let kind = classify(text, start, end, number, diagnostics);
+        let kind = match eq {
+            Some(eq) => LineKind::Entry {
+                key: start..eq,
+                value: entry_value(text, eq, end),
+            },
+            None => classify(text, start, end, number, diagnostics),
+        };
         out.push(Line {
             start,
             end,
             ending,
             kind,
         });
-    };
-    let mut start = 0;
-    let mut i = 0;
-    while i < bytes.len() {
-        match bytes[i] {
-            b'\n' => {
-                emit(start, i, LineEnding::Lf, diagnostics);
-                i += 1;
-                start = i;
-            }
-            b'\r' if bytes.get(i + 1) == Some(&b'\n') => {
-                emit(start, i, LineEnding::CrLf, diagnostics);
-                i += 2;
-                start = i;
-            }
-            b'\r' => {
-                emit(start, i, LineEnding::Cr, diagnostics);
-                i += 1;
-                start = i;
-            }
-            _ => i += 1,
-        }
-    }
-    if start < bytes.len() {
-        emit(start, bytes.len(), LineEnding::None, diagnostics);
+        start = next;
     }
     if saw_lf && saw_crlf {
         let first = out
@@ -530,6 +535,55 @@ fn split_lines(text: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<Line> {
         ));
     }
     out
+}
+
+/// Whether a byte may appear in a key without an [`Code::UnusualKey`] finding (letters, digits, `_`).
+fn is_key_byte(b: u8) -> bool {
+    // A table lookup: the three range tests of `is_ascii_alphanumeric` cost more per key byte.
+    const TABLE: [bool; 256] = {
+        let mut table = [false; 256];
+        let mut b = 0;
+        while b < 256 {
+            let c = b as u8;
+            table[b] = c.is_ascii_alphanumeric() || c == b'_';
+            b += 1;
+        }
+        table
+    };
+    TABLE[usize::from(b)]
+}
+
+/// The offset of the first CR or LF at or after `from`, or the text length.
+fn line_end(bytes: &[u8], from: usize) -> usize {
+    const ONES: u64 = u64::from_ne_bytes([0x01; 8]);
+    const HIGHS: u64 = u64::from_ne_bytes([0x80; 8]);
+    const LFS: u64 = u64::from_ne_bytes([b'\n'; 8]);
+    const CRS: u64 = u64::from_ne_bytes([b'\r'; 8]);
+    // Marks the zero bytes of a word; the lowest mark is exact (borrows only run upwards), which is
+    // all the search needs.
+    let zero_bytes = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
+    let mut i = from;
+    // Eight bytes per step: values and comments are long enough for this to beat a byte loop.
+    while let Some(word) = bytes.get(i..).and_then(<[u8]>::first_chunk::<8>) {
+        let word = u64::from_le_bytes(*word);
+        let found = zero_bytes(word ^ LFS) | zero_bytes(word ^ CRS);
+        if found != 0 {
+            // Little-endian: the lowest marked byte is the first in the text.
+            return i + (found.trailing_zeros() / 8) as usize;
+        }
+        i += 8;
+    }
+    bytes
+        .get(i..)
+        .and_then(|rest| rest.iter().position(|&b| b == b'\n' || b == b'\r'))
+        .map_or(bytes.len(), |p| i + p)
+}
+
+/// The trimmed value range of an entry whose `=` is at `eq` (an empty range right after `=` when the
+/// value is empty), as [`LineKind::Entry`] records it.
+fn entry_value(text: &str, eq: usize, end: usize) -> Range<usize> {
+    let value = trim_range(text, eq + 1..end);
+    if value.is_empty() { eq + 1..eq + 1 } else { value }
 }
 
 fn classify(
@@ -613,7 +667,6 @@ fn classify(
         return LineKind::Invalid;
     };
     let key = trim_range(text, start..start + eq);
-    let value = trim_range(text, start + eq + 1..end);
     let key_text = &text[key.clone()];
     if indent > 0 {
         diagnostics.push(Diagnostic::new(
@@ -632,19 +685,17 @@ fn classify(
             .with_help("CiA 306 §4.2: the key is immediately followed by `=`"),
         );
     }
-    if key_text.is_empty() || !key_text.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_') {
+    if key_text.is_empty() || !key_text.bytes().all(is_key_byte) {
         diagnostics.push(Diagnostic::new(
             Code::UnusualKey,
             line_span(indent, key_text.chars().count().max(1)),
             format!("key `{key_text}` is not made of letters, digits and `_`"),
         ));
     }
-    let value = if value.is_empty() {
-        start + eq + 1..start + eq + 1
-    } else {
-        value
-    };
-    LineKind::Entry { key, value }
+    LineKind::Entry {
+        key,
+        value: entry_value(text, start + eq, end),
+    }
 }
 
 /// Trims ASCII white space (CiA 306 files are ASCII; Unicode-aware trimming costs a char decode per byte).
@@ -760,6 +811,16 @@ mod tests {
     }
 
     proptest! {
+        #[test]
+        fn line_end_finds_the_first_break(bytes in proptest::collection::vec(
+            prop_oneof![Just(b'\r'), Just(b'\n'), Just(0x8Du8), Just(0x0Au8 ^ 0x80), any::<u8>(), b'a'..=b'z'], 0..64),
+            from in 0usize..70) {
+            let naive = (from.min(bytes.len())..bytes.len())
+                .find(|&i| bytes[i] == b'\n' || bytes[i] == b'\r')
+                .unwrap_or(bytes.len());
+            prop_assert_eq!(line_end(&bytes, from), naive);
+        }
+
         #[test]
         fn any_bytes_round_trip(bytes in proptest::collection::vec(
             prop_oneof![Just(b'['), Just(b']'), Just(b'='), Just(b';'), Just(b'\r'), Just(b'\n'), Just(b' '),

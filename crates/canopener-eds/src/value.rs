@@ -159,7 +159,7 @@ pub struct IntLiteral {
 /// Lenient forms (an `h` suffix, a leading zero on what was meant as decimal but has 8 or 9 in it) are
 /// accepted and reported in `issues`.
 pub fn parse_integer(text: &str, issues: &mut Vec<Issue>) -> Option<IntLiteral> {
-    let text = text.trim();
+    let text = trim(text);
     let (negative, digits) = match text.strip_prefix('-') {
         Some(rest) => (true, rest.trim_start()),
         None => (false, text.strip_prefix('+').unwrap_or(text)),
@@ -210,15 +210,27 @@ pub fn parse_integer(text: &str, issues: &mut Vec<Issue>) -> Option<IntLiteral> 
 
 /// Whether a value mentions `$NODEID` in any letter case.
 pub fn mentions_nodeid(text: &str) -> bool {
-    text.as_bytes()
-        .windows(7)
-        .any(|w| w.eq_ignore_ascii_case(b"$NODEID"))
+    // Most values have no `$` at all, which one `memchr` settles.
+    text.as_bytes().contains(&b'$')
+        && text
+            .as_bytes()
+            .windows(7)
+            .any(|w| w.eq_ignore_ascii_case(b"$NODEID"))
+}
+
+/// `str::trim`, skipping its character decoding for the usual value (already trimmed of ASCII white
+/// space by the loader) whose first and last bytes are visible ASCII, which no trimming removes.
+pub(crate) fn trim(text: &str) -> &str {
+    match (text.as_bytes().first(), text.as_bytes().last()) {
+        (Some(first), Some(last)) if first.is_ascii_graphic() && last.is_ascii_graphic() => text,
+        _ => text.trim(),
+    }
 }
 
 /// Reads `text` as a value of `data_type` (`None` for types without a value syntax: records, unknown).
 pub fn parse_value(text: &str, data_type: DataType) -> Parsed {
     let mut parsed = Parsed::default();
-    let text = text.trim();
+    let text = trim(text);
     if text.is_empty() {
         return parsed;
     }
@@ -459,6 +471,15 @@ fn parse_time(text: &str, issues: &mut Vec<Issue>) -> Option<Value> {
 }
 
 fn parse_digits(digits: &str, radix: u32) -> Option<i128> {
+    if digits.len() <= 15 && !digits.is_empty() {
+        // Fifteen digits of a radix up to 16 fit in a u64, and u64 arithmetic is much cheaper than
+        // the i128 `from_str_radix`; nearly every value takes this path.
+        let mut value = 0u64;
+        for b in digits.bytes() {
+            value = value * u64::from(radix) + u64::from(char::from(b).to_digit(radix)?);
+        }
+        return Some(i128::from(value));
+    }
     if digits.is_empty() || digits.len() > 40 || !digits.chars().all(|c| c.is_digit(radix)) {
         return None;
     }
@@ -478,6 +499,23 @@ mod tests {
     fn value(text: &str, t: DataType) -> (Option<Value>, Vec<Code>) {
         let parsed = parse_value(text, t);
         (parsed.value, parsed.issues.into_iter().map(|i| i.code).collect())
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn parse_digits_agrees_with_from_str_radix(digits in "[0-9a-fA-F+ xé-]{0,20}") {
+            for radix in [8, 10, 16] {
+                let slow = (!digits.is_empty() && digits.chars().all(|c| c.is_digit(radix)))
+                    .then(|| i128::from_str_radix(&digits, radix).ok())
+                    .flatten();
+                proptest::prop_assert_eq!(parse_digits(&digits, radix), slow);
+            }
+        }
+
+        #[test]
+        fn trim_agrees_with_str_trim(text in "[ \t\u{a0}a0;]{0,6}") {
+            proptest::prop_assert_eq!(trim(&text), text.trim());
+        }
     }
 
     #[test]
