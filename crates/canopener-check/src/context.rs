@@ -1,8 +1,6 @@
 //! One loaded file as the checks see it: the model, the lossless document, and lookups from a
 //! section's meaning to where it is written.
 
-use std::collections::HashMap;
-
 use canopener_eds::section_name::{self, SectionKind};
 use canopener_eds::syntax::Section;
 use canopener_eds::{Diagnostic, Document, Eds, Loaded, Span};
@@ -29,25 +27,47 @@ pub struct Context<'a> {
     pub diagnostics: &'a [Diagnostic],
     /// The file's name without directories, for the `FileName` check; `None` when read from stdin.
     pub file_name: Option<&'a str>,
-    by_kind: HashMap<SectionKind, Vec<usize>>,
+    /// The kind of every section as written, by index into [`Document::sections`].
+    kinds: Vec<SectionKind>,
+    /// Every section index, sorted by identity kind (stable, so file order within a kind), with
+    /// `sorted_kinds` holding the kind of each: a binary search finds a kind's run of indices
+    /// without hashing or one allocation per kind (nearly every object section is a kind of its own).
+    sorted_kinds: Vec<SectionKind>,
+    sorted_sections: Vec<usize>,
 }
 
 impl<'a> Context<'a> {
     /// Indexes a loaded file.
     pub fn new(loaded: &'a Loaded, file_name: Option<&'a str>) -> Self {
         let document = &loaded.document;
-        let mut by_kind: HashMap<SectionKind, Vec<usize>> = HashMap::new();
-        for (i, section) in document.sections().iter().enumerate() {
-            let kind = section_name::classify(document.section_name(section)).identity();
-            by_kind.entry(kind).or_default().push(i);
-        }
+        let kinds: Vec<SectionKind> = document
+            .sections()
+            .iter()
+            .map(|s| {
+                let name = document.section_name(s);
+                object_kind_fast(name).unwrap_or_else(|| section_name::classify(name))
+            })
+            .collect();
+        let mut order: Vec<(SectionKind, usize)> = kinds.iter().map(|k| k.identity()).zip(0..).collect();
+        // Stable: indices of one kind stay in file order.
+        order.sort_by_key(|&(kind, _)| kind);
+        let (sorted_kinds, sorted_sections) = order.into_iter().unzip();
         Self {
             document,
             eds: &loaded.eds,
             diagnostics: &loaded.diagnostics,
             file_name,
-            by_kind,
+            kinds,
+            sorted_kinds,
+            sorted_sections,
         }
+    }
+
+    /// The kind of every section as written ([`section_name::classify`], not merged by
+    /// [`SectionKind::identity`]), by index into [`Document::sections`]: classified once here for
+    /// all checks.
+    pub fn section_kinds(&self) -> &[SectionKind] {
+        &self.kinds
     }
 
     /// Whether the file is a DCF (CiA 306 §5: `LastEDS` or `[DeviceComissioning]` present).
@@ -58,7 +78,13 @@ impl<'a> Context<'a> {
     /// Indices into [`Document::sections`] of every section of this kind (duplicates included, both
     /// commissioning spellings count as one kind), in file order.
     pub fn sections_of(&self, kind: SectionKind) -> &[usize] {
-        self.by_kind.get(&kind.identity()).map_or(&[], Vec::as_slice)
+        let kind = kind.identity();
+        let start = self.sorted_kinds.partition_point(|&k| k < kind);
+        let len = self
+            .sorted_kinds
+            .get(start..)
+            .map_or(0, |rest| rest.partition_point(|&k| k == kind));
+        self.sorted_sections.get(start..start + len).unwrap_or(&[])
     }
 
     /// The first section of this kind.
@@ -136,10 +162,75 @@ impl<'a> Context<'a> {
     }
 }
 
+/// The kind of the names nearly every section has, `[1018]` and `[1018sub1]` in any case, read
+/// without the allocation [`section_name::classify`] makes; `None` for anything else, which
+/// `classify` then decides (no fixed CiA 306 section name is made of hex digits alone).
+pub(crate) fn object_kind_fast(name: &str) -> Option<SectionKind> {
+    let bytes = name.as_bytes();
+    let digits = bytes
+        .iter()
+        .position(|b| !b.is_ascii_hexdigit())
+        .unwrap_or(bytes.len());
+    if !(1..=4).contains(&digits) {
+        return None;
+    }
+    let index = u16::from_str_radix(name.get(..digits)?, 16).ok()?;
+    let rest = name.get(digits..)?;
+    if rest.is_empty() {
+        return Some(SectionKind::Object(index));
+    }
+    let sub = rest.get(3..)?;
+    if !rest.get(..3)?.eq_ignore_ascii_case("sub")
+        || !(1..=2).contains(&sub.len())
+        || !sub.bytes().all(|b| b.is_ascii_hexdigit())
+    {
+        return None;
+    }
+    Some(SectionKind::Sub(index, u8::from_str_radix(sub, 16).ok()?))
+}
+
 /// The section kind of an object (`sub` = `None`) or one of its sub-objects.
 pub(crate) fn object_kind(index: u16, sub: Option<u8>) -> SectionKind {
     match sub {
         None => SectionKind::Object(index),
         Some(sub) => SectionKind::Sub(index, sub),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_object_kinds_agree_with_classify() {
+        for name in [
+            "1018",
+            "1a00",
+            "1018sub1",
+            "1018SUB1",
+            "1018Sub01",
+            "1A00subA",
+            "40",
+            "0sub0",
+            "BEEF",
+            "01018",
+            "1018sub",
+            "1018sub100",
+            "2000Name",
+            "FileInfo",
+            "DeviceInfo",
+            "Comments",
+            "DummyUsage",
+            "M1SubExt6000",
+            "Tool1",
+            "1018sub1x",
+            "",
+        ] {
+            assert_eq!(
+                object_kind_fast(name).unwrap_or_else(|| section_name::classify(name)),
+                section_name::classify(name),
+                "{name}"
+            );
+        }
     }
 }

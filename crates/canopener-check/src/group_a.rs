@@ -7,11 +7,9 @@
 //! other than the typed ones P053 reads, number notation of the untyped numeric keys the loader
 //! reads silently, and unknown names that are misspellings of standard ones.
 
-use std::collections::HashSet;
-
 use canopener_eds::diag::Code;
 use canopener_eds::model::{Attributes, DeviceCommissioning, DeviceInfo, FileInfo, ModuleInfo, decimal_key};
-use canopener_eds::section_name::{self, Companion, ModulePart, SectionKind};
+use canopener_eds::section_name::{Companion, ModulePart, SectionKind};
 use canopener_eds::syntax::{LineKind, Section};
 use canopener_eds::{Severity, Span};
 
@@ -167,10 +165,7 @@ pub(crate) const CHECKS: &[CheckInfo] = &[
 pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     let document = cx.document;
     let sections = document.sections();
-    let kinds: Vec<SectionKind> = sections
-        .iter()
-        .map(|s| section_name::classify(document.section_name(s)))
-        .collect();
+    let kinds = cx.section_kinds();
     // The section of every line, so the line checks can name it.
     let mut owner: Vec<Option<usize>> = vec![None; document.lines().len()];
     for (i, section) in sections.iter().enumerate() {
@@ -180,16 +175,20 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
             }
         }
     }
-    let inline_comment_lines: HashSet<u32> = cx
-        .diagnostics
-        .iter()
-        .filter(|d| d.code == Code::InlineComment)
-        .map(|d| d.span.line)
-        .collect();
+    // Lines with a P053 inline comment, by line index (a flag per line: cheaper than hashing
+    // every line number).
+    let mut inline_comment = vec![false; owner.len()];
+    for d in cx.diagnostics.iter().filter(|d| d.code == Code::InlineComment) {
+        let line = usize::try_from(d.span.line).ok().and_then(|l| l.checked_sub(1));
+        if let Some(flag) = line.and_then(|l| inline_comment.get_mut(l)) {
+            *flag = true;
+        }
+    }
     for (line, &section) in owner.iter().enumerate() {
         let at = LineAt {
             cx,
             line,
+            text: document.line_text(line),
             section: section.and_then(|i| sections.get(i)),
             kind: section
                 .and_then(|i| kinds.get(i).copied())
@@ -198,28 +197,26 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
         };
         check_length(&at, out);
         check_characters(&at, out);
-        if !inline_comment_lines.contains(&line_number(line)) {
+        if !inline_comment.get(line).copied().unwrap_or(false) {
             check_comment_characters(&at, out);
         }
         check_number_notation(&at, out);
     }
-    check_misspelt_names(cx, &kinds, out);
+    check_misspelt_names(cx, kinds, out);
 }
 
 /// One line with what the line checks need to know about it.
 struct LineAt<'c, 'a> {
     cx: &'c Context<'a>,
     line: usize,
+    /// The line's content without its ending.
+    text: &'a str,
     section: Option<&'a Section>,
     kind: SectionKind,
     entry: Option<(&'a str, &'a str)>,
 }
 
 impl LineAt<'_, '_> {
-    fn text(&self) -> &str {
-        self.cx.document.line_text(self.line)
-    }
-
     fn section_name(&self) -> Option<&str> {
         self.section.map(|s| self.cx.document.section_name(s))
     }
@@ -235,7 +232,11 @@ impl LineAt<'_, '_> {
 }
 
 fn check_length(at: &LineAt<'_, '_>, out: &mut Vec<Finding>) {
-    let length = at.text().chars().count();
+    // A line has at most as many characters as bytes, so most lines need no count.
+    if at.text.len() <= MAX_LINE {
+        return;
+    }
+    let length = at.text.chars().count();
     if length <= MAX_LINE {
         return;
     }
@@ -263,8 +264,8 @@ fn check_length(at: &LineAt<'_, '_>, out: &mut Vec<Finding>) {
 }
 
 fn check_characters(at: &LineAt<'_, '_>, out: &mut Vec<Finding>) {
-    let text = at.text();
-    if text.bytes().all(|b| b == b'\t' || (0x20..0x7F).contains(&b)) {
+    let text = at.text;
+    if is_plain_text(text.as_bytes()) {
         return;
     }
     let mut found: Vec<char> = Vec::new();
@@ -325,7 +326,8 @@ fn check_comment_characters(at: &LineAt<'_, '_>, out: &mut Vec<Finding>) {
     if key.eq_ignore_ascii_case("Count") {
         return;
     }
-    let Some(column) = value.find(['#', ';', '\t']) else {
+    // All three are ASCII, so a byte search finds the same (char boundary) position.
+    let Some(column) = value.bytes().position(|b| matches!(b, b'#' | b';' | b'\t')) else {
         return;
     };
     // Where lely already stops at a non-ASCII character, C102 reports what it reads.
@@ -449,7 +451,9 @@ fn check_misspelt_names(cx: &Context<'_>, kinds: &[SectionKind], out: &mut Vec<F
             let Some((key, _)) = document.entry(line) else {
                 continue;
             };
-            if known.iter().any(|k| k.eq_ignore_ascii_case(key))
+            // Nearly every key is spelt exactly as the standard does: compare exactly first.
+            if known.contains(&key)
+                || known.iter().any(|k| k.eq_ignore_ascii_case(key))
                 || RESERVED_DEVICE_INFO_KEYS
                     .iter()
                     .any(|k| k.eq_ignore_ascii_case(key))
@@ -545,7 +549,15 @@ fn closest(name: &str, standard: &[&'static str]) -> Option<&'static str> {
     let limit = if wanted.len() > 8 { 2 } else { 1 };
     standard
         .iter()
-        .map(|&s| (edit_distance(&wanted, &normalise(s)), s))
+        .filter_map(|&s| {
+            let candidate = normalise(s);
+            // The distance is at least the difference in length: skip the table when that alone
+            // is over the limit.
+            if wanted.len().abs_diff(candidate.len()) > limit {
+                return None;
+            }
+            Some((edit_distance(&wanted, &candidate), s))
+        })
         .filter(|&(d, _)| d <= limit)
         .min_by_key(|&(d, _)| d)
         .map(|(_, s)| s)
@@ -722,6 +734,20 @@ fn value_column(at: &LineAt<'_, '_>) -> Option<usize> {
     usize::try_from(span.column).ok()?.checked_sub(1)
 }
 
+/// Whether every byte is a tab or printable ASCII ([`is_plain`] for every character). Checked in
+/// blocks without an early exit so the compiler can test many bytes at once; nearly every line is
+/// plain.
+fn is_plain_text(bytes: &[u8]) -> bool {
+    let not_plain = |b: u8| (b != b'\t') & (b.wrapping_sub(0x20) >= 0x5F);
+    let mut blocks = bytes.chunks_exact(16);
+    for block in &mut blocks {
+        if block.iter().fold(false, |bad, &b| bad | not_plain(b)) {
+            return false;
+        }
+    }
+    !blocks.remainder().iter().any(|&b| not_plain(b))
+}
+
 fn is_plain(c: char) -> bool {
     c == '\t' || (' '..='~').contains(&c)
 }
@@ -745,6 +771,21 @@ fn to_u32(n: usize) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn plain_text_test_agrees_with_byte_by_byte() {
+        let slow = |bytes: &[u8]| bytes.iter().all(|&b| b == b'\t' || (0x20..0x7F).contains(&b));
+        for bad in 0..=255u8 {
+            for len in [1, 15, 16, 17, 40] {
+                for at in [0, len / 2, len - 1] {
+                    let mut line = vec![b'a'; len];
+                    line[at] = bad;
+                    assert_eq!(is_plain_text(&line), slow(&line), "{bad:#x} at {at} of {len}");
+                }
+            }
+        }
+        assert!(is_plain_text(b""));
+    }
 
     fn findings(text: &str) -> Vec<Finding> {
         let loaded = canopener_eds::load(text.as_bytes());

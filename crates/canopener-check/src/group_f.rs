@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 
 use canopener_eds::model::{Attributes, Object, Properties, int_of};
 use canopener_eds::section_name::{Companion, SectionKind};
-use canopener_eds::{DataType, ObjectType, Origin, Severity, SubObject, TypeKind};
+use canopener_eds::{DataType, ObjectType, Origin, Severity, TypeKind};
 
 use crate::context::{Context, object_kind};
 use crate::finding::Finding;
@@ -862,16 +862,16 @@ fn extended_by_modules(cx: &Context<'_>, index: u16) -> bool {
 }
 
 fn check_array_types(cx: &Context<'_>, out: &mut Vec<Finding>, index: u16, object: &Object) {
-    let entries: Vec<(u8, &SubObject, DataType)> = object
+    // Streamed rather than collected: the first typed entry is the reference for the rest.
+    let mut entries = object
         .subs
         .iter()
         .filter(|&(&s, _)| s != 0 && s != 0xFF)
-        .filter_map(|(&s, so)| Some((s, so, so.attributes.data_type()?)))
-        .collect();
-    let Some(&(first_sub, _, first_type)) = entries.first() else {
+        .filter_map(|(&s, so)| Some((s, so, so.attributes.data_type()?)));
+    let Some((first_sub, _, first_type)) = entries.next() else {
         return;
     };
-    for &(sub, so, t) in entries.iter().skip(1) {
+    for (sub, so, t) in entries {
         if t == first_type || so.origin != Origin::Explicit {
             continue;
         }

@@ -369,8 +369,9 @@ fn compare_entry(
     spec: EntrySpec,
     out: &mut Vec<Finding>,
 ) {
-    let name = entry_name(c.index, sub);
-    let what = match sub.and_then(|s| c.reference.sub(s)) {
+    // The texts are only needed for a finding, and most entries match: build them on demand.
+    let name = || entry_name(c.index, sub);
+    let what = || match sub.and_then(|s| c.reference.sub(s)) {
         Some(described) if described.first == described.last => {
             format!("{} {}", c.defined_as(), described.name)
         }
@@ -385,9 +386,11 @@ fn compare_entry(
                     sub,
                     Some("DataType"),
                     format!(
-                        "{name} DataType {} is {}; {what} is {}",
+                        "{} DataType {} is {}; {} is {}",
+                        name(),
                         written(attributes.data_type.as_deref()),
                         type_name(actual),
+                        what(),
                         type_name(expected)
                     ),
                 )
@@ -398,19 +401,23 @@ fn compare_entry(
     if let (Some(expected), Some(actual)) = (spec.access, attributes.access_type()) {
         let (read, write) = (actual.readable(), actual.writable());
         let (may_read, may_write) = (expected.readable(), expected.writable());
-        let message = format!(
-            "{name} AccessType {}; {what} is {}",
-            written(attributes.access_type.as_deref()),
-            expected
-        );
+        let message = || {
+            format!(
+                "{} AccessType {}; {} is {}",
+                name(),
+                written(attributes.access_type.as_deref()),
+                what(),
+                expected
+            )
+        };
         if (read && !may_read) || (write && !may_write) {
             out.push(
-                c.finding(&ACCESS_WRITABLE, sub, Some("AccessType"), message)
+                c.finding(&ACCESS_WRITABLE, sub, Some("AccessType"), message())
                     .with_help(format!("write AccessType={expected}")),
             );
         } else if (!read && may_read) || (!write && may_write) {
             out.push(
-                c.finding(&ACCESS_RESTRICTED, sub, Some("AccessType"), message)
+                c.finding(&ACCESS_RESTRICTED, sub, Some("AccessType"), message())
                     .with_help("nothing to do if the device really restricts the access"),
             );
         }
@@ -422,8 +429,10 @@ fn compare_entry(
                 sub,
                 Some("PDOMapping"),
                 format!(
-                    "{name} PDOMapping {}; {what} is not PDO-mappable",
-                    written(attributes.pdo_mapping.as_deref())
+                    "{} PDOMapping {}; {} is not PDO-mappable",
+                    name(),
+                    written(attributes.pdo_mapping.as_deref()),
+                    what()
                 ),
             )
             .with_help("write PDOMapping=0"),
@@ -434,8 +443,10 @@ fn compare_entry(
                 sub,
                 Some("PDOMapping"),
                 format!(
-                    "{name} PDOMapping {}; {what} is PDO-mappable",
-                    written(attributes.pdo_mapping.as_deref())
+                    "{} PDOMapping {}; {} is PDO-mappable",
+                    name(),
+                    written(attributes.pdo_mapping.as_deref()),
+                    what()
                 ),
             )
             .with_help("write PDOMapping=1"),

@@ -65,12 +65,12 @@ pub const CHECKS: &[CheckInfo] = &[
 
 /// Runs the portability lint.
 pub fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
-    let kinds = tools::section_kinds(cx);
-    text::run(cx, &kinds, out);
-    sections::run(cx, &kinds, out);
+    let kinds = cx.section_kinds();
+    text::run(cx, kinds, out);
+    sections::run(cx, kinds, out);
     info::run(cx, out);
     objects::run(cx, out);
-    tools::for_each_site(cx, &kinds, |site| {
+    tools::for_each_site(cx, kinds, |site| {
         sections::site(cx, site, out);
         objects::site(cx, site, out);
         values::site(cx, site, out);

@@ -4,7 +4,7 @@
 //! (`eds-format-and-checks.md` §11), so a finding can say precisely what that tool will do.
 
 use canopener_eds::diag::Code;
-use canopener_eds::section_name::{self, SectionKind};
+use canopener_eds::section_name::SectionKind;
 use canopener_eds::syntax::Section;
 use canopener_eds::{Attributes, DataType, Object, ObjectType, Origin};
 
@@ -68,9 +68,27 @@ impl Key {
 
     /// The key a written key means (case-insensitive, CiA 306 §4.2).
     fn of(written: &str) -> Option<Key> {
-        Key::ALL
-            .into_iter()
-            .find(|k| k.name().eq_ignore_ascii_case(written))
+        // Nearly every key is spelt exactly as CiA 306 does: one string match finds it without
+        // comparing letter by letter against every name.
+        let exact = match written {
+            "ParameterName" => Some(Key::ParameterName),
+            "ObjectType" => Some(Key::ObjectType),
+            "DataType" => Some(Key::DataType),
+            "AccessType" => Some(Key::AccessType),
+            "DefaultValue" => Some(Key::DefaultValue),
+            "LowLimit" => Some(Key::LowLimit),
+            "HighLimit" => Some(Key::HighLimit),
+            "PDOMapping" => Some(Key::PdoMapping),
+            "CompactSubObj" => Some(Key::CompactSubObj),
+            "ParameterValue" => Some(Key::ParameterValue),
+            "SubNumber" => Some(Key::SubNumber),
+            _ => None,
+        };
+        exact.or_else(|| {
+            Key::ALL
+                .into_iter()
+                .find(|k| k.name().eq_ignore_ascii_case(written))
+        })
     }
 }
 
@@ -127,45 +145,6 @@ impl<'a> Site<'a> {
     pub(super) fn miscased(&self) -> &[(usize, &'a str, Key)] {
         &self.miscased
     }
-}
-
-/// The kind of every section of the document, by index (classified once for all checks).
-pub(super) fn section_kinds(cx: &Context<'_>) -> Vec<SectionKind> {
-    cx.document
-        .sections()
-        .iter()
-        .map(|s| {
-            let name = cx.document.section_name(s);
-            object_kind(name).unwrap_or_else(|| section_name::classify(name))
-        })
-        .collect()
-}
-
-/// The kind of the names nearly every section has, `[1018]` and `[1018sub1]` in any case, read
-/// without the allocation [`section_name::classify`] makes; `None` for anything else, which
-/// `classify` then decides (no fixed CiA 306 section name is made of hex digits alone).
-fn object_kind(name: &str) -> Option<SectionKind> {
-    let bytes = name.as_bytes();
-    let digits = bytes
-        .iter()
-        .position(|b| !b.is_ascii_hexdigit())
-        .unwrap_or(bytes.len());
-    if !(1..=4).contains(&digits) {
-        return None;
-    }
-    let index = u16::from_str_radix(name.get(..digits)?, 16).ok()?;
-    let rest = name.get(digits..)?;
-    if rest.is_empty() {
-        return Some(SectionKind::Object(index));
-    }
-    let sub = rest.get(3..)?;
-    if !rest.get(..3)?.eq_ignore_ascii_case("sub")
-        || !(1..=2).contains(&sub.len())
-        || !sub.bytes().all(|b| b.is_ascii_hexdigit())
-    {
-        return None;
-    }
-    Some(SectionKind::Sub(index, u8::from_str_radix(sub, 16).ok()?))
 }
 
 /// [`Attributes::object_type`], with the usual spellings read without parsing.
@@ -429,36 +408,12 @@ mod tests {
     }
 
     #[test]
-    fn fast_object_kinds_agree_with_classify() {
-        for name in [
-            "1018",
-            "1a00",
-            "1018sub1",
-            "1018SUB1",
-            "1018Sub01",
-            "1A00subA",
-            "40",
-            "0sub0",
-            "BEEF",
-            "01018",
-            "1018sub",
-            "1018sub100",
-            "2000Name",
-            "FileInfo",
-            "DeviceInfo",
-            "Comments",
-            "DummyUsage",
-            "M1SubExt6000",
-            "Tool1",
-            "1018sub1x",
-            "",
-        ] {
-            assert_eq!(
-                object_kind(name).unwrap_or_else(|| section_name::classify(name)),
-                section_name::classify(name),
-                "{name}"
-            );
+    fn exact_key_spellings_match_their_names() {
+        for key in Key::ALL {
+            assert_eq!(Key::of(key.name()), Some(key));
+            assert_eq!(Key::of(&key.name().to_ascii_lowercase()), Some(key));
         }
+        assert_eq!(Key::of("Denotation"), None);
     }
 
     #[test]
