@@ -97,7 +97,7 @@ const IDENTITY_MISMATCH: CheckInfo = CheckInfo {
     group: Group::DeviceInfo,
     title: "VendorNumber, ProductNumber and RevisionNumber equal 1018h sub 1-3",
     reference: &[14],
-    spec: "CiA 306 V1.3 §4.5, CiA 301 §7.5.2.22",
+    spec: "CiA 306 V1.3 §4.5, CiA 301",
     explanation: "\
 [DeviceInfo] repeats the identity the device reports in object 1018h: VendorNumber is the \
 vendor-ID (1018sub1), ProductNumber the product code (1018sub2), RevisionNumber the revision \
@@ -190,7 +190,7 @@ const GRANULARITY_ZERO_WRITABLE: CheckInfo = CheckInfo {
     group: Group::DeviceInfo,
     title: "Granularity=0 (fixed mapping) goes with read-only mapping objects",
     reference: &[17],
-    spec: "CiA 306 V1.3 §4.5, CiA 301 §7.5.2.36",
+    spec: "CiA 306 V1.3 §4.5, CiA 301",
     explanation: "\
 Granularity=0 says the PDO mappings cannot be changed. This check reports such a file in which a \
 PDO mapping object (1600h-17FFh, 1A00h-1BFFh) has a writable sub-object (rw, wo, rwr or rww).

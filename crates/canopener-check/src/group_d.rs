@@ -67,7 +67,7 @@ const TYPE_NOT_FIXED: CheckInfo = CheckInfo {
     group: Group::DummyUsage,
     title: "dummy mapping is enabled only for fixed-length basic types",
     reference: &[21],
-    spec: "CiA 306 V1.3 §4.6.2, CiA 301 §7.4.7.1",
+    spec: "CiA 306 V1.3 §4.6.2, CiA 301",
     explanation: "\
 A dummy mapping entry (index = data type, e.g. 0x00050008) only reserves bits in a PDO, so only \
 the length of the type matters. This check reports Dummy<index>=1 for an index that is not a \

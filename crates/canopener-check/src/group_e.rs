@@ -99,7 +99,7 @@ const MANDATORY_OBJECT_MISSING: CheckInfo = CheckInfo {
     group: Group::ObjectLists,
     title: "the device type 1000h and the error register 1001h are described",
     reference: &[27],
-    spec: "CiA 306 V1.3 §4.6.3.1, CiA 301 §7.5.2.1-§7.5.2.2",
+    spec: "CiA 306 V1.3 §4.6.3.1, CiA 301-§7.5.2.2",
     explanation: "\
 Every CANopen device implements object 1000h (device type) and 1001h (error register); CiA 306 \
 §4.6.3.1 lists them in [MandatoryObjects]. This check reports a file that neither describes nor \
@@ -123,7 +123,7 @@ const IDENTITY_OBJECT_MISSING: CheckInfo = CheckInfo {
     group: Group::ObjectLists,
     title: "the identity object 1018h is described",
     reference: &[27],
-    spec: "CiA 306 V1.3 §4.6.3.1, CiA 301 §7.5.2.22",
+    spec: "CiA 306 V1.3 §4.6.3.1, CiA 301",
     explanation: "\
 CiA 301 (since CANopen 4.0) makes the identity object 1018h mandatory, with at least the vendor-ID \
 in sub 1; CiA 306 §4.6.3.1 lists it in [MandatoryObjects] for such devices. This check reports a \

@@ -121,7 +121,7 @@ const PDO_MAPPING_ON_DOMAIN: CheckInfo = CheckInfo {
     group: Group::Objects,
     title: "no DOMAIN is marked PDO-mappable",
     reference: &[33],
-    spec: "CiA 306 V1.3 §4.6.3.2, CiA 301 §7.4.7.1",
+    spec: "CiA 306 V1.3 §4.6.3.2, CiA 301",
     explanation: "\
 A DOMAIN (object type 0x2, or data type 0x000F) is a block of data of any length, transferred by \
 SDO. A PDO mapping entry gives a fixed length of at most 64 bits, so a DOMAIN cannot be mapped. \
@@ -144,7 +144,7 @@ const PDO_MAPPING_ON_STRING: CheckInfo = CheckInfo {
     group: Group::Objects,
     title: "strings marked PDO-mappable",
     reference: &[33],
-    spec: "CiA 301 §7.4.7.1",
+    spec: "CiA 301",
     explanation: "\
 VISIBLE_STRING, OCTET_STRING and UNICODE_STRING objects have a length of their own. This check \
 reports PDOMapping=1 on them.
@@ -192,9 +192,9 @@ const SUB0_MISSING: CheckInfo = CheckInfo {
     group: Group::Objects,
     title: "ARRAY and RECORD objects describe sub-index 0",
     reference: &[36],
-    spec: "CiA 306 V1.3 §4.6.3.2, CiA 301 §7.4.3",
+    spec: "CiA 306 V1.3 §4.6.3.2, CiA 301",
     explanation: "\
-Sub-index 0 of an ARRAY or RECORD holds the highest sub-index supported (CiA 301 §7.4.3), and a \
+Sub-index 0 of an ARRAY or RECORD holds the highest sub-index supported (CiA 301), and a \
 master reads it first to learn how many entries follow. This check reports an ARRAY, RECORD or \
 DEFSTRUCT that describes sub-objects but no [<index>sub0].
 
@@ -216,9 +216,9 @@ const SUB0_NOT_UNSIGNED8: CheckInfo = CheckInfo {
     group: Group::Objects,
     title: "sub-index 0 is UNSIGNED8",
     reference: &[36],
-    spec: "CiA 301 §7.4.3",
+    spec: "CiA 301",
     explanation: "\
-Sub-index 0 of an ARRAY, RECORD or DEFSTRUCT is UNSIGNED8 (CiA 301 §7.4.3): it holds the highest \
+Sub-index 0 of an ARRAY, RECORD or DEFSTRUCT is UNSIGNED8 (CiA 301): it holds the highest \
 sub-index, at most 254. This check reports another DataType on [<index>sub0].
 
 An SDO client expects one byte; a device or simulator built from the EDS answers with two or four, \
@@ -237,7 +237,7 @@ const SUB0_NOT_HIGHEST: CheckInfo = CheckInfo {
     group: Group::Objects,
     title: "sub-index 0 DefaultValue equals the highest sub-index described",
     reference: &[37],
-    spec: "CiA 306 V1.3 §4.6.3.2, CiA 301 §7.4.3",
+    spec: "CiA 306 V1.3 §4.6.3.2, CiA 301",
     explanation: "\
 The DefaultValue of sub-index 0 of an ARRAY or RECORD is the highest sub-index the object \
 implements (CiA 306 §4.6.3.2: sub-objects need not be consecutive, so [1010] with sub 0 and sub 4 \
@@ -267,9 +267,9 @@ const ARRAY_SUB_TYPES_DIFFER: CheckInfo = CheckInfo {
     group: Group::Objects,
     title: "the entries 1..n of an ARRAY share one DataType",
     reference: &[39],
-    spec: "CiA 301 §7.4.3",
+    spec: "CiA 301",
     explanation: "\
-An ARRAY (ObjectType 0x8) is a sequence of entries of one data type (CiA 301 §7.4.3); only \
+An ARRAY (ObjectType 0x8) is a sequence of entries of one data type (CiA 301); only \
 sub-index 0, the number of entries, differs. This check reports an ARRAY sub-object from sub 1 on \
 whose DataType differs from that of the lowest entry.
 
@@ -290,7 +290,7 @@ const STRUCTURE_SUB_TYPE: CheckInfo = CheckInfo {
     group: Group::Objects,
     title: "standard structures (PDO, SDO, identity) use the CiA 301 sub-object types",
     reference: &[40],
-    spec: "CiA 301 §7.4.8 (data types 0020h-0023h), §7.5.2",
+    spec: "CiA 301 (data types 0020h-0023h), §7.5.2",
     explanation: "\
 CiA 301 defines four record structures: PDO_COMMUNICATION_PARAMETER (0020h: sub 1 UNSIGNED32 \
 COB-ID, sub 2 UNSIGNED8 transmission type, sub 3 UNSIGNED16 inhibit time, sub 4 UNSIGNED8 \
@@ -795,7 +795,7 @@ fn check_sub0(cx: &Context<'_>, out: &mut Vec<Finding>, index: u16, object: &Obj
         .unwrap_or(0);
     let counts_entries = counts_entries_in_use(index);
     let wrong = if counts_entries {
-        // CiA 301 §7.5.2.36: FEh and FFh in sub 0 of a mapping object select SAM-MPDO and DAM-MPDO.
+        // CiA 301: FEh and FFh in sub 0 of a mapping object select SAM-MPDO and DAM-MPDO.
         let mpdo = matches!(index, 0x1600..=0x17FF | 0x1A00..=0x1BFF) && matches!(value, 0xFE | 0xFF);
         !mpdo && (value > i128::from(highest) || value < 0)
     } else {
@@ -845,7 +845,7 @@ fn check_sub0(cx: &Context<'_>, out: &mut Vec<Finding>, index: u16, object: &Obj
 }
 
 /// Objects whose sub 0 counts the entries in use rather than naming the highest sub-index: the
-/// pre-defined error field (CiA 301 §7.5.2.4) and the PDO mapping parameters (§7.5.2.36, §7.5.2.38).
+/// pre-defined error field (CiA 301) and the PDO mapping parameters (§7.5.2.36, §7.5.2.38).
 fn counts_entries_in_use(index: u16) -> bool {
     matches!(index, 0x1003 | 0x1600..=0x17FF | 0x1A00..=0x1BFF)
 }

@@ -50,7 +50,7 @@ const NODE_ID_INVALID: CheckInfo = CheckInfo {
     group: Group::Dcf,
     title: "[DeviceComissioning] NodeID is 1..127",
     reference: &[59],
-    spec: "CiA 306 V1.3 §5.3.1, CiA 301 §7.2.2",
+    spec: "CiA 306 V1.3 §5.3.1, CiA 301",
     explanation: "\
 NodeID is the node-ID the DCF configures, an Unsigned8 in 1..127. This check reports a missing or \
 empty NodeID, a value that is not a number, and numbers outside 1..127 (0, or lely's 0xFF for a \
@@ -72,7 +72,7 @@ const BAUDRATE_INVALID: CheckInfo = CheckInfo {
     group: Group::Dcf,
     title: "[DeviceComissioning] Baudrate is a CiA 301 bit rate in kbit/s",
     reference: &[59],
-    spec: "CiA 306 V1.3 §5.3.1, CiA 301 §5.3",
+    spec: "CiA 306 V1.3 §5.3.1, CiA 301",
     explanation: "\
 Baudrate is the bit rate the device is configured for, in kbit/s: one of 10, 20, 50, 125, 250, \
 500, 800 or 1000. This check reports a missing or empty Baudrate, a value that is not a number, \
@@ -119,7 +119,7 @@ const LSS_SERIAL_MISMATCH: CheckInfo = CheckInfo {
     group: Group::Dcf,
     title: "LSS_SerialNumber equals 1018h sub 4",
     reference: &[59],
-    spec: "CiA 306 V1.3 §5.3.1, CiA 301 §7.5.2.22",
+    spec: "CiA 306 V1.3 §5.3.1, CiA 301",
     explanation: "\
 LSS_SerialNumber names the physical device the DCF belongs to, by the serial number it reports \
 in 1018h sub 4. This check compares the two as numbers: with the ParameterValue of 1018sub4 when \

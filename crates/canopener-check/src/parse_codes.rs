@@ -689,7 +689,7 @@ Fix: move the comment to its own line starting with `;`.",
         group: Group::Values,
         title: "values lie within the range of their data type",
         reference: &[46],
-        spec: "CiA 306 V1.3 §4.6.3.2, CiA 301 §7.1",
+        spec: "CiA 306 V1.3 §4.6.3.2, CiA 301",
         explanation: "\
 A DefaultValue, LowLimit, HighLimit or ParameterValue lies outside the range of the entry's data \
 type (`300` for UNSIGNED8, `65535` for INTEGER16, `-30` for UNSIGNED8), or a `$NODEID` formula \
@@ -699,7 +699,7 @@ No device can hold the value. lely reports an overflow; canopen-host silently tr
 for an UNSIGNED8; limits out of range make every range check of the entry meaningless.
 
 It is an error because the value contradicts the data type the same section declares (CiA 306 \
-§4.6.3.2, data type ranges of CiA 301 §7.1).
+§4.6.3.2, data type ranges of CiA 301).
 
 Fix: correct the value, or the DataType if the value is right. For signed types write negative \
 limits as negative decimals (`-32768`).",
@@ -822,14 +822,14 @@ Fix: write two hex digits per byte, without prefix or separators.",
         group: Group::Values,
         title: "BOOLEAN values are 0 or 1",
         reference: &[48],
-        spec: "CiA 306 V1.3 §4.2, CiA 301 §7.1",
+        spec: "CiA 306 V1.3 §4.2, CiA 301",
         explanation: "\
 A value of a BOOLEAN entry is neither 0 nor 1 (seen: `3`, `0xFFFF` as HighLimit).
 
 lely reports such a value as out of range; readers that accept it store a boolean the device \
 cannot hold, and whether it means true depends on the tool.
 
-It is an error because BOOLEAN has exactly the values 0 and 1 (CiA 301 §7.1).
+It is an error because BOOLEAN has exactly the values 0 and 1 (CiA 301).
 
 Fix: write 0 or 1, or correct the DataType if the entry is not a boolean.",
         fixable: false,
@@ -904,7 +904,7 @@ record).",
         group: Group::Objects,
         title: "DataType is a CiA 301 type or defined in the file",
         reference: &[31],
-        spec: "CiA 306 V1.3 §4.6.3.2, CiA 301 §7.4.7",
+        spec: "CiA 306 V1.3 §4.6.3.2, CiA 301",
         explanation: "\
 DataType is not a number, or names an index that is neither a CiA 301 data type nor defined by a \
 DEFTYPE or DEFSTRUCT section of the file (for example 0x0040, a manufacturer-specific type, \
@@ -990,7 +990,7 @@ Fix: correct CompactSubObj, or the ObjectType, or remove SubNumber.",
         group: Group::Cia301,
         title: "every PDO has both its communication and its mapping object",
         reference: &[54],
-        spec: "CiA 301 §7.5.2.35-§7.5.2.38",
+        spec: "CiA 301-§7.5.2.38",
         explanation: "\
 A PDO communication object (1400h-15FFh, 1800h-19FFh) exists without its mapping object \
 (1600h-17FFh, 1A00h-1BFFh), or the reverse.

@@ -54,7 +54,7 @@ pub(super) fn sub_number(cx: &Context<'_>, out: &mut Planned) {
     }
 }
 
-/// C537: sub 0 of an ARRAY or RECORD holds the highest sub-index supported (CiA 301 §7.4.3). The
+/// C537: sub 0 of an ARRAY or RECORD holds the highest sub-index supported (CiA 301). The
 /// fix sets sub 0's `DefaultValue` to the highest sub-index described (FFh, the structure entry,
 /// excluded), as the check computes it. A device reports this value, so the fix is marked as
 /// changing meaning. Only a sub 0 below the highest sub-index described is raised: the sections
