@@ -152,8 +152,17 @@ pub(crate) fn expand(inputs: &[String]) -> Vec<Target> {
     for input in inputs {
         let path = PathBuf::from(input);
         if path.is_dir() {
-            for found in walk(&path) {
-                push(found, None, &mut targets);
+            let found = walk(&path);
+            if found.is_empty() {
+                // Checking nothing must not look like a clean result.
+                push(
+                    path,
+                    Some("no .eds or .dcf file below this directory".to_owned()),
+                    &mut targets,
+                );
+            }
+            for file in found {
+                push(file, None, &mut targets);
             }
         } else if path.exists() || !is_pattern(input) {
             let problem = (!path.exists()).then(|| "no such file or directory".to_owned());

@@ -135,6 +135,19 @@ fn check_walks_directories_and_globs_and_counts_unreadable_files_as_trouble() {
             .is_some_and(|p| p.contains("no such file")),
         "{doc}"
     );
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).expect("empty dir");
+    let nothing = run(&["eds", "check", arg(&empty)]);
+    assert_eq!(
+        nothing.status.code(),
+        Some(2),
+        "an empty directory is not a clean result"
+    );
+    assert!(
+        stdout(&nothing).contains("no .eds or .dcf file"),
+        "{}",
+        stdout(&nothing)
+    );
 }
 
 #[test]
