@@ -1,0 +1,14 @@
+//! The device side of CANopen: sans-IO protocol cores (CiA 301, CiA 305) on a runtime object
+//! dictionary built from an EDS or DCF.
+//!
+//! Every core follows one shape: `handle_frame(now, &frame)` and `handle_timeout(now)` feed it,
+//! `poll_transmit()`, `poll_event()` and `poll_timeout()` drain it. No core reads a clock, sleeps or
+//! touches a socket: time arrives as [`canopener_can::Instant`], so tests run on virtual time.
+
+#![warn(missing_docs)]
+
+pub mod emcy;
+pub mod heartbeat;
+pub mod nmt_slave;
+pub mod od_build;
+pub mod sdo_server;
