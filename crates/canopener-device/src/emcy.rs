@@ -189,7 +189,7 @@ impl EmcyProducer {
             if self.cob_id & COB_ID_INVALID == 0 && (self.cob_id & 0x7FF) as u16 != can_id {
                 return Err(EmcyConfigError::CanIdChangedWhileValid);
             }
-            if is_restricted_can_id(can_id) {
+            if crate::can_id::is_restricted(can_id) {
                 return Err(EmcyConfigError::RestrictedCanId { can_id });
             }
         }
@@ -419,12 +419,6 @@ impl EmcyProducer {
             self.inhibit_until = now + Duration::from_micros(u64::from(self.inhibit_100us) * 100);
         }
     }
-}
-
-/// CAN-IDs no EMCY (nor SYNC, TIME, PDO, additional SDO) may use (CiA 301, pre-defined connection
-/// set, restricted CAN-IDs): NMT, reserved ranges, default SDO, NMT error control.
-fn is_restricted_can_id(can_id: u16) -> bool {
-    matches!(can_id, 0x000..=0x07F | 0x101..=0x180 | 0x581..=0x5FF | 0x601..=0x67F | 0x6E0..=0x7FF)
 }
 
 #[cfg(test)]

@@ -7,8 +7,14 @@
 
 #![warn(missing_docs)]
 
+pub mod can_id;
 pub mod emcy;
 pub mod heartbeat;
+pub mod lss_slave;
 pub mod nmt_slave;
 pub mod od_build;
+pub mod pdo;
 pub mod sdo_server;
+pub mod store;
+pub mod sync;
+pub mod time_stamp;
