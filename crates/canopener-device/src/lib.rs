@@ -7,7 +7,10 @@
 
 #![warn(missing_docs)]
 
+pub mod application;
 pub mod can_id;
+pub mod cia401;
+pub mod device;
 pub mod emcy;
 pub mod heartbeat;
 pub mod lss_slave;

@@ -1,0 +1,1061 @@
+//! The `Device`: every core of this crate owned together and behaving as one CANopen node (CiA 301
+//! device side, CiA 305 LSS slave), sans IO.
+//!
+//! A [`Device`] owns the object dictionary and a pristine copy of its power-on values, the
+//! [`NmtSlave`], the SDO servers (the default server 1200h and every additional server 1201h–127Fh
+//! whose COB-IDs are valid in the dictionary), heartbeat producer / node guarding ([`ErrorControl`])
+//! and the heartbeat consumer, the EMCY producer, the PDO engine, SYNC, TIME, store/restore with a
+//! [`ParameterStore`], the LSS slave and the [`Application`].
+//!
+//! Feed it with [`Device::boot`] (power-on), [`Device::handle_frame`] and
+//! [`Device::handle_timeout`]; drain it with [`Device::poll_transmit`], [`Device::poll_event`] and
+//! [`Device::poll_timeout`]. No clock, thread or socket is used: time arrives as [`Instant`].
+//!
+//! What is wired (each core's own module documents its protocol):
+//! - Routing follows the CiA 301 table of services per NMT state ([`NmtSlaveState::is_active`]):
+//!   NMT always; node guarding requests and consumed heartbeats in Pre-operational, Operational
+//!   and Stopped; SDO, SYNC, TIME in Pre-operational and Operational; PDOs in Operational (the
+//!   cores themselves also check). Leaving the SDO states drops running SDO transfers without a
+//!   frame. LSS runs in every NMT state (CiA 305 is independent of NMT).
+//! - SDO downloads pass one set of device checks before the dictionary is touched: PDO parameters
+//!   ([`PdoEngine::check_write`]), 1005h/1019h ([`SyncService::check_download`]), 1012h
+//!   ([`TimeService::check_download`]), 1014h and 1003h:00 (EMCY), 1016h (heartbeat consumer), and
+//!   1010h/1011h ([`StoreRestore::check_download`], which saves or forgets when the signature is
+//!   right; it runs last, so a write refused by another check saves nothing). Uploads of 1003h
+//!   above the number of stored errors are refused with 0800 0024h.
+//! - After a download the affected core is reloaded from the dictionary (1400h–1BFFh → PDO
+//!   engine, 1005h–1007h/1019h → SYNC, 1012h → TIME, 1014h/1015h/1003h → EMCY, 1016h/1017h/100Ch/
+//!   100Dh → error control, 1010h/1011h → capability bits, 1201h–127Fh → additional SDO servers)
+//!   and the application is told ([`Application::on_write`]); RPDO writes tell the application
+//!   of every mapped entry as well.
+//! - Application changes ([`AppChanges`], [`Device::app_changed`]) become PDO application events
+//!   and TPDO triggers.
+//! - EMCY: a lost consumed heartbeat or lost life guarding raises 8130h, RPDO length errors
+//!   8210h/8220h, the RPDO deadline 8250h, a SYNC of the wrong length 8240h, each with error
+//!   register bit 4 (communication error); they clear when the cause goes away. 1001h and 1003h
+//!   are mirrored into the dictionary.
+//! - Resets: NMT reset node (and power-on) restores 2000h–FFFFh from the pristine copy, applies the
+//!   saved application and manufacturer parameters and resets the application; reset
+//!   communication (also the second half of reset node) applies the node-ID LSS configured,
+//!   restores 1000h–1FFFh from the pristine copy, applies the saved communication parameters,
+//!   re-creates every communication core from the dictionary and sends the boot-up message.
+//!
+//! Choices:
+//! - The LSS slave always runs when 1018h:01 exists, whatever the EDS's `LSS_Supported` says: a
+//!   simulated device is more useful with LSS, and the fault catalogue switches it off. Store
+//!   configuration answers "not supported" (no LSS storage yet).
+//! - Frames from other cores during the silence of an LSS bit rate switch are dropped, not held:
+//!   CiA 305 forbids sending then, and a late heartbeat is worse than a missing one.
+//! - The pristine copy of a device built with [`Device::from_eds`] is rebuilt with the new
+//!   node-ID when LSS changes it, so `$NODEID` defaults (PDO COB-IDs, EMCY 1014h) follow; a device
+//!   made with [`Device::new`] keeps the dictionary's values as given.
+//! - The error history 1003h starts empty after every reset communication (the EMCY producer is
+//!   re-created with the other communication cores), as CANopenNode does.
+
+use std::collections::{BTreeSet, VecDeque};
+
+use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_eds::model::Eds;
+use canopener_od::{DynamicOd, ObjectKey};
+use canopener_wire::{NodeId, abort};
+
+use crate::application::{AppChanges, Application};
+use crate::emcy::{EmcyEvent, EmcyProducer};
+use crate::heartbeat::{ConsumerEvent, ErrorControl, ErrorControlEvent, HeartbeatConsumer};
+use crate::lss_slave::{LssEvent, LssSlave};
+use crate::nmt_slave::{CommService, NmtEvent, NmtSlave, NmtSlaveState};
+use crate::od_build::{BuildNote, OdBuildError, build_od};
+use crate::pdo::{Direction, DummyUsage, Mapped, PdoEngine, PdoEvent, PdoRef};
+use crate::sdo_server::{self, SdoHooks, SdoServer};
+use crate::store::{MemoryStore, ParameterGroup, ParameterStore, StorageError, StoreEvent, StoreRestore};
+use crate::sync::{EMCY_SYNC_LENGTH, SyncEvent, SyncService};
+use crate::time_stamp::{TimeEvent, TimeService};
+
+/// EMCY error code of a heartbeat or life guarding event (CiA 301 emergency error codes:
+/// life guard error or heartbeat error).
+pub const EMCY_HEARTBEAT: u16 = 0x8130;
+
+/// Error register bit 4, communication error (CiA 301, error register).
+const COMMUNICATION_ERROR: u8 = 0x10;
+
+/// The default SDO server parameter; 1201h–127Fh are the additional servers.
+const SDO_SERVER_FIRST: u16 = 0x1200;
+const SDO_SERVER_LAST: u16 = 0x127F;
+
+/// Why a device cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DeviceError {
+    /// The object dictionary could not be built from the EDS.
+    #[error(transparent)]
+    Build(#[from] OdBuildError),
+    /// A node-ID outside 1..=127.
+    #[error("node-ID {0} is outside 1..=127; give the device a node-ID in that range")]
+    NodeId(u8),
+}
+
+/// A value in the dictionary a core could not take when it was (re)created at a reset; the core
+/// keeps its own default instead.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigRefused {
+    /// The entry.
+    pub key: ObjectKey,
+    /// The SDO abort code a write of that value would have been refused with.
+    pub abort_code: u32,
+}
+
+/// What a [`Device`] reports, in the order it happened.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DeviceEvent {
+    /// The NMT slave reported something: a state change, a reset, a malformed or unknown command.
+    Nmt(NmtEvent),
+    /// An SDO server finished a download or a transfer was aborted.
+    Sdo {
+        /// The server's parameter index (1200h for the default server).
+        server: u16,
+        /// What happened.
+        event: sdo_server::Event,
+    },
+    /// Life guarding lost or resumed.
+    ErrorControl(ErrorControlEvent),
+    /// The heartbeat consumer reported something (lost, resumed, remote state).
+    Heartbeat(ConsumerEvent),
+    /// An EMCY frame went out: error code, error register and manufacturer data as sent.
+    EmcySent {
+        /// The error code (0000h for the error reset).
+        code: u16,
+        /// The error register sent.
+        register: u8,
+        /// The manufacturer-specific bytes.
+        data: [u8; 5],
+    },
+    /// The EMCY producer dropped an EMCY.
+    Emcy(EmcyEvent),
+    /// The PDO engine reported something.
+    Pdo(PdoEvent),
+    /// SYNC reported something.
+    Sync(SyncEvent),
+    /// TIME reported something.
+    Time(TimeEvent),
+    /// The LSS slave reported something.
+    Lss(LssEvent),
+    /// Store/restore reported something.
+    Store(StoreEvent),
+    /// The parameter storage failed while saved values were applied at a reset.
+    StorageFailed(StorageError),
+    /// A dictionary value a core refused at a reset.
+    ConfigRefused(ConfigRefused),
+    /// A reset communication made a new node-ID active.
+    NodeIdChanged {
+        /// The node-ID before.
+        from: NodeId,
+        /// The node-ID now.
+        to: NodeId,
+    },
+}
+
+/// One CANopen device: every core of this crate on one object dictionary.
+pub struct Device {
+    od: DynamicOd,
+    pristine: DynamicOd,
+    eds: Option<Box<Eds>>,
+    notes: Vec<BuildNote>,
+    node: NodeId,
+    dummies: DummyUsage,
+    nmt: NmtSlave,
+    sdo: Vec<(u16, SdoServer)>,
+    error_control: ErrorControl,
+    consumer: HeartbeatConsumer,
+    emcy: EmcyProducer,
+    pdo: PdoEngine,
+    sync: SyncService,
+    time: TimeService,
+    store: StoreRestore,
+    params: Box<dyn ParameterStore>,
+    lss: Option<LssSlave>,
+    app: Box<dyn Application>,
+    /// Sources of the active 8130h EMCY: consumed nodes lost, and 0 for life guarding.
+    lost: BTreeSet<u8>,
+    reset_application: bool,
+    transmit: VecDeque<CanFrame>,
+    events: VecDeque<DeviceEvent>,
+}
+
+impl std::fmt::Debug for Device {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Device")
+            .field("node", &self.node)
+            .field("state", &self.nmt.state())
+            .field("entries", &self.od.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Device {
+    /// A device built from `eds` with node-ID `node_id`, the in-memory parameter store and `app`.
+    /// The build notes are kept ([`Device::notes`]); dummy mapping follows the EDS `[DummyUsage]`.
+    /// The device is in Initialisation until [`Device::boot`].
+    pub fn from_eds(eds: &Eds, node_id: u8, app: Box<dyn Application>) -> Result<Device, DeviceError> {
+        let built = build_od(eds, node_id)?;
+        let mut device = Device::new(built.od, node_id, app)?;
+        device.notes = built.notes;
+        device.dummies = dummy_usage(eds);
+        device.pdo = PdoEngine::new().with_dummy_usage(device.dummies);
+        device.eds = Some(Box::new(eds.clone()));
+        Ok(device)
+    }
+
+    /// A device on `od` (its values are the power-on defaults) with node-ID `node_id`, the
+    /// in-memory parameter store and `app`, accepting no dummy mapping. In Initialisation until
+    /// [`Device::boot`].
+    pub fn new(od: DynamicOd, node_id: u8, app: Box<dyn Application>) -> Result<Device, DeviceError> {
+        let node = NodeId::new(node_id).ok_or(DeviceError::NodeId(node_id))?;
+        let lss = LssSlave::from_od(&od, Some(node)).ok();
+        Ok(Device {
+            pristine: od.clone(),
+            od,
+            eds: None,
+            notes: Vec::new(),
+            node,
+            dummies: DummyUsage::NONE,
+            nmt: NmtSlave::new(node),
+            sdo: Vec::new(),
+            error_control: ErrorControl::new(node),
+            consumer: HeartbeatConsumer::new(),
+            emcy: EmcyProducer::new(node),
+            pdo: PdoEngine::new(),
+            sync: SyncService::new(),
+            time: TimeService::new(),
+            store: StoreRestore::new(),
+            params: Box::new(MemoryStore::new()),
+            lss,
+            app,
+            lost: BTreeSet::new(),
+            reset_application: false,
+            transmit: VecDeque::new(),
+            events: VecDeque::new(),
+        })
+    }
+
+    /// Uses `store` for saved parameters (1010h/1011h) instead of the in-memory one. Call before
+    /// [`Device::boot`], which applies the values it holds.
+    pub fn with_parameter_store(mut self, store: Box<dyn ParameterStore>) -> Device {
+        self.params = store;
+        self
+    }
+
+    /// Power-on: reset application and reset communication (defaults, then saved values), then
+    /// the boot-up message and Pre-operational. Does nothing once booted.
+    pub fn boot(&mut self, now: Instant) {
+        if self.nmt.state() != NmtSlaveState::Initialisation {
+            return;
+        }
+        self.reset(now, true);
+        self.pump(now);
+    }
+
+    /// What building the dictionary from the EDS did not take as written.
+    pub fn notes(&self) -> &[BuildNote] {
+        &self.notes
+    }
+
+    /// The object dictionary.
+    pub fn od(&self) -> &DynamicOd {
+        &self.od
+    }
+
+    /// The object dictionary, for tests and the application side. Tell the device about changed
+    /// mapped entries with [`Device::app_changed`].
+    pub fn od_mut(&mut self) -> &mut DynamicOd {
+        &mut self.od
+    }
+
+    /// The NMT state.
+    pub fn state(&self) -> NmtSlaveState {
+        self.nmt.state()
+    }
+
+    /// The active node-ID.
+    pub fn node_id(&self) -> NodeId {
+        self.node
+    }
+
+    /// The LSS slave, if the dictionary has an identity (1018h:01).
+    pub fn lss(&self) -> Option<&LssSlave> {
+        self.lss.as_ref()
+    }
+
+    /// The EMCY producer (active errors, error register, history).
+    pub fn emcy(&self) -> &EmcyProducer {
+        &self.emcy
+    }
+
+    /// The application side changed `keys` in the dictionary: TPDOs mapping them are sent as their
+    /// transmission types say.
+    pub fn app_changed(&mut self, now: Instant, keys: &[ObjectKey]) {
+        for &key in keys {
+            self.pdo.application_event(now, key);
+        }
+        self.pump(now);
+    }
+
+    /// Feeds a received frame to every core whose COB-ID it matches, in the NMT states where CiA
+    /// 301 runs that service.
+    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+        let state = self.nmt.state();
+        self.nmt.handle_frame(now, frame);
+        if let Some(lss) = &mut self.lss {
+            lss.handle_frame(now, frame);
+        }
+        if state.is_active(CommService::ErrorControl) {
+            self.error_control.handle_frame(now, frame);
+            self.consumer.handle_frame(now, frame);
+        }
+        if state.is_active(CommService::Sdo) {
+            let mut hooks = Hooks {
+                pdo: &self.pdo,
+                sync: &self.sync,
+                time: &self.time,
+                emcy: &self.emcy,
+                consumer: &self.consumer,
+                store: &mut self.store,
+                params: &mut *self.params,
+            };
+            for (_, server) in &mut self.sdo {
+                server.handle_frame_with(now, frame, &mut self.od, &mut hooks);
+            }
+        }
+        if state.is_active(CommService::Sync) {
+            self.sync.handle_frame(now, frame);
+        }
+        if state.is_active(CommService::Time) {
+            self.time.handle_frame(now, frame);
+        }
+        if state.is_active(CommService::Pdo) {
+            self.pdo.handle_frame(now, frame, &mut self.od);
+        }
+        self.pump(now);
+    }
+
+    /// Runs every timer due at `now`, in every core and the application.
+    pub fn handle_timeout(&mut self, now: Instant) {
+        self.error_control.handle_timeout(now);
+        self.consumer.handle_timeout(now);
+        for (_, server) in &mut self.sdo {
+            server.handle_timeout(now);
+        }
+        self.emcy.handle_timeout(now);
+        self.sync.handle_timeout(now);
+        self.time.handle_timeout(now);
+        if let Some(lss) = &mut self.lss {
+            lss.handle_timeout(now);
+        }
+        self.pump(now);
+        self.pdo.handle_timeout(now, &self.od);
+        if self.app.poll_timeout().is_some_and(|due| due <= now) {
+            let changes = self.app.handle_timeout(now, &mut self.od);
+            self.apply_changes(now, &changes);
+        }
+        self.pump(now);
+    }
+
+    /// The next frame to send.
+    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
+        self.transmit.pop_front()
+    }
+
+    /// The next event.
+    pub fn poll_event(&mut self) -> Option<DeviceEvent> {
+        self.events.pop_front()
+    }
+
+    /// When [`Device::handle_timeout`] must next be called: the earliest deadline of every core
+    /// and the application.
+    pub fn poll_timeout(&self) -> Option<Instant> {
+        let lss = self.lss.as_ref().and_then(LssSlave::poll_timeout);
+        [
+            self.error_control.poll_timeout(),
+            self.consumer.poll_timeout(),
+            self.emcy.poll_timeout(),
+            self.pdo.poll_timeout(),
+            self.sync.poll_timeout(),
+            self.time.poll_timeout(),
+            self.app.poll_timeout(),
+            lss,
+        ]
+        .into_iter()
+        .chain(self.sdo.iter().map(|(_, server)| server.poll_timeout()))
+        .flatten()
+        .min()
+    }
+
+    /// Handles every event the cores reported until none is left, then collects their frames.
+    fn pump(&mut self, now: Instant) {
+        // Bounded: every round handles events the previous one produced; cores do not loop.
+        for _ in 0..64 {
+            if !self.pump_once(now) {
+                break;
+            }
+        }
+        self.emcy.sync_od(&mut self.od);
+        self.collect_frames();
+    }
+
+    fn pump_once(&mut self, now: Instant) -> bool {
+        let mut any = false;
+        while let Some(event) = self.nmt.poll_event() {
+            any = true;
+            self.on_nmt(now, event);
+        }
+        let mut written = Vec::new();
+        for (index, server) in &mut self.sdo {
+            while let Some(event) = server.poll_event() {
+                if let sdo_server::Event::Written { key } = event {
+                    written.push(key);
+                }
+                self.events.push_back(DeviceEvent::Sdo {
+                    server: *index,
+                    event,
+                });
+            }
+        }
+        for key in written {
+            any = true;
+            self.after_download(now, key);
+        }
+        while let Some(event) = self.error_control.poll_event() {
+            any = true;
+            match event {
+                ErrorControlEvent::LifeGuardingLost => self.comm_lost(now, 0),
+                ErrorControlEvent::LifeGuardingResumed => self.comm_resumed(now, 0),
+            }
+            self.events.push_back(DeviceEvent::ErrorControl(event));
+        }
+        while let Some(event) = self.consumer.poll_event() {
+            any = true;
+            match event {
+                ConsumerEvent::HeartbeatLost { node } => self.comm_lost(now, node),
+                ConsumerEvent::HeartbeatResumed { node } => self.comm_resumed(now, node),
+                _ => {}
+            }
+            self.events.push_back(DeviceEvent::Heartbeat(event));
+        }
+        while let Some(event) = self.sync.poll_event() {
+            any = true;
+            match event {
+                SyncEvent::Sync { counter } => self.pdo.handle_sync(now, counter, &mut self.od),
+                SyncEvent::WrongLength { expected, received } => {
+                    self.emcy.raise(
+                        now,
+                        EMCY_SYNC_LENGTH,
+                        COMMUNICATION_ERROR,
+                        [expected, received, 0, 0, 0],
+                    );
+                }
+                SyncEvent::WindowClosed => {}
+            }
+            self.events.push_back(DeviceEvent::Sync(event));
+        }
+        while let Some(event) = self.pdo.poll_event() {
+            any = true;
+            self.on_pdo(now, event);
+        }
+        while let Some(event) = self.time.poll_event() {
+            any = true;
+            self.events.push_back(DeviceEvent::Time(event));
+        }
+        while let Some(event) = self.lss.as_mut().and_then(LssSlave::poll_event) {
+            any = true;
+            if event == LssEvent::ResetCommunication {
+                self.nmt.enter_local(NmtSlaveState::Initialisation);
+            }
+            self.events.push_back(DeviceEvent::Lss(event));
+        }
+        while let Some(event) = self.store.poll_event() {
+            any = true;
+            self.events.push_back(DeviceEvent::Store(event));
+        }
+        while let Some(event) = self.emcy.poll_event() {
+            any = true;
+            self.events.push_back(DeviceEvent::Emcy(event));
+        }
+        any
+    }
+
+    fn collect_frames(&mut self) {
+        let silent = self.lss.as_ref().is_some_and(LssSlave::is_silent);
+        let mut frames = Vec::new();
+        if let Some(lss) = &mut self.lss {
+            frames.extend(std::iter::from_fn(|| lss.poll_transmit()));
+        }
+        let mut others = Vec::new();
+        others.extend(std::iter::from_fn(|| self.nmt.poll_transmit()));
+        for (_, server) in &mut self.sdo {
+            others.extend(std::iter::from_fn(|| server.poll_transmit()));
+        }
+        others.extend(std::iter::from_fn(|| self.error_control.poll_transmit()));
+        while let Some(frame) = self.emcy.poll_transmit() {
+            let d = frame.data();
+            if d.len() == 8 {
+                self.events.push_back(DeviceEvent::EmcySent {
+                    code: u16::from_le_bytes([d[0], d[1]]),
+                    register: d[2],
+                    data: [d[3], d[4], d[5], d[6], d[7]],
+                });
+            }
+            others.push(frame);
+        }
+        others.extend(std::iter::from_fn(|| self.sync.poll_transmit()));
+        others.extend(std::iter::from_fn(|| self.pdo.poll_transmit()));
+        others.extend(std::iter::from_fn(|| self.time.poll_transmit()));
+        if !silent {
+            frames.extend(others);
+        }
+        self.transmit.extend(frames);
+    }
+
+    fn on_nmt(&mut self, now: Instant, event: NmtEvent) {
+        self.events.push_back(DeviceEvent::Nmt(event));
+        match event {
+            NmtEvent::StateChanged { to, .. } => {
+                self.error_control.set_state(now, to);
+                self.emcy.set_state(now, to);
+                self.sync.set_state(now, to);
+                self.time.set_state(now, to);
+                self.pdo.set_state(now, to);
+                if !to.is_active(CommService::Sdo) {
+                    for (_, server) in &mut self.sdo {
+                        server.reset();
+                    }
+                }
+            }
+            NmtEvent::ResetApplication => self.reset_application = true,
+            NmtEvent::ResetCommunication => {
+                let application = std::mem::take(&mut self.reset_application);
+                self.reset(now, application);
+            }
+            NmtEvent::Malformed(_) | NmtEvent::UnknownCommand { .. } => {}
+        }
+    }
+
+    fn on_pdo(&mut self, now: Instant, event: PdoEvent) {
+        self.events.push_back(DeviceEvent::Pdo(event));
+        if let Some(code) = event.emcy_code() {
+            let data = match event {
+                PdoEvent::RpdoTooShort { number, .. }
+                | PdoEvent::RpdoTooLong { number, .. }
+                | PdoEvent::RpdoTimeout { number } => number.to_le_bytes(),
+                _ => [0, 0],
+            };
+            self.emcy
+                .raise(now, code, COMMUNICATION_ERROR, [data[0], data[1], 0, 0, 0]);
+        }
+        match event {
+            PdoEvent::RpdoLengthOk { .. } => {
+                self.emcy.clear(now, crate::pdo::EMCY_PDO_LENGTH_ERROR);
+                self.emcy.clear(now, crate::pdo::EMCY_PDO_LENGTH_EXCEEDED);
+            }
+            PdoEvent::RpdoResumed { .. } => {
+                self.emcy.clear(now, crate::pdo::EMCY_RPDO_TIMEOUT);
+            }
+            PdoEvent::RpdoWritten { number } => {
+                let pdo = PdoRef {
+                    direction: Direction::Receive,
+                    number,
+                };
+                let keys: Vec<ObjectKey> = self
+                    .pdo
+                    .mapping(pdo)
+                    .unwrap_or_default()
+                    .iter()
+                    .filter_map(|mapped| match mapped {
+                        Mapped::Object { key, .. } => Some(*key),
+                        Mapped::Dummy { .. } => None,
+                    })
+                    .collect();
+                for key in keys {
+                    let changes = self.app.on_write(now, key, &mut self.od);
+                    self.apply_changes(now, &changes);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// `source` (a consumed node-ID, or 0 for life guarding) was lost: EMCY 8130h unless one is
+    /// active already.
+    fn comm_lost(&mut self, now: Instant, source: u8) {
+        if self.lost.is_empty() {
+            self.emcy
+                .raise(now, EMCY_HEARTBEAT, COMMUNICATION_ERROR, [source, 0, 0, 0, 0]);
+        }
+        self.lost.insert(source);
+    }
+
+    fn comm_resumed(&mut self, now: Instant, source: u8) {
+        if self.lost.remove(&source) && self.lost.is_empty() {
+            self.emcy.clear(now, EMCY_HEARTBEAT);
+        }
+    }
+
+    fn apply_changes(&mut self, now: Instant, changes: &AppChanges) {
+        for &key in &changes.changed {
+            self.pdo.application_event(now, key);
+        }
+        for &number in &changes.trigger_tpdos {
+            self.pdo.trigger_tpdo(now, number);
+        }
+    }
+
+    /// An SDO download stored a value at `key`: reload the core it configures, tell the
+    /// application.
+    fn after_download(&mut self, now: Instant, key: ObjectKey) {
+        let value = self.od.get(key).map(|e| e.value().to_vec()).unwrap_or_default();
+        let u32_value = <[u8; 4]>::try_from(value.as_slice()).map(u32::from_le_bytes).ok();
+        let u16_value = <[u8; 2]>::try_from(value.as_slice()).map(u16::from_le_bytes).ok();
+        match key.index {
+            0x1400..=0x1BFF => self.pdo.reload(now, &self.od),
+            0x1005..=0x1007 | 0x1019 => self.sync.load_od(now, &self.od),
+            0x1012 => self.time.load_od(&self.od),
+            0x1014 => {
+                if let Some(value) = u32_value {
+                    // Checked by the hooks before the dictionary stored it.
+                    let _ = self.emcy.set_cob_id(value);
+                }
+            }
+            0x1015 => {
+                if let Some(value) = u16_value {
+                    self.emcy.set_inhibit_time(now, value);
+                }
+            }
+            0x1003 if key.sub == 0 => {
+                if let &[count] = value.as_slice() {
+                    let _ = self.emcy.write_history_count(count);
+                }
+            }
+            0x1016 => {
+                if let Some(value) = u32_value {
+                    let _ = self.consumer.set_entry(key.sub, value);
+                }
+            }
+            0x1017 => {
+                if let Some(value) = u16_value {
+                    self.error_control.set_producer_time(now, value);
+                }
+            }
+            0x100C => {
+                if let Some(value) = u16_value {
+                    self.error_control.set_guard_time(now, value);
+                }
+            }
+            0x100D => {
+                if let &[value] = value.as_slice() {
+                    self.error_control.set_life_time_factor(now, value);
+                }
+            }
+            0x1010 | 0x1011 => self.store.sync_od(&mut self.od),
+            0x1201..=SDO_SERVER_LAST => self.load_sdo_servers(),
+            _ => {}
+        }
+        let changes = self.app.on_write(now, key, &mut self.od);
+        self.apply_changes(now, &changes);
+    }
+
+    /// Reset communication (and, with `application`, reset application first), as on power-on
+    /// and NMT reset node / reset communication; ends with the boot-up message.
+    fn reset(&mut self, now: Instant, application: bool) {
+        if application {
+            self.restore_defaults(0x2000..=0xFFFF);
+            for group in [ParameterGroup::Application, ParameterGroup::Manufacturer] {
+                self.apply_saved(group);
+            }
+        }
+        if let Some(lss) = &mut self.lss
+            && let Some(node) = lss.reset_communication()
+            && node != self.node
+        {
+            self.events.push_back(DeviceEvent::NodeIdChanged {
+                from: self.node,
+                to: node,
+            });
+            self.node = node;
+            if let Some(eds) = &self.eds
+                && let Ok(built) = build_od(eds, node.get())
+            {
+                self.pristine = built.od;
+            }
+        }
+        self.restore_defaults(0x1000..=0x1FFF);
+        self.apply_saved(ParameterGroup::Communication);
+        self.store.sync_od(&mut self.od);
+        self.load_communication(now);
+        if application {
+            let changes = self.app.reset(now, &mut self.od);
+            self.apply_changes(now, &changes);
+        }
+        self.nmt.set_node_id(self.node);
+        self.nmt.boot(now);
+    }
+
+    fn restore_defaults(&mut self, range: std::ops::RangeInclusive<u16>) {
+        for entry in self.pristine.iter().filter(|e| range.contains(&e.key().index)) {
+            let _ = self.od.set_value(entry.key(), entry.value());
+        }
+    }
+
+    fn apply_saved(&mut self, group: ParameterGroup) {
+        if let Err(error) = self.store.apply_saved(group, &mut self.od, &mut *self.params) {
+            self.events.push_back(DeviceEvent::StorageFailed(error));
+        }
+    }
+
+    /// Re-creates every communication core from the dictionary (reset communication).
+    fn load_communication(&mut self, now: Instant) {
+        let node = self.node;
+        let u32_at =
+            |od: &DynamicOd, index: u16, sub: u8| match od.get(ObjectKey::new(index, sub)).map(|e| e.value())
+            {
+                Some(&[a, b, c, d]) => Some(u32::from_le_bytes([a, b, c, d])),
+                _ => None,
+            };
+        let u16_at = |od: &DynamicOd, index: u16| match od.get(ObjectKey::new(index, 0)).map(|e| e.value()) {
+            Some(&[a, b]) => Some(u16::from_le_bytes([a, b])),
+            _ => None,
+        };
+
+        self.error_control = ErrorControl::new(node);
+        self.error_control
+            .set_producer_time(now, u16_at(&self.od, 0x1017).unwrap_or(0));
+        self.error_control
+            .set_guard_time(now, u16_at(&self.od, 0x100C).unwrap_or(0));
+        if let Some(&[factor]) = self.od.get(ObjectKey::new(0x100D, 0)).map(|e| e.value()) {
+            self.error_control.set_life_time_factor(now, factor);
+        }
+
+        self.consumer = HeartbeatConsumer::new();
+        self.lost.clear();
+        let entries: Vec<(u8, u32)> = self
+            .od
+            .object(0x1016)
+            .iter()
+            .filter(|e| e.key().sub != 0)
+            .filter_map(|e| Some((e.key().sub, u32::from_le_bytes(e.value().try_into().ok()?))))
+            .collect();
+        for (sub, value) in entries {
+            if let Err(error) = self.consumer.set_entry(sub, value) {
+                self.refused(ObjectKey::new(0x1016, sub), error.abort_code());
+            }
+        }
+
+        let history = self.od.object(0x1003).len().saturating_sub(1);
+        self.emcy = EmcyProducer::new(node);
+        if history > 0 {
+            self.emcy = self.emcy.clone().with_history_len(history);
+        }
+        if let Some(value) = u32_at(&self.od, 0x1014, 0) {
+            // Through "invalid" first, so a valid COB-ID with another CAN-ID than 80h + node-ID
+            // is not refused as a change while valid.
+            let _ = self.emcy.set_cob_id(crate::emcy::COB_ID_INVALID);
+            if let Err(error) = self.emcy.set_cob_id(value) {
+                let _ = self.emcy.set_cob_id(EmcyProducer::new(node).cob_id());
+                self.refused(ObjectKey::new(0x1014, 0), error.abort_code());
+            }
+        }
+        if let Some(inhibit) = u16_at(&self.od, 0x1015) {
+            self.emcy.set_inhibit_time(now, inhibit);
+        }
+
+        self.sync = SyncService::new();
+        self.sync.load_od(now, &self.od);
+        self.time = TimeService::new();
+        self.time.load_od(&self.od);
+        self.pdo = PdoEngine::new().with_dummy_usage(self.dummies);
+        self.pdo.reload(now, &self.od);
+        self.load_sdo_servers();
+    }
+
+    fn refused(&mut self, key: ObjectKey, abort_code: u32) {
+        self.events
+            .push_back(DeviceEvent::ConfigRefused(ConfigRefused { key, abort_code }));
+    }
+
+    /// The default server 1200h (always, on 600h/580h + node-ID) and the additional servers whose
+    /// COB-IDs in 1201h–127Fh are both valid 11-bit ones. Servers whose COB-IDs did not change keep
+    /// their running transfer.
+    fn load_sdo_servers(&mut self) {
+        let mut wanted: Vec<(u16, CanId, CanId)> = Vec::new();
+        if let Ok(server) = SdoServer::default_for_node(self.node.get()) {
+            wanted.push((SDO_SERVER_FIRST, server.rx_id(), server.tx_id()));
+        }
+        for index in SDO_SERVER_FIRST + 1..=SDO_SERVER_LAST {
+            let cob = |sub: u8| match self.od.get(ObjectKey::new(index, sub)).map(|e| e.value()) {
+                Some(&[a, b, c, d]) => Some(u32::from_le_bytes([a, b, c, d])),
+                _ => None,
+            };
+            let (Some(rx), Some(tx)) = (cob(1), cob(2)) else {
+                continue;
+            };
+            let id = |value: u32| {
+                (value & 0xE000_0000 == 0)
+                    .then(|| StandardId::new((value & 0x7FF) as u16))
+                    .flatten()
+                    .map(CanId::from)
+            };
+            if let (Some(rx), Some(tx)) = (id(rx), id(tx)) {
+                wanted.push((index, rx, tx));
+            }
+        }
+        let mut old = std::mem::take(&mut self.sdo);
+        for (index, rx, tx) in wanted {
+            let kept = old
+                .iter()
+                .position(|(i, s)| *i == index && s.rx_id() == rx && s.tx_id() == tx);
+            let server = match kept {
+                Some(position) => old.swap_remove(position).1,
+                None => SdoServer::new(rx, tx),
+            };
+            self.sdo.push((index, server));
+        }
+        // Servers that went away may still hold a response to the download that removed them.
+        for (_, mut server) in old {
+            self.transmit
+                .extend(std::iter::from_fn(|| server.poll_transmit()));
+        }
+    }
+}
+
+/// The dummy types the EDS `[DummyUsage]` section enables (`DummyXXXX=1`).
+fn dummy_usage(eds: &Eds) -> DummyUsage {
+    let mut dummies = DummyUsage::NONE;
+    if let Some(section) = &eds.dummy_usage {
+        for index in 1..=7u16 {
+            let enabled = section
+                .get(&format!("Dummy{index:04X}"))
+                .and_then(canopener_eds::model::int_of)
+                == Some(1);
+            if enabled {
+                dummies = dummies.with(index);
+            }
+        }
+    }
+    dummies
+}
+
+/// The device's checks on SDO transfers, over the cores that own the rules.
+struct Hooks<'a> {
+    pdo: &'a PdoEngine,
+    sync: &'a SyncService,
+    time: &'a TimeService,
+    emcy: &'a EmcyProducer,
+    consumer: &'a HeartbeatConsumer,
+    store: &'a mut StoreRestore,
+    params: &'a mut dyn ParameterStore,
+}
+
+impl SdoHooks for Hooks<'_> {
+    fn check_download(&mut self, key: ObjectKey, data: &[u8], od: &DynamicOd) -> Result<(), u32> {
+        self.pdo.check_write(key, data, od).map_err(|e| e.abort_code())?;
+        self.sync.check_download(key, data).map_err(|e| e.abort_code())?;
+        self.time.check_download(key, data).map_err(|e| e.abort_code())?;
+        match (key.index, key.sub, data) {
+            (0x1014, 0, &[a, b, c, d]) => {
+                let mut emcy = self.emcy.clone();
+                emcy.set_cob_id(u32::from_le_bytes([a, b, c, d]))
+                    .map_err(|e| e.abort_code())?;
+            }
+            (0x1003, 0, &[count]) => {
+                let mut emcy = self.emcy.clone();
+                emcy.write_history_count(count).map_err(|e| e.abort_code())?;
+            }
+            (0x1016, sub, &[a, b, c, d]) if sub != 0 => {
+                let mut consumer = self.consumer.clone();
+                consumer
+                    .set_entry(sub, u32::from_le_bytes([a, b, c, d]))
+                    .map_err(|e| e.abort_code())?;
+            }
+            _ => {}
+        }
+        // Last: a `save` here stores the dictionary at once, so every other check must have passed.
+        self.store
+            .check_download(key, data, od, self.params)
+            .map_err(|e| e.abort_code())
+    }
+
+    fn check_upload(&mut self, key: ObjectKey, _od: &DynamicOd) -> Result<(), u32> {
+        if key.index == 0x1003 && key.sub != 0 {
+            // A sub-index the dictionary has but the history does not reach: 0800 0024h.
+            match self.emcy.read_history(key.sub) {
+                Err(error) if error.abort_code() == abort::NO_DATA_AVAILABLE => {
+                    return Err(error.abort_code());
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::application::NoApplication;
+    use crate::nmt_slave::trace::{Core, Trace, any_frame, ms};
+    use canopener_od::{Access, DataType, Entry};
+    use proptest::prelude::*;
+
+    impl Core for Device {
+        type Event = DeviceEvent;
+        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+            Device::handle_frame(self, now, frame);
+        }
+        fn handle_timeout(&mut self, now: Instant) {
+            Device::handle_timeout(self, now);
+        }
+        fn poll_transmit(&mut self) -> Option<CanFrame> {
+            Device::poll_transmit(self)
+        }
+        fn poll_event(&mut self) -> Option<DeviceEvent> {
+            Device::poll_event(self)
+        }
+        fn poll_timeout(&self) -> Option<Instant> {
+            Device::poll_timeout(self)
+        }
+    }
+
+    /// A minimal dictionary: 1001h, 1003h with 2 entries, 1014h, 1017h = 50 ms, 1018h:01, and an
+    /// additional SDO server 1201h on 641h/5C1h.
+    fn od() -> DynamicOd {
+        let mut od = DynamicOd::with_capacity(16);
+        let mut add = |index: u16, sub: u8, data_type: DataType, access: Access, value: &[u8]| {
+            let entry = Entry::new(ObjectKey::new(index, sub), data_type, access, value).expect("entry");
+            od.insert(entry).expect("room");
+        };
+        add(0x1001, 0, DataType::UNSIGNED8, Access::Ro, &[0]);
+        add(0x1003, 0, DataType::UNSIGNED8, Access::Rw, &[0]);
+        add(0x1003, 1, DataType::UNSIGNED32, Access::Ro, &[0; 4]);
+        add(0x1003, 2, DataType::UNSIGNED32, Access::Ro, &[0; 4]);
+        add(
+            0x1014,
+            0,
+            DataType::UNSIGNED32,
+            Access::Rw,
+            &0x87u32.to_le_bytes(),
+        );
+        add(0x1017, 0, DataType::UNSIGNED16, Access::Rw, &50u16.to_le_bytes());
+        add(
+            0x1018,
+            1,
+            DataType::UNSIGNED32,
+            Access::Ro,
+            &0xABCu32.to_le_bytes(),
+        );
+        add(
+            0x1201,
+            1,
+            DataType::UNSIGNED32,
+            Access::Rw,
+            &0x641u32.to_le_bytes(),
+        );
+        add(
+            0x1201,
+            2,
+            DataType::UNSIGNED32,
+            Access::Rw,
+            &0x5C1u32.to_le_bytes(),
+        );
+        od
+    }
+
+    fn device() -> Trace<Device> {
+        let dev = Device::new(od(), 7, Box::new(NoApplication)).expect("device");
+        Trace::new(dev)
+    }
+
+    #[test]
+    fn nothing_before_boot_then_boot_up_and_heartbeats() {
+        let mut t = device();
+        t.rx(ms(1), "000#0107");
+        t.rx(ms(2), "607#4017100000000000");
+        assert_eq!(t.core.state(), NmtSlaveState::Initialisation);
+        assert_eq!(t.core.poll_timeout(), None);
+        t.core.boot(ms(10));
+        t.now = ms(10);
+        t.advance(ms(110));
+        assert_eq!(t.sent(), ["10.000 707#00", "60.000 707#7F", "110.000 707#7F"]);
+    }
+
+    #[test]
+    fn additional_sdo_server_from_1201h_and_its_reload() {
+        let mut t = device();
+        t.core.boot(ms(0));
+        t.rx(ms(1), "641#4017100000000000");
+        // Move 1201h's request COB-ID: invalid first, then 642h.
+        t.rx(ms(2), "641#2301120141060080");
+        t.rx(ms(3), "641#4017100000000000");
+        t.rx(ms(4), "607#2301120142060000");
+        t.rx(ms(5), "642#4017100000000000");
+        let sent: Vec<String> = t.sent().into_iter().filter(|s| !s.contains(" 707#")).collect();
+        assert_eq!(
+            sent,
+            [
+                "1.000 5C1#4B17100032000000",
+                "2.000 5C1#6001120100000000",
+                "4.000 587#6001120100000000",
+                "5.000 5C1#4B17100032000000",
+            ]
+        );
+    }
+
+    #[test]
+    fn emcy_cob_id_from_the_dictionary_and_history_upload_limits() {
+        let mut t = device();
+        t.core.boot(ms(0));
+        t.rx(ms(1), "000#0107");
+        t.rx(ms(2), "080#00");
+        // 1019h does not exist, so a SYNC with data is the wrong length: EMCY 8240h on 087h, data
+        // expected 0, received 1.
+        let sent = t.sent();
+        assert!(
+            sent.contains(&"2.000 087#4082110001000000".to_string()),
+            "{sent:?}"
+        );
+        t.rx(ms(3), "607#4003100200000000");
+        assert_eq!(t.sent(), ["3.000 587#8003100224000008"]);
+        t.rx(ms(4), "607#4003100100000000");
+        assert_eq!(t.sent(), ["4.000 587#4303100140820001"]);
+    }
+
+    #[test]
+    fn stopped_drops_a_running_sdo_transfer_silently() {
+        let mut t = device();
+        t.core.boot(ms(0));
+        // Segmented download initiate of 1018h... any 4-byte entry: 1017h with size 2.
+        t.rx(ms(1), "607#2117100002000000");
+        t.rx(ms(2), "000#0207");
+        t.advance(ms(3_000));
+        let sent: Vec<String> = t.sent().into_iter().filter(|s| !s.contains(" 707#")).collect();
+        assert_eq!(sent, ["1.000 587#6017100000000000"]);
+    }
+
+    #[test]
+    fn invalid_node_id_is_refused() {
+        assert!(matches!(
+            Device::new(od(), 128, Box::new(NoApplication)),
+            Err(DeviceError::NodeId(128))
+        ));
+    }
+
+    proptest! {
+        #[test]
+        fn arbitrary_frames_never_panic(frames in proptest::collection::vec((any_frame(), 0u64..30), 0..80)) {
+            let mut t = device();
+            t.core.boot(ms(0));
+            let mut now = 0;
+            for (frame, dt) in frames {
+                now += dt;
+                t.advance(ms(now));
+                t.core.handle_frame(ms(now), &frame);
+            }
+            t.advance(ms(now + 3_000));
+        }
+    }
+}

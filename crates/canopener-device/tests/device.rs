@@ -1,0 +1,464 @@
+//! The `Device` as one CANopen node on virtual time: timestamped frame traces against the fixture
+//! EDS of the checker (`base.eds`, node 5) and a real EDS of the corpus (CANopenNode's
+//! `DS301_profile.eds`, node 10).
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use canopener_can::candump::parse_compact_frame;
+use canopener_can::{CanFrame, Instant};
+use canopener_device::application::{AppChanges, Application, NoApplication};
+use canopener_device::device::{Device, DeviceEvent};
+use canopener_device::nmt_slave::NmtSlaveState;
+use canopener_device::od_build::build_od;
+use canopener_od::{DynamicOd, ObjectKey};
+use proptest::prelude::*;
+
+const BASE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../canopener-check/test_data/checks/base.eds"
+);
+const DS301: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__DS301_profile.eds"
+);
+
+fn eds(path: &str) -> canopener_eds::model::Eds {
+    canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
+}
+
+/// Drives a device on virtual time and records what it sends as `"<ms>.<µs> <frame>"`.
+struct Bus {
+    dev: Device,
+    now: Instant,
+    out: Vec<String>,
+    events: Vec<DeviceEvent>,
+}
+
+impl Bus {
+    fn booted(dev: Device) -> Bus {
+        let mut bus = Bus {
+            dev,
+            now: Instant::ZERO,
+            out: Vec::new(),
+            events: Vec::new(),
+        };
+        bus.dev.boot(Instant::ZERO);
+        bus.drain();
+        bus
+    }
+
+    fn drain(&mut self) {
+        while let Some(frame) = self.dev.poll_transmit() {
+            let micros = self.now.as_micros();
+            self.out
+                .push(format!("{}.{:03} {frame}", micros / 1000, micros % 1000));
+        }
+        while let Some(event) = self.dev.poll_event() {
+            self.events.push(event);
+        }
+    }
+
+    fn advance(&mut self, until_ms: u64) {
+        let until = Instant::from_millis(until_ms);
+        self.drain();
+        while let Some(due) = self.dev.poll_timeout() {
+            if due > until {
+                break;
+            }
+            assert!(due >= self.now, "timer in the past");
+            self.now = due;
+            self.dev.handle_timeout(due);
+            self.drain();
+        }
+        self.now = until;
+    }
+
+    fn rx(&mut self, at_ms: u64, text: &str) {
+        self.advance(at_ms);
+        let frame: CanFrame = parse_compact_frame(text).expect("test frame");
+        self.dev.handle_frame(self.now, &frame);
+        self.drain();
+    }
+
+    fn sent(&mut self) -> Vec<String> {
+        self.drain();
+        std::mem::take(&mut self.out)
+    }
+
+    fn events(&mut self) -> Vec<DeviceEvent> {
+        self.drain();
+        std::mem::take(&mut self.events)
+    }
+
+    fn value(&self, index: u16, sub: u8) -> Vec<u8> {
+        self.dev
+            .od()
+            .read(ObjectKey::new(index, sub))
+            .expect("readable")
+            .to_vec()
+    }
+}
+
+/// An expedited SDO download request to `node` as compact candump text.
+fn download(node: u8, index: u16, sub: u8, data: &[u8]) -> String {
+    let command = 0x23 | ((4 - data.len() as u8) << 2);
+    let mut bytes = vec![command, index as u8, (index >> 8) as u8, sub];
+    bytes.extend_from_slice(data);
+    bytes.resize(8, 0);
+    let hex: String = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    format!("{:03X}#{hex}", 0x600 + u16::from(node))
+}
+
+fn base_device(node: u8) -> Device {
+    Device::from_eds(&eds(BASE), node, Box::new(NoApplication)).expect("device")
+}
+
+fn ds301_device(node: u8) -> Device {
+    Device::from_eds(&eds(DS301), node, Box::new(NoApplication)).expect("device")
+}
+
+#[test]
+fn boot_up_then_heartbeats_at_the_1017h_period() {
+    let mut built = build_od(&eds(BASE), 5).expect("builds");
+    built
+        .od
+        .set_value(ObjectKey::new(0x1017, 0), &100u16.to_le_bytes())
+        .expect("1017h");
+    let mut bus = Bus::booted(Device::new(built.od, 5, Box::new(NoApplication)).expect("device"));
+    assert_eq!(bus.dev.state(), NmtSlaveState::PreOperational);
+    bus.advance(250);
+    assert_eq!(bus.sent(), ["0.000 705#00", "100.000 705#7F", "200.000 705#7F"]);
+}
+
+#[test]
+fn nmt_commands_through_frames() {
+    let mut bus = Bus::booted(base_device(5));
+    bus.rx(0, &download(5, 0x1017, 0, &50u16.to_le_bytes()));
+    bus.rx(10, "000#0105");
+    assert_eq!(bus.dev.state(), NmtSlaveState::Operational);
+    bus.rx(20, "000#0205");
+    assert_eq!(bus.dev.state(), NmtSlaveState::Stopped);
+    // SDO does not run in Stopped: no answer.
+    bus.rx(30, &download(5, 0x1017, 0, &60u16.to_le_bytes()));
+    bus.rx(40, "000#8000");
+    assert_eq!(bus.dev.state(), NmtSlaveState::PreOperational);
+    // A command for another node changes nothing.
+    bus.rx(45, "000#0106");
+    assert_eq!(bus.dev.state(), NmtSlaveState::PreOperational);
+    assert_eq!(
+        bus.sent(),
+        [
+            "0.000 705#00",
+            "0.000 585#6017100000000000",
+            "10.000 705#05",
+            // Entering Operational sends the event-driven TPDO once.
+            "10.000 185#00",
+            "20.000 705#04",
+            "40.000 705#7F",
+        ]
+    );
+    // Reset communication: 1017h goes back to its default 0, boot-up, no more heartbeats.
+    bus.rx(50, "000#8205");
+    bus.advance(500);
+    assert_eq!(bus.sent(), ["50.000 705#00"]);
+    assert_eq!(bus.value(0x1017, 0), [0, 0]);
+    bus.rx(600, "000#8105");
+    assert_eq!(bus.sent(), ["600.000 705#00"]);
+    let events = bus.events();
+    assert!(events.contains(&DeviceEvent::Nmt(
+        canopener_device::nmt_slave::NmtEvent::ResetApplication
+    )));
+}
+
+#[test]
+fn sdo_expedited_read_of_1018h_sub_1() {
+    let mut bus = Bus::booted(base_device(5));
+    bus.rx(1, "605#4018100100000000");
+    assert_eq!(bus.sent(), ["0.000 705#00", "1.000 585#43181001BC0A0000"]);
+}
+
+#[test]
+fn sdo_write_to_1017h_changes_the_heartbeat_period() {
+    let mut bus = Bus::booted(base_device(5));
+    bus.rx(0, &download(5, 0x1017, 0, &100u16.to_le_bytes()));
+    bus.advance(250);
+    bus.rx(250, &download(5, 0x1017, 0, &20u16.to_le_bytes()));
+    bus.advance(300);
+    assert_eq!(
+        bus.sent(),
+        [
+            "0.000 705#00",
+            "0.000 585#6017100000000000",
+            "100.000 705#7F",
+            "200.000 705#7F",
+            "250.000 585#6017100000000000",
+            "270.000 705#7F",
+            "290.000 705#7F",
+        ]
+    );
+    assert!(bus.events().iter().any(|e| matches!(
+        e,
+        DeviceEvent::Sdo {
+            server: 0x1200,
+            event: canopener_device::sdo_server::Event::Written { .. }
+        }
+    )));
+}
+
+#[test]
+fn pdo_remapped_over_sdo_then_sent_on_sync() {
+    let mut bus = Bus::booted(base_device(5));
+    bus.dev
+        .od_mut()
+        .set_value(ObjectKey::new(0x6200, 1), &[0x5A])
+        .expect("6200h");
+    // CiA 301 mapping procedure: invalidate, clear, map, count, type 1 (every SYNC), validate.
+    bus.rx(1, &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+    bus.rx(2, &download(5, 0x1A00, 0, &[0]));
+    bus.rx(3, &download(5, 0x1A00, 1, &0x6200_0108u32.to_le_bytes()));
+    bus.rx(4, &download(5, 0x1A00, 0, &[1]));
+    bus.rx(5, &download(5, 0x1800, 2, &[1]));
+    bus.rx(6, &download(5, 0x1800, 1, &0x0000_0185u32.to_le_bytes()));
+    let sent = bus.sent();
+    assert_eq!(sent.len(), 7, "{sent:?}");
+    assert!(sent[1..].iter().all(|s| s.contains(" 585#60")), "{sent:?}");
+    bus.rx(10, "000#0105");
+    bus.rx(20, "080#");
+    bus.rx(30, "080#");
+    assert_eq!(bus.sent(), ["20.000 185#5A", "30.000 185#5A"]);
+}
+
+#[test]
+fn pdo_mapping_refusals_are_abort_codes() {
+    let mut bus = Bus::booted(base_device(5));
+    // Mapping written while the TPDO is valid: 0601 0000h (CANopenNode, CCT set).
+    bus.rx(1, &download(5, 0x1A00, 1, &0x6200_0108u32.to_le_bytes()));
+    bus.rx(2, &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+    bus.rx(3, &download(5, 0x1A00, 0, &[0]));
+    // 2000h is not mappable: 0604 0041h.
+    bus.rx(4, &download(5, 0x1A00, 1, &0x2000_0010u32.to_le_bytes()));
+    let sent = bus.sent();
+    assert_eq!(sent[1], "1.000 585#80001A0100000106");
+    assert_eq!(sent[4], "4.000 585#80001A0141000406");
+}
+
+/// Records what the device tells the application.
+struct Recorder(Rc<RefCell<Vec<ObjectKey>>>);
+
+impl Application for Recorder {
+    fn reset(&mut self, _now: Instant, _od: &mut DynamicOd) -> AppChanges {
+        AppChanges::none()
+    }
+    fn on_write(&mut self, _now: Instant, key: ObjectKey, _od: &mut DynamicOd) -> AppChanges {
+        self.0.borrow_mut().push(key);
+        AppChanges::none()
+    }
+    fn handle_timeout(&mut self, _now: Instant, _od: &mut DynamicOd) -> AppChanges {
+        AppChanges::none()
+    }
+    fn poll_timeout(&self) -> Option<Instant> {
+        None
+    }
+}
+
+#[test]
+fn rpdo_is_written_into_the_od_and_told_to_the_application() {
+    let writes = Rc::new(RefCell::new(Vec::new()));
+    let dev = Device::from_eds(&eds(BASE), 5, Box::new(Recorder(writes.clone()))).expect("device");
+    let mut bus = Bus::booted(dev);
+    // Not in Pre-operational.
+    bus.rx(1, "205#AB");
+    assert_eq!(bus.value(0x6200, 1), [0]);
+    bus.rx(2, "000#0105");
+    bus.rx(3, "205#AB");
+    assert_eq!(bus.value(0x6200, 1), [0xAB]);
+    assert_eq!(*writes.borrow(), [ObjectKey::new(0x6200, 1)]);
+    // Too short: not processed, EMCY 8210h with the communication error bit.
+    bus.rx(4, "205#");
+    assert_eq!(
+        bus.sent(),
+        ["0.000 705#00", "2.000 185#00", "4.000 085#1082110100000000"]
+    );
+    // The right length again clears it: error reset EMCY.
+    bus.rx(5, "205#01");
+    assert_eq!(bus.sent(), ["5.000 085#0000000000000000"]);
+}
+
+#[test]
+fn application_change_sends_the_event_driven_tpdo() {
+    let mut bus = Bus::booted(base_device(5));
+    bus.rx(1, "000#0105");
+    bus.advance(1);
+    bus.dev
+        .od_mut()
+        .set_value(ObjectKey::new(0x6000, 1), &[0x0F])
+        .expect("6000h");
+    bus.dev
+        .app_changed(Instant::from_millis(2), &[ObjectKey::new(0x6000, 1)]);
+    bus.advance(3);
+    assert_eq!(bus.sent(), ["0.000 705#00", "1.000 185#00", "2.000 185#0F"]);
+}
+
+#[test]
+fn emcy_when_a_consumed_heartbeat_is_lost() {
+    let mut bus = Bus::booted(ds301_device(10));
+    bus.rx(0, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+    bus.rx(10, "703#05");
+    bus.advance(200);
+    bus.rx(300, "703#05");
+    assert_eq!(
+        bus.sent(),
+        [
+            "0.000 70A#00",
+            "0.000 58A#6016100100000000",
+            "110.000 08A#3081110300000000",
+            "300.000 08A#0000000000000000",
+        ]
+    );
+    assert_eq!(bus.value(0x1001, 0), [0]);
+    assert_eq!(bus.value(0x1003, 0), [1]);
+    // Error code in bits 15..0, the first two manufacturer bytes (the node-ID lost) above.
+    assert_eq!(bus.value(0x1003, 1), 0x0003_8130u32.to_le_bytes());
+    let events = bus.events();
+    assert!(events.iter().any(|e| matches!(
+        e,
+        DeviceEvent::EmcySent {
+            code: 0x8130,
+            register: 0x11,
+            ..
+        }
+    )));
+}
+
+#[test]
+fn device_check_refusals() {
+    let mut bus = Bus::booted(ds301_device(10));
+    // 1016h: the same node twice, 0604 0043h.
+    bus.rx(1, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+    bus.rx(2, &download(10, 0x1016, 2, &0x0003_0064u32.to_le_bytes()));
+    // 1014h with a restricted CAN-ID (after invalidating): 0609 0030h.
+    bus.rx(3, &download(10, 0x1014, 0, &0x8000_008Au32.to_le_bytes()));
+    bus.rx(4, &download(10, 0x1014, 0, &0x0000_0701u32.to_le_bytes()));
+    // 1010h:01 without the signature: 0800 0020h.
+    bus.rx(5, &download(10, 0x1010, 1, b"wron"));
+    // 1003h:01 with no error stored: 0800 0024h.
+    bus.rx(6, "60A#4003100100000000");
+    // 1003h:00 = 1: 0609 0030h.
+    bus.rx(7, &download(10, 0x1003, 0, &[1]));
+    // 1019h reserved value 1: 0609 0030h.
+    bus.rx(8, &download(10, 0x1019, 0, &[1]));
+    // 1012h with a 29-bit CAN-ID: 0609 0030h.
+    bus.rx(9, &download(10, 0x1012, 0, &0x2000_0100u32.to_le_bytes()));
+    let sent = bus.sent();
+    assert_eq!(
+        sent[1..],
+        [
+            "1.000 58A#6016100100000000",
+            "2.000 58A#8016100243000406",
+            "3.000 58A#6014100000000000",
+            "4.000 58A#8014100030000906",
+            "5.000 58A#8010100120000008",
+            "6.000 58A#8003100124000008",
+            "7.000 58A#8003100030000906",
+            "8.000 58A#8019100030000906",
+            "9.000 58A#8012100030000906",
+        ]
+    );
+}
+
+#[test]
+fn store_keeps_a_value_over_reset_node_and_restore_reverts_it() {
+    let mut bus = Bus::booted(ds301_device(10));
+    bus.rx(1, &download(10, 0x1017, 0, &500u16.to_le_bytes()));
+    bus.rx(2, &download(10, 0x1010, 1, b"save"));
+    bus.rx(3, "000#810A");
+    assert_eq!(bus.value(0x1017, 0), 500u16.to_le_bytes());
+    // 1010h:01 reads the capability, not the signature.
+    assert_eq!(bus.value(0x1010, 1), 1u32.to_le_bytes());
+    bus.rx(4, &download(10, 0x1011, 1, b"load"));
+    // Restore takes effect at the next reset, not at once.
+    assert_eq!(bus.value(0x1017, 0), 500u16.to_le_bytes());
+    bus.rx(5, "000#810A");
+    assert_eq!(bus.value(0x1017, 0), [0, 0]);
+    let sent = bus.sent();
+    assert!(sent.contains(&"3.000 70A#00".to_string()), "{sent:?}");
+    assert!(sent.contains(&"5.000 70A#00".to_string()), "{sent:?}");
+}
+
+#[test]
+fn store_on_reset_communication_keeps_communication_parameters() {
+    let mut bus = Bus::booted(ds301_device(10));
+    bus.rx(1, &download(10, 0x1017, 0, &100u16.to_le_bytes()));
+    bus.rx(2, &download(10, 0x1010, 2, b"save"));
+    bus.rx(3, &download(10, 0x1017, 0, &0u16.to_le_bytes()));
+    bus.rx(4, "000#820A");
+    bus.advance(104);
+    let sent = bus.sent();
+    assert_eq!(sent[sent.len() - 2..], ["4.000 70A#00", "104.000 70A#7F"]);
+}
+
+#[test]
+fn lss_configured_node_id_takes_effect_at_reset_communication() {
+    let mut bus = Bus::booted(base_device(5));
+    bus.rx(1, "7E5#0401000000000000");
+    bus.rx(2, "7E5#1120000000000000");
+    bus.rx(3, "7E5#0400000000000000");
+    assert_eq!(bus.dev.node_id().get(), 5);
+    bus.rx(4, "000#8205");
+    assert_eq!(bus.dev.node_id().get(), 0x20);
+    assert_eq!(
+        bus.sent(),
+        ["0.000 705#00", "2.000 7E4#1100000000000000", "4.000 720#00"]
+    );
+    // The default SDO server and the $NODEID defaults follow the new node-ID.
+    bus.rx(5, "620#4018100100000000");
+    assert_eq!(bus.sent(), ["5.000 5A0#43181001BC0A0000"]);
+    assert_eq!(bus.value(0x1800, 1), 0x1A0u32.to_le_bytes());
+    assert!(
+        bus.events()
+            .iter()
+            .any(|e| matches!(e, DeviceEvent::NodeIdChanged { .. }))
+    );
+}
+
+#[test]
+fn build_notes_are_kept() {
+    let dev = ds301_device(10);
+    // Whatever the file departs in, the notes are readable.
+    for note in dev.notes() {
+        assert!(!note.to_string().is_empty());
+    }
+    assert!(Device::from_eds(&eds(BASE), 0, Box::new(NoApplication)).is_err());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn arbitrary_frames_never_panic(
+        frames in proptest::collection::vec(
+            (0u16..0x800, proptest::bool::ANY, proptest::collection::vec(any::<u8>(), 0..=8), 0u64..50),
+            0..60,
+        )
+    ) {
+        for dev in [base_device(5), ds301_device(10)] {
+            let mut bus = Bus::booted(dev);
+            let mut t = 0;
+            bus.rx(0, "000#0100");
+            for (id, remote, data, dt) in &frames {
+                t += dt;
+                bus.advance(t);
+                let id = canopener_can::StandardId::new(*id).expect("11-bit");
+                let frame = if *remote {
+                    CanFrame::remote(id, data.len() as u8).expect("dlc")
+                } else {
+                    CanFrame::new(id, data).expect("<= 8")
+                };
+                bus.dev.handle_frame(bus.now, &frame);
+                bus.drain();
+            }
+            bus.advance(t + 5_000);
+        }
+    }
+}
