@@ -51,6 +51,12 @@
 //!   made with [`Device::new`] keeps the dictionary's values as given.
 //! - The error history 1003h starts empty after every reset communication (the EMCY producer is
 //!   re-created with the other communication cores), as CANopenNode does.
+//!
+//! Faults ([`Device::with_faults`], the catalogue in [`crate::faults`]) are applied around the
+//! cores, never inside them: received frames pass the fault layer before routing, sent frames
+//! pass it (tagged with the core that made them) after collection, and the three "accepted
+//! anyway" faults and `store-ignored` act in the device's own SDO download checks. Without faults
+//! every one of these steps is the identity.
 
 use std::collections::{BTreeSet, VecDeque};
 
@@ -61,6 +67,7 @@ use canopener_wire::{NodeId, abort};
 
 use crate::application::{AppChanges, Application};
 use crate::emcy::{EmcyEvent, EmcyProducer};
+use crate::faults::{Fault, FaultLayer, FaultSet, Source};
 use crate::heartbeat::{ConsumerEvent, ErrorControl, ErrorControlEvent, HeartbeatConsumer};
 use crate::lss_slave::{LssEvent, LssSlave};
 use crate::nmt_slave::{CommService, NmtEvent, NmtSlave, NmtSlaveState};
@@ -176,6 +183,7 @@ pub struct Device {
     /// Sources of the active 8130h EMCY: consumed nodes lost, and 0 for life guarding.
     lost: BTreeSet<u8>,
     reset_application: bool,
+    faults: FaultLayer,
     transmit: VecDeque<CanFrame>,
     events: VecDeque<DeviceEvent>,
 }
@@ -231,6 +239,7 @@ impl Device {
             app,
             lost: BTreeSet::new(),
             reset_application: false,
+            faults: FaultLayer::new(FaultSet::none()),
             transmit: VecDeque::new(),
             events: VecDeque::new(),
         })
@@ -241,6 +250,18 @@ impl Device {
     pub fn with_parameter_store(mut self, store: Box<dyn ParameterStore>) -> Device {
         self.params = store;
         self
+    }
+
+    /// Gives the device the defects in `faults` (the fault catalogue, [`crate::faults`]). Call
+    /// before [`Device::boot`] so that the boot-up message is affected too.
+    pub fn with_faults(mut self, faults: FaultSet) -> Device {
+        self.faults = FaultLayer::new(faults);
+        self
+    }
+
+    /// The device's defects.
+    pub fn faults(&self) -> FaultSet {
+        self.faults.faults()
     }
 
     /// Power-on: reset application and reset communication (defaults, then saved values), then
@@ -301,7 +322,19 @@ impl Device {
     /// Feeds a received frame to every core whose COB-ID it matches, in the NMT states where CiA
     /// 301 runs that service.
     pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+        let sdo_request = self.sdo.iter().any(|(_, server)| server.rx_id() == frame.id());
+        let Some(frame) = self.faults.inbound(frame, self.node, sdo_request) else {
+            return;
+        };
+        let frame = &frame;
         let state = self.nmt.state();
+        if sdo_request && state.is_active(CommService::Sdo) && self.fault_accepts(now, frame) {
+            self.pump(now);
+            return;
+        }
+        if state.is_active(CommService::ErrorControl) {
+            self.fault_guarding(now, frame);
+        }
         self.nmt.handle_frame(now, frame);
         if let Some(lss) = &mut self.lss {
             lss.handle_frame(now, frame);
@@ -319,6 +352,7 @@ impl Device {
                 consumer: &self.consumer,
                 store: &mut self.store,
                 params: &mut *self.params,
+                store_ignored: self.faults.has(Fault::StoreIgnored),
             };
             for (_, server) in &mut self.sdo {
                 server.handle_frame_with(now, frame, &mut self.od, &mut hooks);
@@ -338,6 +372,9 @@ impl Device {
 
     /// Runs every timer due at `now`, in every core and the application.
     pub fn handle_timeout(&mut self, now: Instant) {
+        let mut released = Vec::new();
+        self.faults.release(now, &mut released);
+        self.transmit.extend(released);
         self.error_control.handle_timeout(now);
         self.consumer.handle_timeout(now);
         for (_, server) in &mut self.sdo {
@@ -384,6 +421,7 @@ impl Device {
         ]
         .into_iter()
         .chain(self.sdo.iter().map(|(_, server)| server.poll_timeout()))
+        .chain([self.faults.poll_timeout()])
         .flatten()
         .min()
     }
@@ -397,7 +435,7 @@ impl Device {
             }
         }
         self.emcy.sync_od(&mut self.od);
-        self.collect_frames();
+        self.collect_frames(now);
     }
 
     fn pump_once(&mut self, now: Instant) -> bool {
@@ -481,36 +519,139 @@ impl Device {
         any
     }
 
-    fn collect_frames(&mut self) {
+    fn collect_frames(&mut self, now: Instant) {
         let silent = self.lss.as_ref().is_some_and(LssSlave::is_silent);
-        let mut frames = Vec::new();
+        let mut made: Vec<(Source, CanFrame)> = Vec::new();
         if let Some(lss) = &mut self.lss {
-            frames.extend(std::iter::from_fn(|| lss.poll_transmit()));
+            made.extend(std::iter::from_fn(|| lss.poll_transmit()).map(|f| (Source::Other, f)));
         }
-        let mut others = Vec::new();
-        others.extend(std::iter::from_fn(|| self.nmt.poll_transmit()));
+        let lss_frames = made.len();
+        made.extend(std::iter::from_fn(|| self.nmt.poll_transmit()).map(|f| (Source::Nmt, f)));
         for (_, server) in &mut self.sdo {
-            others.extend(std::iter::from_fn(|| server.poll_transmit()));
+            made.extend(std::iter::from_fn(|| server.poll_transmit()).map(|f| (Source::Sdo, f)));
         }
-        others.extend(std::iter::from_fn(|| self.error_control.poll_transmit()));
+        let error_control = if self.error_control.heartbeat_active() {
+            let period_ms = match self.od.get(ObjectKey::new(0x1017, 0)).map(|e| e.value()) {
+                Some(&[a, b]) => u16::from_le_bytes([a, b]),
+                _ => 0,
+            };
+            Source::Heartbeat { period_ms }
+        } else {
+            Source::Guarding
+        };
+        made.extend(std::iter::from_fn(|| self.error_control.poll_transmit()).map(|f| (error_control, f)));
         while let Some(frame) = self.emcy.poll_transmit() {
             let d = frame.data();
-            if d.len() == 8 {
+            let dropped = self.faults.has(Fault::NoEmcy)
+                || (self.faults.has(Fault::EmcyNoErrorReset) && d.starts_with(&[0, 0]));
+            if d.len() == 8 && !dropped {
                 self.events.push_back(DeviceEvent::EmcySent {
                     code: u16::from_le_bytes([d[0], d[1]]),
                     register: d[2],
                     data: [d[3], d[4], d[5], d[6], d[7]],
                 });
             }
-            others.push(frame);
+            made.push((Source::Emcy, frame));
         }
-        others.extend(std::iter::from_fn(|| self.sync.poll_transmit()));
-        others.extend(std::iter::from_fn(|| self.pdo.poll_transmit()));
-        others.extend(std::iter::from_fn(|| self.time.poll_transmit()));
-        if !silent {
-            frames.extend(others);
+        made.extend(std::iter::from_fn(|| self.sync.poll_transmit()).map(|f| (Source::Sync, f)));
+        made.extend(std::iter::from_fn(|| self.pdo.poll_transmit()).map(|f| (Source::Other, f)));
+        made.extend(std::iter::from_fn(|| self.time.poll_transmit()).map(|f| (Source::Other, f)));
+        if silent {
+            made.truncate(lss_frames);
+        }
+        let mut frames = Vec::with_capacity(made.len());
+        for (source, frame) in made {
+            self.faults.outbound(now, source, frame, &mut frames);
         }
         self.transmit.extend(frames);
+    }
+
+    /// `limit-not-enforced`, `unmappable-accepted`, `pdo-cob-id-unchecked`: an expedited download
+    /// a correct device refuses for that reason is stored and confirmed anyway. `true` when the
+    /// frame was taken so.
+    fn fault_accepts(&mut self, now: Instant, frame: &CanFrame) -> bool {
+        let wanted = [
+            Fault::LimitNotEnforced,
+            Fault::UnmappableAccepted,
+            Fault::PdoCobIdUnchecked,
+        ];
+        if !wanted.iter().any(|f| self.faults.has(*f)) {
+            return false;
+        }
+        let Some((server_index, server)) = self.sdo.iter().find(|(_, s)| s.rx_id() == frame.id()) else {
+            return false;
+        };
+        let (server_index, tx) = (*server_index, server.tx_id());
+        let &[command, lo, hi, sub, ref payload @ ..] = frame.data() else {
+            return false;
+        };
+        // Expedited download initiate only (ccs 1, e = 1), while the server is idle.
+        if command & 0xE2 != 0x22 || payload.len() != 4 || server.is_busy() {
+            return false;
+        }
+        let len = if command & 0x01 != 0 {
+            4 - usize::from((command >> 2) & 0x03)
+        } else {
+            4
+        };
+        let key = ObjectKey::new(u16::from_le_bytes([lo, hi]), sub);
+        let data = &payload[..len];
+        let refused = match self.pdo.check_write(key, data, &self.od) {
+            Err(crate::pdo::PdoConfigError::NotMappable { .. }) => self.faults.has(Fault::UnmappableAccepted),
+            Err(crate::pdo::PdoConfigError::RestrictedCanId { .. }) => {
+                self.faults.has(Fault::PdoCobIdUnchecked)
+            }
+            Err(_) => false,
+            Ok(()) => {
+                // Probe the dictionary's own checks, then put the old value back.
+                let Some(old) = self.od.get(key).map(|e| e.value().to_vec()) else {
+                    return false;
+                };
+                match self.od.write(key, data) {
+                    Ok(()) => {
+                        let _ = self.od.set_value(key, &old);
+                        false
+                    }
+                    Err(error) => {
+                        self.faults.has(Fault::LimitNotEnforced)
+                            && matches!(error.abort_code(), abort::VALUE_TOO_HIGH | abort::VALUE_TOO_LOW)
+                    }
+                }
+            }
+        };
+        if !refused || self.od.set_value(key, data).is_err() {
+            return false;
+        }
+        if let Ok(response) = CanFrame::new(tx, &[0x60, lo, hi, sub, 0, 0, 0, 0]) {
+            let mut out = Vec::new();
+            self.faults.outbound(now, Source::Sdo, response, &mut out);
+            self.transmit.extend(out);
+        }
+        self.events.push_back(DeviceEvent::Sdo {
+            server: server_index,
+            event: sdo_server::Event::Written { key },
+        });
+        self.after_download(now, key);
+        true
+    }
+
+    /// `guarding-and-heartbeat`: a node guarding request is answered even while heartbeat runs
+    /// (error control ignores it then, as CiA 301 wants).
+    fn fault_guarding(&mut self, now: Instant, frame: &CanFrame) {
+        let own = u32::from(canopener_wire::ERROR_CONTROL_BASE) + u32::from(self.node.get());
+        if self.faults.has(Fault::GuardingAndHeartbeat)
+            && frame.is_remote()
+            && frame.id().as_raw() == own
+            && self.error_control.heartbeat_active()
+        {
+            let toggle = self.faults.next_guard_toggle();
+            let byte = canopener_wire::encode_guard_response(self.nmt.state().reported(), toggle);
+            if let Ok(answer) = CanFrame::new(frame.id(), &[byte]) {
+                let mut out = Vec::new();
+                self.faults.outbound(now, Source::Guarding, answer, &mut out);
+                self.transmit.extend(out);
+            }
+        }
     }
 
     fn on_nmt(&mut self, now: Instant, event: NmtEvent) {
@@ -692,6 +833,7 @@ impl Device {
             let changes = self.app.reset(now, &mut self.od);
             self.apply_changes(now, &changes);
         }
+        self.faults.reset_guard_toggle();
         self.nmt.set_node_id(self.node);
         self.nmt.boot(now);
     }
@@ -849,6 +991,8 @@ struct Hooks<'a> {
     consumer: &'a HeartbeatConsumer,
     store: &'a mut StoreRestore,
     params: &'a mut dyn ParameterStore,
+    /// `store-ignored`: `save` to 1010h is confirmed without storing.
+    store_ignored: bool,
 }
 
 impl SdoHooks for Hooks<'_> {
@@ -873,6 +1017,9 @@ impl SdoHooks for Hooks<'_> {
                     .map_err(|e| e.abort_code())?;
             }
             _ => {}
+        }
+        if self.store_ignored && key.index == 0x1010 && data == b"save" {
+            return Ok(());
         }
         // Last: a `save` here stores the dictionary at once, so every other check must have passed.
         self.store

@@ -1,0 +1,725 @@
+//! The fault catalogue: named, documented defects a real device might have, switchable per
+//! [`Device`](crate::device::Device) with [`Device::with_faults`](crate::device::Device::with_faults).
+//!
+//! Each [`Fault`] is a small, explicit deviation applied by the `Device` around its cores, never
+//! inside them: the cores stay correct, and a device without faults behaves exactly as before.
+//! A fault acts at one of four places:
+//! - **on received frames**, before any core sees them ([`FaultLayer::inbound`]): a frame is
+//!   dropped (NMT stop, NMT broadcast, LSS, TPDO remote requests) or rewritten (the SDO toggle bit
+//!   is forced to what the server expects);
+//! - **on sent frames**, after the cores made them and before they leave the device
+//!   ([`FaultLayer::outbound`]): a frame is dropped (boot-up, EMCY), rewritten (heartbeat state,
+//!   abort code, expedited size bit, SYNC counter, block CRC, boot-up CAN-ID) or delayed and
+//!   duplicated on virtual time (slow SDO, heartbeat jitter, extra heartbeats 1 ms apart);
+//! - **in the `Device`'s own checks** on SDO downloads: a download a correct device refuses
+//!   (above HighLimit, a non-mappable object in a PDO mapping, a restricted COB-ID) is stored and
+//!   confirmed anyway, and a `save` signature is confirmed without storing anything;
+//! - **in the `Device`'s routing**: node guarding requests are answered while heartbeat runs.
+//!
+//! The sources of the defects: the thesis in `seeds/001` (a UWASA node tested with a Kvaser rig:
+//! a write above HighLimit to 1F51h accepted, a non-mappable object accepted into a PDO mapping,
+//! heartbeats 1 ms apart, no RTR on TPDOs, no LSS), the EnergyBus conformance testing paper (a
+//! missing SYNC counter, a missing LSS state change during configuration) and field experience.
+
+use std::collections::VecDeque;
+use std::fmt;
+use std::str::FromStr;
+use std::time::Duration;
+
+use canopener_can::{CanFrame, Instant, StandardId};
+use canopener_wire::{ERROR_CONTROL_BASE, LSS_MASTER_TO_SLAVE_ID, NMT_ID, NodeId, abort};
+
+/// The SDO response delay of [`Fault::SdoSlow`] unless [`FaultSet::with_sdo_delay`] says
+/// otherwise: longer than the 500 ms many SDO clients wait by default.
+pub const DEFAULT_SDO_DELAY: Duration = Duration::from_millis(600);
+
+/// The gap between a heartbeat and its copy under [`Fault::HeartbeatTooFast`].
+pub const HEARTBEAT_COPY_GAP: Duration = Duration::from_millis(1);
+
+/// One defect a simulated device can have.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Fault {
+    /// No boot-up message after power-on or a reset.
+    NoBootUp,
+    /// The boot-up message on 700h + node-ID + 1.
+    BootUpWrongId,
+    /// Heartbeat and guarding answers report the NMT command specifier instead of the state.
+    HeartbeatStateWrong,
+    /// Every heartbeat is sent twice, 1 ms apart.
+    HeartbeatTooFast,
+    /// Every second heartbeat is 40 % of the period late.
+    HeartbeatJitter,
+    /// Node guarding is answered while heartbeat production runs.
+    GuardingAndHeartbeat,
+    /// NMT stop is ignored.
+    IgnoresNmtStop,
+    /// NMT commands to all nodes (node-ID 0) are ignored.
+    NmtBroadcastIgnored,
+    /// The SDO server does not check the toggle bit of segments.
+    SdoToggleIgnored,
+    /// Every SDO response is sent late.
+    SdoSlow,
+    /// Expedited upload responses claim 4 bytes whatever the size.
+    SdoExpeditedSizeWrong,
+    /// Every SDO abort carries the general error 0800 0000h.
+    WrongAbortCode,
+    /// Requests with an unknown command specifier are not answered.
+    SdoBadCommandSilent,
+    /// The CRC of a block upload is wrong.
+    BlockCrcWrong,
+    /// Writes above HighLimit (or below LowLimit) are accepted.
+    LimitNotEnforced,
+    /// A non-mappable object is accepted into a PDO mapping.
+    UnmappableAccepted,
+    /// A restricted CAN-ID is accepted as a PDO COB-ID.
+    PdoCobIdUnchecked,
+    /// Remote requests on TPDOs are not answered.
+    NoTpdoRtr,
+    /// No EMCY is ever sent.
+    NoEmcy,
+    /// The error-reset EMCY (0000h) is never sent.
+    EmcyNoErrorReset,
+    /// `save` to 1010h is confirmed but nothing is stored.
+    StoreIgnored,
+    /// The SYNC producer leaves out the counter byte.
+    SyncCounterMissing,
+    /// The device has no LSS slave.
+    NoLss,
+    /// The LSS slave never leaves the waiting state.
+    LssStateNotChanged,
+}
+
+impl Fault {
+    /// Every fault, in catalogue order.
+    pub const ALL: [Fault; 24] = [
+        Fault::NoBootUp,
+        Fault::BootUpWrongId,
+        Fault::HeartbeatStateWrong,
+        Fault::HeartbeatTooFast,
+        Fault::HeartbeatJitter,
+        Fault::GuardingAndHeartbeat,
+        Fault::IgnoresNmtStop,
+        Fault::NmtBroadcastIgnored,
+        Fault::SdoToggleIgnored,
+        Fault::SdoSlow,
+        Fault::SdoExpeditedSizeWrong,
+        Fault::WrongAbortCode,
+        Fault::SdoBadCommandSilent,
+        Fault::BlockCrcWrong,
+        Fault::LimitNotEnforced,
+        Fault::UnmappableAccepted,
+        Fault::PdoCobIdUnchecked,
+        Fault::NoTpdoRtr,
+        Fault::NoEmcy,
+        Fault::EmcyNoErrorReset,
+        Fault::StoreIgnored,
+        Fault::SyncCounterMissing,
+        Fault::NoLss,
+        Fault::LssStateNotChanged,
+    ];
+
+    /// The stable kebab-case name (`canopener sim --fault NAME`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Fault::NoBootUp => "no-boot-up",
+            Fault::BootUpWrongId => "boot-up-wrong-id",
+            Fault::HeartbeatStateWrong => "heartbeat-state-wrong",
+            Fault::HeartbeatTooFast => "heartbeat-too-fast",
+            Fault::HeartbeatJitter => "heartbeat-jitter",
+            Fault::GuardingAndHeartbeat => "guarding-and-heartbeat",
+            Fault::IgnoresNmtStop => "ignores-nmt-stop",
+            Fault::NmtBroadcastIgnored => "nmt-broadcast-ignored",
+            Fault::SdoToggleIgnored => "sdo-toggle-ignored",
+            Fault::SdoSlow => "sdo-slow",
+            Fault::SdoExpeditedSizeWrong => "sdo-expedited-size-wrong",
+            Fault::WrongAbortCode => "wrong-abort-code",
+            Fault::SdoBadCommandSilent => "sdo-bad-command-silent",
+            Fault::BlockCrcWrong => "block-crc-wrong",
+            Fault::LimitNotEnforced => "limit-not-enforced",
+            Fault::UnmappableAccepted => "unmappable-accepted",
+            Fault::PdoCobIdUnchecked => "pdo-cob-id-unchecked",
+            Fault::NoTpdoRtr => "no-tpdo-rtr",
+            Fault::NoEmcy => "no-emcy",
+            Fault::EmcyNoErrorReset => "emcy-no-error-reset",
+            Fault::StoreIgnored => "store-ignored",
+            Fault::SyncCounterMissing => "sync-counter-missing",
+            Fault::NoLss => "no-lss",
+            Fault::LssStateNotChanged => "lss-state-not-changed",
+        }
+    }
+
+    /// What the defect is, what a conformance test should catch, and where it comes from.
+    pub const fn description(self) -> &'static str {
+        match self {
+            Fault::NoBootUp => {
+                "No boot-up message (700h + node-ID, data 00h) after power-on, reset node or reset \
+                 communication; the device still enters Pre-operational. A test should expect the \
+                 boot-up within a bounded time after every reset. Field experience: masters that wait \
+                 for the boot-up never configure such a node."
+            }
+            Fault::BootUpWrongId => {
+                "The boot-up message goes out on 700h + node-ID + 1 (an off-by-one between the \
+                 configured node-ID and the one used for error control). A test should check the \
+                 boot-up's CAN-ID against the node-ID it set. Field experience."
+            }
+            Fault::HeartbeatStateWrong => {
+                "Heartbeats and node guarding answers carry the NMT command specifier instead of the \
+                 state: 01h for Operational, 02h for Stopped, 80h for Pre-operational (guarding answers \
+                 keep their toggle bit in Operational and Stopped). A test should check the state \
+                 byte in every NMT state. Field experience (command and state codes confused)."
+            }
+            Fault::HeartbeatTooFast => {
+                "Every heartbeat is followed by a copy 1 ms later, so the measured interval drops to \
+                 1 ms and the average to about half of 1017h. A test should measure minimum, maximum and \
+                 average heartbeat intervals against 1017h. From the thesis (UWASA node: heartbeat \
+                 minimum 1 ms, average 55 ms at 1017h = 100 ms)."
+            }
+            Fault::HeartbeatJitter => {
+                "Every second heartbeat is late by 40 % of the 1017h period (intervals of 1.4 and 0.6 \
+                 periods). A test should check each interval against a tolerance (the thesis used \
+                 ±5 %). Field experience (heartbeat sent from a busy main loop)."
+            }
+            Fault::GuardingAndHeartbeat => {
+                "Node guarding requests are answered while 1017h is not 0, so heartbeat and guarding \
+                 run together, which CiA 301 forbids (heartbeat wins). A test should send a guarding \
+                 request while heartbeat runs and expect no answer. Field experience."
+            }
+            Fault::IgnoresNmtStop => {
+                "The NMT stop command (02h) is ignored: the device stays in its state and keeps \
+                 serving SDO and PDOs. A test should send stop and expect the Stopped state (04h) in \
+                 the heartbeat and no SDO answer. Field experience."
+            }
+            Fault::NmtBroadcastIgnored => {
+                "NMT commands addressed to all nodes (node-ID 0) are ignored; commands to the own \
+                 node-ID work. A test should use both forms. Field experience."
+            }
+            Fault::SdoToggleIgnored => {
+                "The SDO server does not check the toggle bit of download and upload segments: a \
+                 repeated or out-of-order segment is taken as the next one instead of being aborted \
+                 with 0503 0000h. A test should send a segment with the wrong toggle and expect the \
+                 abort. Field experience (wrong toggle handling)."
+            }
+            Fault::SdoSlow => {
+                "Every SDO response is sent late (600 ms unless configured), beyond the timeout of \
+                 many clients. A test should measure SDO response times (the thesis's SDO read/write \
+                 response time test). Field experience (SDO served from a slow background task)."
+            }
+            Fault::SdoExpeditedSizeWrong => {
+                "Expedited upload responses always say 4 bytes (command 43h) whatever the object's \
+                 size, so a 1- or 2-byte value is answered as 4 bytes with padding. A test should check \
+                 the size indicated against the object's data type. Field experience."
+            }
+            Fault::WrongAbortCode => {
+                "Every SDO abort carries the general error 0800 0000h instead of the code for the \
+                 condition (object missing, read-only, out of range...). A test should check the exact \
+                 abort code of each refusal. Field experience."
+            }
+            Fault::SdoBadCommandSilent => {
+                "A request with an unknown client command specifier gets no answer instead of the \
+                 abort 0504 0001h, so the client runs into its timeout. A test should send an \
+                 invalid command and expect the abort. Field experience."
+            }
+            Fault::BlockCrcWrong => {
+                "The CRC in the end frame of a block upload is wrong (inverted), so a client that \
+                 checks it aborts with 0504 0004h. A test should upload with CRC and check it. Field \
+                 experience (wrong CRC polynomial or seed)."
+            }
+            Fault::LimitNotEnforced => {
+                "Downloads outside the EDS LowLimit/HighLimit are stored and confirmed instead of \
+                 being aborted with 0609 0031h / 0609 0032h. A test should write just \
+                 above HighLimit and expect the abort. From the thesis (a write above HighLimit to \
+                 1F51h accepted)."
+            }
+            Fault::UnmappableAccepted => {
+                "A mapping entry naming an object whose PDOMapping is 0 is stored and confirmed \
+                 instead of being aborted with 0604 0041h. A test should try to map a non-mappable \
+                 object. From the thesis (a non-mappable object accepted into a PDO mapping)."
+            }
+            Fault::PdoCobIdUnchecked => {
+                "A PDO COB-ID with a restricted CAN-ID (NMT, SYNC, SDO, error control, LSS...) is \
+                 stored and confirmed instead of being aborted with 0609 0030h. A test should write a \
+                 restricted CAN-ID to 1400h/1800h sub-index 1. Field experience (CiA 301 restricted \
+                 CAN-IDs)."
+            }
+            Fault::NoTpdoRtr => {
+                "Remote requests on TPDO COB-IDs are not answered although COB-ID bit 30 allows them. \
+                 A test should request each TPDO whose bit 30 is clear. From the thesis (the UWASA \
+                 node did not support PDO RTR)."
+            }
+            Fault::NoEmcy => {
+                "No EMCY frame is ever sent, though 1001h and 1003h still record errors. A test should \
+                 provoke an error (a too-short RPDO, a lost heartbeat) and expect the EMCY. Field \
+                 experience (missing EMCY)."
+            }
+            Fault::EmcyNoErrorReset => {
+                "EMCYs are sent but the error reset (error code 0000h) when the last error clears is \
+                 not. A test should clear the error and expect the error reset EMCY. Field experience."
+            }
+            Fault::StoreIgnored => {
+                "Writing `save` to 1010h is confirmed but nothing is stored, so values are lost at the \
+                 next reset. A test should save, reset node and read back. Field experience \
+                 (store/restore ignored)."
+            }
+            Fault::SyncCounterMissing => {
+                "The SYNC producer leaves out the counter byte although 1019h is not 0. A test should \
+                 check the SYNC length and counter sequence against 1019h. From the EnergyBus paper \
+                 (missing counter value in SYNC handling of the stack under test)."
+            }
+            Fault::NoLss => {
+                "The device has no LSS slave: no answer to any LSS request, so fastscan cannot find it \
+                 and its node-ID cannot be configured. A test should inquire or fastscan. From the \
+                 thesis (the UWASA node did not support LSS)."
+            }
+            Fault::LssStateNotChanged => {
+                "The LSS slave never changes from waiting to configuration: switch state global and \
+                 selective are ignored, so configuration commands are not answered. A test should \
+                 switch to configuration and configure the node-ID. From the EnergyBus paper (missing \
+                 state change in the LSS state machine during configuration)."
+            }
+        }
+    }
+}
+
+impl fmt::Display for Fault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A fault name that is not in the catalogue.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown fault `{name}`; the faults are: {}", known_names())]
+pub struct UnknownFault {
+    /// The name given.
+    pub name: String,
+}
+
+fn known_names() -> String {
+    Fault::ALL.map(Fault::name).join(", ")
+}
+
+impl FromStr for Fault {
+    type Err = UnknownFault;
+
+    fn from_str(s: &str) -> Result<Fault, UnknownFault> {
+        let wanted = s.trim();
+        Fault::ALL
+            .into_iter()
+            .find(|f| f.name().eq_ignore_ascii_case(wanted))
+            .ok_or_else(|| UnknownFault { name: s.to_string() })
+    }
+}
+
+/// The faults of one device, and the delay of [`Fault::SdoSlow`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FaultSet {
+    bits: u32,
+    sdo_delay: Duration,
+}
+
+impl Default for FaultSet {
+    fn default() -> FaultSet {
+        FaultSet::none()
+    }
+}
+
+impl FaultSet {
+    /// No fault: a correct device.
+    pub const fn none() -> FaultSet {
+        FaultSet {
+            bits: 0,
+            sdo_delay: DEFAULT_SDO_DELAY,
+        }
+    }
+
+    /// This set with `fault` as well.
+    pub const fn with(mut self, fault: Fault) -> FaultSet {
+        self.bits |= 1 << fault as u32;
+        self
+    }
+
+    /// This set with the SDO response delay of [`Fault::SdoSlow`] set to `delay`.
+    pub const fn with_sdo_delay(mut self, delay: Duration) -> FaultSet {
+        self.sdo_delay = delay;
+        self
+    }
+
+    /// Adds `fault`.
+    pub fn insert(&mut self, fault: Fault) {
+        *self = self.with(fault);
+    }
+
+    /// Removes `fault`.
+    pub fn remove(&mut self, fault: Fault) {
+        self.bits &= !(1 << fault as u32);
+    }
+
+    /// Whether `fault` is in the set.
+    pub const fn contains(&self, fault: Fault) -> bool {
+        self.bits & (1 << fault as u32) != 0
+    }
+
+    /// Whether the set is empty.
+    pub const fn is_empty(&self) -> bool {
+        self.bits == 0
+    }
+
+    /// The faults in the set, in catalogue order.
+    pub fn iter(&self) -> impl Iterator<Item = Fault> + '_ {
+        Fault::ALL.into_iter().filter(|f| self.contains(*f))
+    }
+
+    /// The SDO response delay of [`Fault::SdoSlow`].
+    pub const fn sdo_delay(&self) -> Duration {
+        self.sdo_delay
+    }
+}
+
+impl FromIterator<Fault> for FaultSet {
+    fn from_iter<I: IntoIterator<Item = Fault>>(iter: I) -> FaultSet {
+        iter.into_iter().fold(FaultSet::none(), FaultSet::with)
+    }
+}
+
+impl From<Fault> for FaultSet {
+    fn from(fault: Fault) -> FaultSet {
+        FaultSet::none().with(fault)
+    }
+}
+
+/// Which core made an outgoing frame, for [`FaultLayer::outbound`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Source {
+    /// The NMT slave (the boot-up message).
+    Nmt,
+    /// An SDO server.
+    Sdo,
+    /// Error control while heartbeat runs, with the period in ms.
+    Heartbeat { period_ms: u16 },
+    /// Error control answering node guarding.
+    Guarding,
+    /// The EMCY producer.
+    Emcy,
+    /// The SYNC producer.
+    Sync,
+    /// Anything else (PDOs, TIME, LSS).
+    Other,
+}
+
+/// Where a block upload is, as far as [`Fault::BlockCrcWrong`] needs to know.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+enum BlockUpload {
+    #[default]
+    None,
+    /// The client asked for a block upload.
+    Initiated,
+    /// The server sends sub-block segments.
+    Segments,
+    /// The last segment went out; the client's acknowledgement comes next.
+    LastSent,
+    /// The client acknowledged the last sub-block: the end frame with the CRC comes next.
+    Ending,
+}
+
+/// The state the faults need on top of the cores: delayed frames, the SDO toggle the server
+/// expects, the block upload phase, the guarding toggle, the heartbeat count.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct FaultLayer {
+    faults: FaultSet,
+    delayed: VecDeque<(Instant, CanFrame)>,
+    /// Under [`Fault::SdoToggleIgnored`]: the toggle the server expects next, if in a segmented
+    /// transfer.
+    sdo_toggle: Option<bool>,
+    block: BlockUpload,
+    /// Under [`Fault::GuardingAndHeartbeat`]: the toggle of the next extra guarding answer.
+    guard_toggle: bool,
+    heartbeats: u64,
+}
+
+impl FaultLayer {
+    pub(crate) fn new(faults: FaultSet) -> FaultLayer {
+        FaultLayer {
+            faults,
+            ..FaultLayer::default()
+        }
+    }
+
+    pub(crate) fn faults(&self) -> FaultSet {
+        self.faults
+    }
+
+    pub(crate) fn has(&self, fault: Fault) -> bool {
+        self.faults.contains(fault)
+    }
+
+    /// A received frame before the cores see it: `None` drops it. `sdo_request` says whether it
+    /// arrived on an SDO server's request COB-ID.
+    pub(crate) fn inbound(&mut self, frame: &CanFrame, node: NodeId, sdo_request: bool) -> Option<CanFrame> {
+        if self.faults.is_empty() {
+            return Some(*frame);
+        }
+        let raw = frame.id().as_raw();
+        let data = frame.data();
+        if raw == u32::from(NMT_ID) && !frame.is_remote() && data.len() == 2 {
+            let (command, target) = (data[0], data[1]);
+            if self.has(Fault::NmtBroadcastIgnored) && target == 0 {
+                return None;
+            }
+            if self.has(Fault::IgnoresNmtStop) && command == 0x02 && (target == 0 || target == node.get()) {
+                return None;
+            }
+        }
+        if raw == u32::from(LSS_MASTER_TO_SLAVE_ID) {
+            if self.has(Fault::NoLss) {
+                return None;
+            }
+            if self.has(Fault::LssStateNotChanged) && matches!(data, [0x04, 0x01, ..] | [0x40..=0x43, ..]) {
+                return None;
+            }
+        }
+        if self.has(Fault::NoTpdoRtr)
+            && frame.is_remote()
+            && raw != u32::from(ERROR_CONTROL_BASE) + u32::from(node.get())
+        {
+            return None;
+        }
+        if sdo_request && let Some(&first) = data.first() {
+            if first & 0xE3 == 0xA0 {
+                self.block = BlockUpload::Initiated;
+            } else if first == 0xA2 && self.block == BlockUpload::LastSent {
+                self.block = BlockUpload::Ending;
+            } else if first == 0x80 {
+                self.block = BlockUpload::None;
+            }
+            if self.has(Fault::SdoToggleIgnored)
+                && let Some(toggle) = self.sdo_toggle
+                && matches!(first >> 5, 0 | 3)
+            {
+                let mut bytes = data.to_vec();
+                bytes[0] = (first & !0x10) | if toggle { 0x10 } else { 0 };
+                return CanFrame::new(frame.id(), &bytes).ok();
+            }
+        }
+        Some(*frame)
+    }
+
+    /// A frame a core made, at `now`: `out` receives what leaves the device at once; delayed
+    /// frames wait for [`FaultLayer::release`].
+    pub(crate) fn outbound(
+        &mut self,
+        now: Instant,
+        source: Source,
+        frame: CanFrame,
+        out: &mut Vec<CanFrame>,
+    ) {
+        if self.faults.is_empty() {
+            out.push(frame);
+            return;
+        }
+        let data = frame.data();
+        let mut bytes = data.to_vec();
+        let mut id = frame.id();
+        let mut delay = None;
+        match source {
+            Source::Nmt => {
+                if bytes == [0] && self.has(Fault::NoBootUp) {
+                    return;
+                }
+                if bytes == [0]
+                    && self.has(Fault::BootUpWrongId)
+                    && let Some(next) = StandardId::new((frame.id().as_raw() as u16).wrapping_add(1) & 0x7FF)
+                {
+                    id = next.into();
+                }
+            }
+            Source::Heartbeat { period_ms } => {
+                self.heartbeats += 1;
+                self.wrong_state(&mut bytes);
+                if self.has(Fault::HeartbeatJitter) && self.heartbeats.is_multiple_of(2) {
+                    delay = Some(Duration::from_millis(u64::from(period_ms) * 2 / 5));
+                }
+                if self.has(Fault::HeartbeatTooFast)
+                    && let Ok(copy) = CanFrame::new(id, &bytes)
+                {
+                    let at = now + delay.unwrap_or_default() + HEARTBEAT_COPY_GAP;
+                    self.delay(at, copy);
+                }
+            }
+            Source::Guarding => self.wrong_state(&mut bytes),
+            Source::Sdo => {
+                if !self.sdo_outbound(&mut bytes) {
+                    return;
+                }
+                if self.has(Fault::SdoSlow) {
+                    delay = Some(self.faults.sdo_delay());
+                }
+            }
+            Source::Emcy => {
+                if self.has(Fault::NoEmcy) {
+                    return;
+                }
+                if self.has(Fault::EmcyNoErrorReset) && bytes.len() >= 2 && bytes[..2] == [0, 0] {
+                    return;
+                }
+            }
+            Source::Sync => {
+                if self.has(Fault::SyncCounterMissing) {
+                    bytes.clear();
+                }
+            }
+            Source::Other => {}
+        }
+        let Ok(frame) = CanFrame::new(id, &bytes) else {
+            return;
+        };
+        match delay {
+            Some(delay) if !delay.is_zero() => self.delay(now + delay, frame),
+            _ => out.push(frame),
+        }
+    }
+
+    /// Heartbeat or guarding state byte under [`Fault::HeartbeatStateWrong`].
+    fn wrong_state(&self, bytes: &mut [u8]) {
+        if self.has(Fault::HeartbeatStateWrong)
+            && let [byte] = bytes
+        {
+            let state = match *byte & 0x7F {
+                0x05 => 0x01,
+                0x04 => 0x02,
+                0x7F => 0x80,
+                other => other,
+            };
+            // Pre-operational's 80h takes the place of the toggle bit; the other states keep it.
+            *byte = if state == 0x80 {
+                state
+            } else {
+                (*byte & 0x80) | state
+            };
+        }
+    }
+
+    /// An SDO response under the SDO faults; `false` drops it.
+    fn sdo_outbound(&mut self, bytes: &mut [u8]) -> bool {
+        let Some(&first) = bytes.first() else {
+            return true;
+        };
+        let scs = first >> 5;
+        // Toggle tracking: what the server answered decides what it expects next.
+        self.sdo_toggle = match scs {
+            2 | 3 => Some(false),
+            0 | 1 => Some(first & 0x10 == 0),
+            _ => None,
+        };
+        // Block upload phases: the server's own frames move them on.
+        match self.block {
+            // Initiate response: ss (bit 0) = 0; end: ss = 1.
+            BlockUpload::Initiated if scs == 6 && first & 0x01 == 0 => self.block = BlockUpload::Segments,
+            BlockUpload::Segments if first & 0x80 != 0 => self.block = BlockUpload::LastSent,
+            BlockUpload::Ending if scs == 6 && first & 0x03 == 1 => {
+                self.block = BlockUpload::None;
+                if self.has(Fault::BlockCrcWrong) && bytes.len() >= 3 {
+                    bytes[1] = !bytes[1];
+                    bytes[2] = !bytes[2];
+                }
+            }
+            _ => {}
+        }
+        if first == 0x80 && bytes.len() == 8 {
+            self.block = BlockUpload::None;
+            let code = u32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]);
+            if self.has(Fault::SdoBadCommandSilent) && code == abort::COMMAND_SPECIFIER_INVALID {
+                return false;
+            }
+            if self.has(Fault::WrongAbortCode) {
+                bytes[4..8].copy_from_slice(&abort::GENERAL_ERROR.to_le_bytes());
+            }
+        }
+        if self.has(Fault::SdoExpeditedSizeWrong) && first & 0xE3 == 0x43 {
+            bytes[0] = 0x43;
+        }
+        true
+    }
+
+    /// The next guarding toggle under [`Fault::GuardingAndHeartbeat`].
+    pub(crate) fn next_guard_toggle(&mut self) -> bool {
+        let toggle = self.guard_toggle;
+        self.guard_toggle = !toggle;
+        toggle
+    }
+
+    /// Forgets the guarding toggle (a reset communication).
+    pub(crate) fn reset_guard_toggle(&mut self) {
+        self.guard_toggle = false;
+    }
+
+    fn delay(&mut self, at: Instant, frame: CanFrame) {
+        // Kept in order of due time; equal times keep their order.
+        let position = self.delayed.partition_point(|(due, _)| *due <= at);
+        self.delayed.insert(position, (at, frame));
+    }
+
+    /// Frames whose delay is over at `now`.
+    pub(crate) fn release(&mut self, now: Instant, out: &mut Vec<CanFrame>) {
+        while let Some((due, _)) = self.delayed.front()
+            && *due <= now
+        {
+            if let Some((_, frame)) = self.delayed.pop_front() {
+                out.push(frame);
+            }
+        }
+    }
+
+    /// When the next delayed frame is due.
+    pub(crate) fn poll_timeout(&self) -> Option<Instant> {
+        self.delayed.front().map(|(due, _)| *due)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_kebab_case_and_parse_back() {
+        let mut names: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
+        for (fault, name) in Fault::ALL.iter().zip(&names) {
+            assert!(name.chars().all(|c| c.is_ascii_lowercase() || c == '-'), "{name}");
+            assert_eq!(name.parse::<Fault>(), Ok(*fault));
+            assert!(!fault.description().is_empty());
+            assert_eq!(fault.to_string(), *name);
+        }
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), Fault::ALL.len());
+        assert!(Fault::ALL.len() >= 20);
+    }
+
+    #[test]
+    fn unknown_name_lists_the_known_ones() {
+        let error = "no-such-fault".parse::<Fault>().unwrap_err();
+        let text = error.to_string();
+        assert!(text.contains("no-such-fault"), "{text}");
+        assert!(
+            text.contains("no-boot-up") && text.contains("lss-state-not-changed"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn fault_set_operations() {
+        let mut set: FaultSet = [Fault::NoLss, Fault::NoEmcy].into_iter().collect();
+        assert!(set.contains(Fault::NoLss) && set.contains(Fault::NoEmcy));
+        assert!(!set.contains(Fault::NoBootUp));
+        set.remove(Fault::NoLss);
+        set.insert(Fault::SdoSlow);
+        assert_eq!(set.iter().collect::<Vec<_>>(), [Fault::SdoSlow, Fault::NoEmcy]);
+        assert!(FaultSet::none().is_empty());
+        assert_eq!(FaultSet::from(Fault::SdoSlow).sdo_delay(), DEFAULT_SDO_DELAY);
+        assert_eq!(
+            FaultSet::none()
+                .with_sdo_delay(Duration::from_millis(50))
+                .sdo_delay(),
+            Duration::from_millis(50)
+        );
+    }
+}

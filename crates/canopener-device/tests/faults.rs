@@ -1,0 +1,660 @@
+//! The fault catalogue on the wire: every fault of [`Fault::ALL`] shown as a timestamped frame
+//! trace on virtual time, next to the same scenario on a device without the fault. Devices are
+//! built from the checker's fixture `base.eds` (node 5), and from CANopenNode's
+//! `DS301_profile.eds` (node 10) where a fault needs objects `base.eds` lacks (SYNC producer,
+//! store/restore).
+
+use std::time::Duration;
+
+use canopener_can::candump::parse_compact_frame;
+use canopener_can::{CanFrame, Instant};
+use canopener_device::application::NoApplication;
+use canopener_device::device::{Device, DeviceEvent};
+use canopener_device::faults::{Fault, FaultSet};
+use canopener_device::nmt_slave::NmtSlaveState;
+use canopener_od::ObjectKey;
+
+const BASE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../canopener-check/test_data/checks/base.eds"
+);
+const DS301: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__DS301_profile.eds"
+);
+
+fn eds(path: &str) -> canopener_eds::model::Eds {
+    canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
+}
+
+/// Drives a device on virtual time and records what it sends as `"<ms>.<µs> <frame>"`.
+struct Bus {
+    dev: Device,
+    now: Instant,
+    out: Vec<String>,
+    events: Vec<DeviceEvent>,
+}
+
+impl Bus {
+    fn booted(dev: Device) -> Bus {
+        let mut bus = Bus {
+            dev,
+            now: Instant::ZERO,
+            out: Vec::new(),
+            events: Vec::new(),
+        };
+        bus.dev.boot(Instant::ZERO);
+        bus.drain();
+        bus
+    }
+
+    fn drain(&mut self) {
+        while let Some(frame) = self.dev.poll_transmit() {
+            let micros = self.now.as_micros();
+            self.out
+                .push(format!("{}.{:03} {frame}", micros / 1000, micros % 1000));
+        }
+        while let Some(event) = self.dev.poll_event() {
+            self.events.push(event);
+        }
+    }
+
+    fn advance(&mut self, until_ms: u64) {
+        let until = Instant::from_millis(until_ms);
+        self.drain();
+        while let Some(due) = self.dev.poll_timeout() {
+            if due > until {
+                break;
+            }
+            assert!(due >= self.now, "timer in the past");
+            self.now = due;
+            self.dev.handle_timeout(due);
+            self.drain();
+        }
+        self.now = until;
+    }
+
+    fn rx(&mut self, at_ms: u64, text: &str) {
+        self.advance(at_ms);
+        let frame: CanFrame = parse_compact_frame(text).expect("test frame");
+        self.dev.handle_frame(self.now, &frame);
+        self.drain();
+    }
+
+    fn sent(&mut self) -> Vec<String> {
+        self.drain();
+        std::mem::take(&mut self.out)
+    }
+
+    fn events(&mut self) -> Vec<DeviceEvent> {
+        self.drain();
+        std::mem::take(&mut self.events)
+    }
+
+    fn remote(&mut self, at_ms: u64, id: u16) {
+        self.advance(at_ms);
+        let id = canopener_can::StandardId::new(id).expect("11-bit");
+        let frame = CanFrame::remote(id, 1).expect("dlc");
+        self.dev.handle_frame(self.now, &frame);
+        self.drain();
+    }
+
+    fn value(&self, index: u16, sub: u8) -> Vec<u8> {
+        self.dev
+            .od()
+            .read(ObjectKey::new(index, sub))
+            .expect("readable")
+            .to_vec()
+    }
+}
+
+/// An expedited SDO download request to `node` as compact candump text.
+fn download(node: u8, index: u16, sub: u8, data: &[u8]) -> String {
+    let command = 0x23 | ((4 - data.len() as u8) << 2);
+    let mut bytes = vec![command, index as u8, (index >> 8) as u8, sub];
+    bytes.extend_from_slice(data);
+    bytes.resize(8, 0);
+    let hex: String = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    format!("{:03X}#{hex}", 0x600 + u16::from(node))
+}
+
+fn device(path: &str, node: u8, faults: FaultSet) -> Device {
+    Device::from_eds(&eds(path), node, Box::new(NoApplication))
+        .expect("device")
+        .with_faults(faults)
+}
+
+/// Runs `scenario` on a correct device and on one with `fault`; returns both traces.
+fn both(path: &str, node: u8, fault: Fault, scenario: impl Fn(&mut Bus)) -> (Vec<String>, Vec<String>) {
+    let mut traces = [FaultSet::none(), FaultSet::from(fault)].map(|faults| {
+        let mut bus = Bus::booted(device(path, node, faults));
+        assert_eq!(bus.dev.faults(), faults);
+        scenario(&mut bus);
+        bus.sent()
+    });
+    let faulty = std::mem::take(&mut traces[1]);
+    (std::mem::take(&mut traces[0]), faulty)
+}
+
+fn base(fault: Fault, scenario: impl Fn(&mut Bus)) -> (Vec<String>, Vec<String>) {
+    both(BASE, 5, fault, scenario)
+}
+
+fn hb(period_ms: u16) -> String {
+    download(5, 0x1017, 0, &period_ms.to_le_bytes())
+}
+
+#[test]
+fn every_fault_has_a_test_here() {
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/faults.rs")).expect("this file");
+    for fault in Fault::ALL {
+        let name = format!("fn {}(", fault.name().replace('-', "_"));
+        assert!(text.contains(&name), "no test `{name}`");
+    }
+}
+
+#[test]
+fn no_boot_up() {
+    let (ok, bad) = base(Fault::NoBootUp, |bus| bus.rx(10, "000#8205"));
+    assert_eq!(ok, ["0.000 705#00", "10.000 705#00"]);
+    assert_eq!(bad, Vec::<String>::new());
+}
+
+#[test]
+fn boot_up_wrong_id() {
+    let (ok, bad) = base(Fault::BootUpWrongId, |bus| bus.rx(10, "000#8105"));
+    assert_eq!(ok, ["0.000 705#00", "10.000 705#00"]);
+    assert_eq!(bad, ["0.000 706#00", "10.000 706#00"]);
+}
+
+#[test]
+fn heartbeat_state_wrong() {
+    let (ok, bad) = base(Fault::HeartbeatStateWrong, |bus| {
+        bus.rx(0, &hb(100));
+        bus.advance(150);
+        bus.rx(150, "000#0105");
+        bus.advance(250);
+        bus.rx(260, "000#0205");
+        bus.advance(360);
+    });
+    let heartbeats = |trace: Vec<String>| -> Vec<String> {
+        trace
+            .into_iter()
+            .skip(1)
+            .filter(|s| s.contains(" 705#"))
+            .collect()
+    };
+    // A state change sends a heartbeat at once and restarts the period.
+    assert_eq!(
+        heartbeats(ok),
+        [
+            "100.000 705#7F",
+            "150.000 705#05",
+            "250.000 705#05",
+            "260.000 705#04",
+            "360.000 705#04"
+        ]
+    );
+    assert_eq!(
+        heartbeats(bad),
+        [
+            "100.000 705#80",
+            "150.000 705#01",
+            "250.000 705#01",
+            "260.000 705#02",
+            "360.000 705#02"
+        ]
+    );
+}
+
+#[test]
+fn heartbeat_too_fast() {
+    let (ok, bad) = base(Fault::HeartbeatTooFast, |bus| {
+        bus.rx(0, &hb(100));
+        bus.advance(250);
+    });
+    assert_eq!(ok[2..], ["100.000 705#7F", "200.000 705#7F"]);
+    assert_eq!(
+        bad[2..],
+        [
+            "100.000 705#7F",
+            "101.000 705#7F",
+            "200.000 705#7F",
+            "201.000 705#7F"
+        ]
+    );
+}
+
+#[test]
+fn heartbeat_jitter() {
+    let (ok, bad) = base(Fault::HeartbeatJitter, |bus| {
+        bus.rx(0, &hb(100));
+        bus.advance(450);
+    });
+    assert_eq!(
+        ok[2..],
+        [
+            "100.000 705#7F",
+            "200.000 705#7F",
+            "300.000 705#7F",
+            "400.000 705#7F"
+        ]
+    );
+    assert_eq!(
+        bad[2..],
+        [
+            "100.000 705#7F",
+            "240.000 705#7F",
+            "300.000 705#7F",
+            "440.000 705#7F"
+        ]
+    );
+}
+
+#[test]
+fn guarding_and_heartbeat() {
+    let (ok, bad) = base(Fault::GuardingAndHeartbeat, |bus| {
+        // Guarding alone is answered by both.
+        bus.remote(1, 0x705);
+        bus.rx(2, &hb(100));
+        bus.remote(50, 0x705);
+        bus.remote(60, 0x705);
+    });
+    assert_eq!(ok, ["0.000 705#00", "1.000 705#7F", "2.000 585#6017100000000000"]);
+    assert_eq!(
+        bad,
+        [
+            "0.000 705#00",
+            "1.000 705#7F",
+            "2.000 585#6017100000000000",
+            "50.000 705#7F",
+            "60.000 705#FF",
+        ]
+    );
+}
+
+#[test]
+fn ignores_nmt_stop() {
+    let (ok, bad) = base(Fault::IgnoresNmtStop, |bus| {
+        bus.rx(1, "000#0205");
+        bus.rx(2, "605#4018100100000000");
+        bus.rx(3, "000#0200");
+    });
+    assert_eq!(ok, ["0.000 705#00"]);
+    assert_eq!(bad, ["0.000 705#00", "2.000 585#43181001BC0A0000"]);
+    let mut stopped = Bus::booted(device(BASE, 5, FaultSet::none()));
+    stopped.rx(1, "000#0205");
+    assert_eq!(stopped.dev.state(), NmtSlaveState::Stopped);
+    let mut faulty = Bus::booted(device(BASE, 5, Fault::IgnoresNmtStop.into()));
+    faulty.rx(1, "000#0205");
+    assert_eq!(faulty.dev.state(), NmtSlaveState::PreOperational);
+}
+
+#[test]
+fn nmt_broadcast_ignored() {
+    let (ok, bad) = base(Fault::NmtBroadcastIgnored, |bus| {
+        bus.rx(1, "000#0100");
+        bus.rx(2, "205#AB");
+        bus.rx(3, "000#0105");
+        bus.rx(4, "205#CD");
+    });
+    // Operational from the broadcast: the RPDO at 2 ms is taken, 6200h:01 = ABh (no frame).
+    assert_eq!(ok, ["0.000 705#00", "1.000 185#00"]);
+    // Only the addressed command works.
+    assert_eq!(bad, ["0.000 705#00", "3.000 185#00"]);
+}
+
+#[test]
+fn sdo_toggle_ignored() {
+    let scenario = |bus: &mut Bus| {
+        // Segmented download of 1017h, 2 bytes in two 1-byte segments, both with toggle 0.
+        bus.rx(1, "605#2117100002000000");
+        bus.rx(2, "605#0C64000000000000");
+        bus.rx(3, "605#0D00000000000000");
+    };
+    let (ok, bad) = base(Fault::SdoToggleIgnored, scenario);
+    assert_eq!(
+        ok,
+        [
+            "0.000 705#00",
+            "1.000 585#6017100000000000",
+            "2.000 585#2000000000000000",
+            "3.000 585#8017100000000305",
+        ]
+    );
+    assert_eq!(
+        bad,
+        [
+            "0.000 705#00",
+            "1.000 585#6017100000000000",
+            "2.000 585#2000000000000000",
+            "3.000 585#3000000000000000",
+        ]
+    );
+    let mut faulty = Bus::booted(device(BASE, 5, Fault::SdoToggleIgnored.into()));
+    scenario(&mut faulty);
+    assert_eq!(faulty.value(0x1017, 0), [0x64, 0]);
+}
+
+#[test]
+fn sdo_slow() {
+    let scenario = |bus: &mut Bus| {
+        bus.rx(1, "605#4018100100000000");
+        bus.advance(1_000);
+    };
+    let (ok, bad) = base(Fault::SdoSlow, scenario);
+    assert_eq!(ok, ["0.000 705#00", "1.000 585#43181001BC0A0000"]);
+    assert_eq!(bad, ["0.000 705#00", "601.000 585#43181001BC0A0000"]);
+    // The delay is configurable.
+    let faults = FaultSet::from(Fault::SdoSlow).with_sdo_delay(Duration::from_millis(50));
+    let mut bus = Bus::booted(device(BASE, 5, faults));
+    scenario(&mut bus);
+    assert_eq!(bus.sent(), ["0.000 705#00", "51.000 585#43181001BC0A0000"]);
+}
+
+#[test]
+fn sdo_expedited_size_wrong() {
+    let (ok, bad) = base(Fault::SdoExpeditedSizeWrong, |bus| {
+        bus.rx(1, "605#4017100000000000");
+        bus.rx(2, "605#4018100100000000");
+    });
+    assert_eq!(
+        ok[1..],
+        ["1.000 585#4B17100000000000", "2.000 585#43181001BC0A0000"]
+    );
+    assert_eq!(
+        bad[1..],
+        ["1.000 585#4317100000000000", "2.000 585#43181001BC0A0000"]
+    );
+}
+
+#[test]
+fn wrong_abort_code() {
+    let (ok, bad) = base(Fault::WrongAbortCode, |bus| {
+        bus.rx(1, "605#4000300000000000");
+        bus.rx(2, &download(5, 0x1000, 0, &[0, 0, 0, 0]));
+    });
+    assert_eq!(
+        ok[1..],
+        ["1.000 585#8000300000000206", "2.000 585#8000100002000106"]
+    );
+    assert_eq!(
+        bad[1..],
+        ["1.000 585#8000300000000008", "2.000 585#8000100000000008"]
+    );
+}
+
+#[test]
+fn sdo_bad_command_silent() {
+    let (ok, bad) = base(Fault::SdoBadCommandSilent, |bus| {
+        bus.rx(1, "605#E000000000000000");
+        bus.rx(2, "605#4018100100000000");
+    });
+    assert_eq!(
+        ok[1..],
+        ["1.000 585#8000000001000405", "2.000 585#43181001BC0A0000"]
+    );
+    assert_eq!(bad[1..], ["2.000 585#43181001BC0A0000"]);
+}
+
+#[test]
+fn block_crc_wrong() {
+    let scenario = |bus: &mut Bus| {
+        // Block upload of 1018h:01 with CRC, protocol switch threshold 0.
+        bus.rx(1, "605#A41810017F000000");
+        bus.rx(2, "605#A300000000000000");
+        bus.rx(3, "605#A2017F0000000000");
+        bus.rx(4, "605#A100000000000000");
+    };
+    let (ok, bad) = base(Fault::BlockCrcWrong, scenario);
+    assert_eq!(ok.len(), 4, "{ok:?}");
+    assert_eq!(ok[..3], bad[..3]);
+    let (good_end, bad_end) = (&ok[3], &bad[3]);
+    assert!(good_end.starts_with("3.000 585#CD"), "{good_end}");
+    let crc = |s: &str| u16::from_str_radix(&format!("{}{}", &s[14..16], &s[12..14]), 16).unwrap();
+    // CRC-16-CCITT (XModem) of BC 0A 00 00.
+    assert_eq!(crc(good_end), 0x7922, "{good_end}");
+    assert_eq!(crc(bad_end), !0x7922, "{bad_end}");
+}
+
+#[test]
+fn limit_not_enforced() {
+    let scenario = |bus: &mut Bus| bus.rx(1, &download(5, 0x2000, 0, &2000u16.to_le_bytes()));
+    let (ok, bad) = base(Fault::LimitNotEnforced, scenario);
+    assert_eq!(ok[1..], ["1.000 585#8000200031000906"]);
+    assert_eq!(bad[1..], ["1.000 585#6000200000000000"]);
+    let mut faulty = Bus::booted(device(BASE, 5, Fault::LimitNotEnforced.into()));
+    scenario(&mut faulty);
+    faulty.sent();
+    assert_eq!(faulty.value(0x2000, 0), 2000u16.to_le_bytes());
+    // Writes within the limits are unchanged.
+    faulty.rx(2, &download(5, 0x2000, 0, &500u16.to_le_bytes()));
+    assert_eq!(faulty.sent(), ["2.000 585#6000200000000000"]);
+    assert_eq!(faulty.value(0x2000, 0), 500u16.to_le_bytes());
+}
+
+#[test]
+fn unmappable_accepted() {
+    let scenario = |bus: &mut Bus| {
+        bus.rx(1, &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(2, &download(5, 0x1A00, 0, &[0]));
+        bus.rx(3, &download(5, 0x1A00, 1, &0x2000_0010u32.to_le_bytes()));
+    };
+    let (ok, bad) = base(Fault::UnmappableAccepted, scenario);
+    assert_eq!(ok[3], "3.000 585#80001A0141000406");
+    assert_eq!(bad[3], "3.000 585#60001A0100000000");
+    let mut faulty = Bus::booted(device(BASE, 5, Fault::UnmappableAccepted.into()));
+    scenario(&mut faulty);
+    assert_eq!(faulty.value(0x1A00, 1), 0x2000_0010u32.to_le_bytes());
+}
+
+#[test]
+fn pdo_cob_id_unchecked() {
+    let scenario = |bus: &mut Bus| {
+        bus.rx(1, &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(2, &download(5, 0x1800, 1, &0x0000_0701u32.to_le_bytes()));
+    };
+    let (ok, bad) = base(Fault::PdoCobIdUnchecked, scenario);
+    assert_eq!(ok[2], "2.000 585#8000180130000906");
+    assert_eq!(bad[2], "2.000 585#6000180100000000");
+    let mut faulty = Bus::booted(device(BASE, 5, Fault::PdoCobIdUnchecked.into()));
+    scenario(&mut faulty);
+    assert_eq!(faulty.value(0x1800, 1), 0x701u32.to_le_bytes());
+}
+
+#[test]
+fn no_tpdo_rtr() {
+    let (ok, bad) = base(Fault::NoTpdoRtr, |bus| {
+        bus.rx(1, "000#0105");
+        bus.remote(2, 0x185);
+        // Node guarding (also a remote frame) still works.
+        bus.remote(3, 0x705);
+    });
+    assert_eq!(
+        ok,
+        ["0.000 705#00", "1.000 185#00", "2.000 185#00", "3.000 705#05"]
+    );
+    assert_eq!(bad, ["0.000 705#00", "1.000 185#00", "3.000 705#05"]);
+}
+
+/// Operational, then an RPDO too short (EMCY 8210h) and one of the right length (error reset).
+fn rpdo_length_error(bus: &mut Bus) {
+    bus.rx(1, "000#0105");
+    bus.rx(2, "205#");
+    bus.rx(3, "205#01");
+}
+
+#[test]
+fn no_emcy() {
+    let (ok, bad) = base(Fault::NoEmcy, rpdo_length_error);
+    assert_eq!(
+        ok,
+        [
+            "0.000 705#00",
+            "1.000 185#00",
+            "2.000 085#1082110100000000",
+            "3.000 085#0000000000000000",
+        ]
+    );
+    assert_eq!(bad, ["0.000 705#00", "1.000 185#00"]);
+    // The error is still recorded.
+    let mut faulty = Bus::booted(device(BASE, 5, Fault::NoEmcy.into()));
+    faulty.rx(1, "000#0105");
+    faulty.rx(2, "205#");
+    assert_eq!(faulty.value(0x1001, 0), [0x11]);
+    assert!(
+        !faulty
+            .events()
+            .iter()
+            .any(|e| matches!(e, DeviceEvent::EmcySent { .. }))
+    );
+}
+
+#[test]
+fn emcy_no_error_reset() {
+    let (ok, bad) = base(Fault::EmcyNoErrorReset, rpdo_length_error);
+    assert_eq!(
+        ok[2..],
+        ["2.000 085#1082110100000000", "3.000 085#0000000000000000"]
+    );
+    assert_eq!(bad[2..], ["2.000 085#1082110100000000"]);
+}
+
+#[test]
+fn store_ignored() {
+    let scenario = |bus: &mut Bus| {
+        bus.rx(1, &download(10, 0x1017, 0, &500u16.to_le_bytes()));
+        bus.rx(2, &download(10, 0x1010, 1, b"save"));
+        bus.rx(3, "000#810A");
+    };
+    let (ok, bad) = both(DS301, 10, Fault::StoreIgnored, scenario);
+    // Both confirm the save.
+    assert_eq!(ok[2], "2.000 58A#6010100100000000");
+    assert_eq!(bad[2], "2.000 58A#6010100100000000");
+    // Only the correct device heartbeats at 500 ms after the reset.
+    let mut correct = Bus::booted(device(DS301, 10, FaultSet::none()));
+    scenario(&mut correct);
+    correct.advance(600);
+    let mut faulty = Bus::booted(device(DS301, 10, Fault::StoreIgnored.into()));
+    scenario(&mut faulty);
+    faulty.advance(600);
+    assert_eq!(correct.value(0x1017, 0), 500u16.to_le_bytes());
+    assert_eq!(faulty.value(0x1017, 0), [0, 0]);
+    assert_eq!(correct.sent().last().map(String::as_str), Some("503.000 70A#7F"));
+    assert_eq!(faulty.sent().last().map(String::as_str), Some("3.000 70A#00"));
+}
+
+#[test]
+fn sync_counter_missing() {
+    let (ok, bad) = both(DS301, 10, Fault::SyncCounterMissing, |bus| {
+        bus.rx(1, &download(10, 0x1019, 0, &[3]));
+        bus.rx(2, &download(10, 0x1006, 0, &10_000u32.to_le_bytes()));
+        bus.rx(3, &download(10, 0x1005, 0, &0x4000_0080u32.to_le_bytes()));
+        bus.advance(45);
+    });
+    assert_eq!(
+        ok[4..],
+        ["13.000 080#01", "23.000 080#02", "33.000 080#03", "43.000 080#01"]
+    );
+    assert_eq!(
+        bad[4..],
+        ["13.000 080#", "23.000 080#", "33.000 080#", "43.000 080#"]
+    );
+}
+
+#[test]
+fn no_lss() {
+    let (ok, bad) = base(Fault::NoLss, |bus| {
+        bus.rx(1, "7E5#0401000000000000");
+        bus.rx(2, "7E5#5E00000000000000");
+    });
+    assert_eq!(ok[1..], ["2.000 7E4#5E05000000000000"]);
+    assert_eq!(bad[1..], Vec::<String>::new());
+}
+
+#[test]
+fn lss_state_not_changed() {
+    let scenario = |bus: &mut Bus| {
+        // Switch state selective with 1018h of base.eds, then configure node-ID 20h.
+        bus.rx(1, "7E5#40BC0A0000000000");
+        bus.rx(2, "7E5#4101040000000000");
+        bus.rx(3, "7E5#4202000100000000");
+        bus.rx(4, "7E5#4300000000000000");
+        bus.rx(5, "7E5#1120000000000000");
+    };
+    let (ok, bad) = base(Fault::LssStateNotChanged, scenario);
+    assert_eq!(
+        ok[1..],
+        ["4.000 7E4#4400000000000000", "5.000 7E4#1100000000000000"]
+    );
+    assert_eq!(bad[1..], Vec::<String>::new());
+    // Switch state global is ignored as well.
+    let (ok, bad) = base(Fault::LssStateNotChanged, |bus| {
+        bus.rx(1, "7E5#0401000000000000");
+        bus.rx(2, "7E5#1120000000000000");
+    });
+    assert_eq!(ok[1..], ["2.000 7E4#1100000000000000"]);
+    assert_eq!(bad[1..], Vec::<String>::new());
+}
+
+#[test]
+fn without_faults_nothing_changes() {
+    let mut plain = Bus::booted(Device::from_eds(&eds(BASE), 5, Box::new(NoApplication)).expect("device"));
+    let mut none = Bus::booted(device(BASE, 5, FaultSet::none()));
+    for bus in [&mut plain, &mut none] {
+        bus.rx(0, &hb(100));
+        bus.rx(1, "000#0105");
+        bus.rx(2, "605#4018100100000000");
+        bus.advance(250);
+    }
+    assert_eq!(plain.sent(), none.sent());
+    assert!(plain.dev.faults().is_empty());
+    let _ = (Instant::ZERO, ObjectKey::new(0, 0));
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn arbitrary_frames_never_panic_with_every_fault(
+        frames in proptest::collection::vec(
+            (
+                0u16..0x800,
+                proptest::bool::ANY,
+                proptest::collection::vec(proptest::prelude::any::<u8>(), 0..=8),
+                0u64..50,
+            ),
+            0..60,
+        ),
+        mask in 0u32..(1 << Fault::ALL.len()),
+    ) {
+        let faults: FaultSet = Fault::ALL
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| mask & (1 << i) != 0)
+            .map(|(_, f)| f)
+            .collect();
+        for (path, node) in [(BASE, 5), (DS301, 10)] {
+            let mut bus = Bus::booted(device(path, node, faults));
+            let mut t = 0;
+            bus.rx(0, "000#0100");
+            for (id, remote, data, dt) in &frames {
+                t += dt;
+                bus.advance(t);
+                let id = canopener_can::StandardId::new(*id).expect("11-bit");
+                let frame = if *remote {
+                    CanFrame::remote(id, data.len() as u8).expect("dlc")
+                } else {
+                    CanFrame::new(id, data).expect("<= 8")
+                };
+                bus.dev.handle_frame(bus.now, &frame);
+                bus.drain();
+            }
+            bus.advance(t + 5_000);
+            // Delayed frames drain: nothing is stuck in the fault layer.
+            let until = bus.now.as_micros() / 1000 + 2_000;
+            bus.advance(until);
+        }
+    }
+}
