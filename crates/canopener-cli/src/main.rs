@@ -26,6 +26,8 @@ mod eds_show;
 mod error;
 mod monitor;
 mod output_file;
+mod sim;
+mod sim_store;
 mod stop;
 
 use std::process::ExitCode;
@@ -82,6 +84,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Eds(EdsCommand::Explain(args)) => eds_explain::run(args),
         Command::Eds(EdsCommand::Rules(EdsRulesCommand::List(args))) => eds_rules::list(args),
         Command::Eds(EdsCommand::Fix(args)) => eds_fix::run(args),
+        Command::Sim(args) => sim::run(args),
     }
 }
 

@@ -9,6 +9,7 @@ mod support;
 
 mod eds;
 mod eds_check;
+mod sim;
 
 use std::process::Output;
 use std::time::Duration;

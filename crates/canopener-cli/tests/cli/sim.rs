@@ -1,0 +1,268 @@
+//! `canopener sim`: a simulated device from an EDS on a hub, driven by a test client over socketcand.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+use canopener_can::CanFrame;
+use canopener_can::candump::parse_compact_frame;
+use canopener_transport::{BusSpec, CanBus, open};
+
+use crate::support::{HubProc, canopener, workspace_root};
+use crate::{run, stderr, stdout, temp_dir};
+
+/// Generous: the machine running the tests may be loaded.
+const WAIT: Duration = Duration::from_secs(10);
+
+fn base_eds() -> PathBuf {
+    workspace_root().join("crates/canopener-check/test_data/checks/base.eds")
+}
+
+/// `canopener sim` as a child with stdout and stderr in files (no pipe to fill up), killed when dropped
+/// unless it already ended.
+struct SimProc {
+    child: Child,
+    stdout: PathBuf,
+    stderr: PathBuf,
+}
+
+impl SimProc {
+    fn spawn(dir: &Path, args: &[&str]) -> SimProc {
+        let stdout = dir.join("sim.stdout");
+        let stderr = dir.join("sim.stderr");
+        let child = canopener()
+            .arg("sim")
+            .args(args)
+            .env_remove("CANOPENER_BUS")
+            .stdin(Stdio::null())
+            .stdout(std::fs::File::create(&stdout).expect("stdout file"))
+            .stderr(std::fs::File::create(&stderr).expect("stderr file"))
+            .spawn()
+            .expect("spawn canopener sim");
+        SimProc {
+            child,
+            stdout,
+            stderr,
+        }
+    }
+
+    fn stderr(&self) -> String {
+        std::fs::read_to_string(&self.stderr).unwrap_or_default()
+    }
+
+    fn stdout(&self) -> String {
+        std::fs::read_to_string(&self.stdout).unwrap_or_default()
+    }
+
+    /// SIGTERM, then the exit status.
+    fn terminate(&mut self) -> ExitStatus {
+        let status = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status()
+            .expect("run kill");
+        assert!(status.success(), "kill -TERM failed");
+        let deadline = Instant::now() + WAIT;
+        loop {
+            if let Some(status) = self.child.try_wait().expect("try_wait") {
+                return status;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "sim did not stop within {WAIT:?} of SIGTERM; stderr:\n{}",
+                self.stderr()
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+impl Drop for SimProc {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn client(hub: &HubProc) -> Box<dyn CanBus> {
+    let spec = BusSpec::Socketcand {
+        host: hub.addr.ip().to_string(),
+        port: hub.addr.port(),
+        bus: "can0".into(),
+    };
+    open(&spec).expect("test client connects to the hub")
+}
+
+fn send(bus: &mut dyn CanBus, text: &str) {
+    bus.send(&parse_compact_frame(text).expect("frame"))
+        .expect("send");
+}
+
+/// The first frame received within [`WAIT`] whose text starts with `prefix` (e.g. `"585#"`).
+fn expect_frame(bus: &mut dyn CanBus, prefix: &str, sim: &SimProc) -> String {
+    let deadline = Instant::now() + WAIT;
+    let mut seen = Vec::new();
+    while Instant::now() < deadline {
+        if let Some(received) = bus.recv(Duration::from_millis(100)).expect("recv") {
+            let text = CanFrame::to_string(&received.frame);
+            if text.starts_with(prefix) {
+                return text;
+            }
+            seen.push(text);
+        }
+    }
+    panic!(
+        "no frame {prefix}… within {WAIT:?}; saw {seen:?}; sim stderr:\n{}",
+        sim.stderr()
+    );
+}
+
+#[test]
+fn sim_boots_answers_sdo_runs_nmt_and_heartbeat_and_stops_cleanly() {
+    let hub = HubProc::start();
+    let dir = temp_dir("sim-run");
+    // The client is on the hub before the device boots, so it sees the boot-up message.
+    let mut bus = client(&hub);
+    let eds = base_eds();
+    let spec = hub.spec("can0");
+    let mut sim = SimProc::spawn(
+        &dir,
+        &[
+            eds.to_str().unwrap(),
+            "--node-id",
+            "5",
+            "--bus",
+            &spec,
+            "--format",
+            "json",
+        ],
+    );
+    assert_eq!(expect_frame(&mut *bus, "705#", &sim), "705#00");
+
+    // Expedited upload of 1018h:01, the vendor-ID.
+    send(&mut *bus, "605#4018100100000000");
+    assert_eq!(expect_frame(&mut *bus, "585#", &sim), "585#43181001BC0A0000");
+
+    // 1017h = 100 ms, then NMT start: heartbeats with state 05h.
+    send(&mut *bus, "605#2B17100064000000");
+    assert_eq!(expect_frame(&mut *bus, "585#", &sim), "585#6017100000000000");
+    send(&mut *bus, "000#0105");
+    assert_eq!(expect_frame(&mut *bus, "705#05", &sim), "705#05");
+
+    let status = sim.terminate();
+    assert_eq!(status.code(), Some(0), "stderr:\n{}", sim.stderr());
+    let events: Vec<serde_json::Value> = sim
+        .stdout()
+        .lines()
+        .map(|line| serde_json::from_str(line).expect("JSON line"))
+        .collect();
+    let kinds: Vec<&str> = events.iter().filter_map(|e| e["event"].as_str()).collect();
+    for kind in ["started", "boot_up", "sdo_write", "nmt_state", "stopped"] {
+        assert!(kinds.contains(&kind), "no {kind} event in {kinds:?}");
+    }
+    assert!(
+        events
+            .iter()
+            .any(|e| e["event"] == "nmt_state" && e["to"] == "operational" && e["node"] == 5),
+        "{events:?}"
+    );
+}
+
+#[test]
+fn sim_keeps_saved_parameters_in_the_state_dir_across_restarts() {
+    let hub = HubProc::start();
+    let dir = temp_dir("sim-state");
+    let state = dir.join("state");
+    // base.eds with store parameters 1010h (sub-index 1, all parameters).
+    let mut text = std::fs::read_to_string(base_eds()).unwrap();
+    text.push_str(
+        "\n[1010]\nParameterName=Store parameters\nObjectType=0x8\nSubNumber=2\n\n\
+         [1010sub0]\nParameterName=Highest sub-index supported\nObjectType=0x7\nDataType=0x0005\n\
+         AccessType=ro\nDefaultValue=1\nPDOMapping=0\n\n\
+         [1010sub1]\nParameterName=Save all parameters\nObjectType=0x7\nDataType=0x0007\n\
+         AccessType=rw\nDefaultValue=1\nPDOMapping=0\n",
+    );
+    let eds = dir.join("store.eds");
+    std::fs::write(&eds, text).unwrap();
+    let spec = hub.spec("can0");
+    let args = [
+        eds.to_str().unwrap(),
+        "--node-id",
+        "7",
+        "--bus",
+        &spec,
+        "--state-dir",
+        state.to_str().unwrap(),
+    ];
+    let mut bus = client(&hub);
+    let mut sim = SimProc::spawn(&dir, &args);
+    expect_frame(&mut *bus, "707#00", &sim);
+    send(&mut *bus, "607#2B171000FA000000");
+    assert_eq!(expect_frame(&mut *bus, "587#", &sim), "587#6017100000000000");
+    // 1010h:01 = "save".
+    send(&mut *bus, "607#2310100173617665");
+    assert_eq!(expect_frame(&mut *bus, "587#", &sim), "587#6010100100000000");
+    assert_eq!(sim.terminate().code(), Some(0), "{}", sim.stderr());
+    assert!(state.join("node-007.params").exists());
+    drop(sim);
+
+    let mut sim = SimProc::spawn(&dir, &args);
+    expect_frame(&mut *bus, "707#00", &sim);
+    send(&mut *bus, "607#4017100000000000");
+    assert_eq!(expect_frame(&mut *bus, "587#", &sim), "587#4B171000FA000000");
+    assert_eq!(sim.terminate().code(), Some(0), "{}", sim.stderr());
+}
+
+#[test]
+fn sim_refuses_bad_files_and_missing_node_ids() {
+    let dir = temp_dir("sim-bad");
+    let bad = dir.join("broken.eds");
+    std::fs::write(&bad, "garbage without sections\n").unwrap();
+    let output = run(&[
+        "sim",
+        bad.to_str().unwrap(),
+        "--node-id",
+        "5",
+        "--bus",
+        "socketcand://127.0.0.1:9/can0",
+    ]);
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+    assert!(stderr(&output).contains("broken.eds"), "{}", stderr(&output));
+
+    let eds = base_eds();
+    let no_node = run(&[
+        "sim",
+        eds.to_str().unwrap(),
+        "--bus",
+        "socketcand://127.0.0.1:9/can0",
+    ]);
+    assert_eq!(no_node.status.code(), Some(2), "{}", stderr(&no_node));
+    assert!(stderr(&no_node).contains("--node-id"), "{}", stderr(&no_node));
+
+    let help = run(&["sim", "--help"]);
+    assert!(help.status.success());
+    assert!(
+        String::from_utf8_lossy(&help.stdout).contains("Examples:"),
+        "{help:?}"
+    );
+}
+
+#[test]
+fn list_faults_describes_the_catalogue_and_unknown_faults_are_refused() {
+    let output = run(&["sim", "--list-faults"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let text = stdout(&output);
+    for fault in canopener_device::faults::Fault::ALL {
+        assert!(
+            text.contains(fault.name()),
+            "{} not listed:\n{text}",
+            fault.name()
+        );
+    }
+    let unknown = run(&["sim", "x.eds", "--fault", "no-such-fault", "--node-id", "5"]);
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(
+        stderr(&unknown).contains("no-boot-up"),
+        "the error lists the names: {}",
+        stderr(&unknown)
+    );
+}
