@@ -8,8 +8,6 @@
 //! Every file is read, loaded and checked with every built-in check `N` times (default 7) on one
 //! thread; one JSON document gives per file the median time of the whole (read + load + check) and of
 //! the load alone, in microseconds, and how many findings and errors the check produced.
-//!
-//! It uses mimalloc as the `canopener` binary does, so the numbers are what users get.
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
@@ -19,9 +17,6 @@ use std::time::{Duration, Instant};
 use canopener_check::Selection;
 use canopener_eds::Severity;
 use serde_json::{Value as Json, json};
-
-#[global_allocator]
-static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 const USAGE: &str = "usage: check_timing [--repeat N] [--list FILE|-] FILE...";
 

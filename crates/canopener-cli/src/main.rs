@@ -36,10 +36,6 @@ use clap::Parser;
 
 use crate::cli::{BusCommand, Cli, Command, EdsCommand, EdsRulesCommand};
 
-// Loading and checking EDS files makes many small allocations (one owned string per value); mimalloc
-// serves them markedly faster than glibc's allocator (measured in BENCHMARKS.md).
-#[global_allocator]
-static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 use crate::error::{CliError, exit_code};
 
 fn main() -> ExitCode {
