@@ -16,7 +16,7 @@ use canopener_od::ObjectKey;
 #[path = "common/bus.rs"]
 mod bus;
 
-use bus::{BASE, Bus, DS301, eds};
+use bus::{BASE, Bus, DS301, download, eds};
 
 impl Bus {
     fn remote(&mut self, at_ms: u64, id: u16) {
@@ -26,24 +26,6 @@ impl Bus {
         self.dev.handle_frame(self.now, &frame);
         self.drain();
     }
-
-    fn value(&self, index: u16, sub: u8) -> Vec<u8> {
-        self.dev
-            .od()
-            .read(ObjectKey::new(index, sub))
-            .expect("readable")
-            .to_vec()
-    }
-}
-
-/// An expedited SDO download request to `node` as compact candump text.
-fn download(node: u8, index: u16, sub: u8, data: &[u8]) -> String {
-    let command = 0x23 | ((4 - data.len() as u8) << 2);
-    let mut bytes = vec![command, index as u8, (index >> 8) as u8, sub];
-    bytes.extend_from_slice(data);
-    bytes.resize(8, 0);
-    let hex: String = bytes.iter().map(|b| format!("{b:02X}")).collect();
-    format!("{:03X}#{hex}", 0x600 + u16::from(node))
 }
 
 fn device(path: &str, node: u8, faults: FaultSet) -> Device {

@@ -4,6 +4,7 @@
 use canopener_can::candump::parse_compact_frame;
 use canopener_can::{CanFrame, Instant};
 use canopener_device::device::{Device, DeviceEvent};
+use canopener_od::ObjectKey;
 
 pub(crate) const BASE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -81,4 +82,22 @@ impl Bus {
         self.drain();
         std::mem::take(&mut self.events)
     }
+
+    pub(crate) fn value(&self, index: u16, sub: u8) -> Vec<u8> {
+        self.dev
+            .od()
+            .read(ObjectKey::new(index, sub))
+            .expect("readable")
+            .to_vec()
+    }
+}
+
+/// An expedited SDO download request to `node` as compact candump text.
+pub(crate) fn download(node: u8, index: u16, sub: u8, data: &[u8]) -> String {
+    let command = 0x23 | ((4 - data.len() as u8) << 2);
+    let mut bytes = vec![command, index as u8, (index >> 8) as u8, sub];
+    bytes.extend_from_slice(data);
+    bytes.resize(8, 0);
+    let hex: String = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    format!("{:03X}#{hex}", 0x600 + u16::from(node))
 }
