@@ -66,6 +66,7 @@ pub(crate) enum Command {
   canopener sim a.eds b.eds c.eds --node-id 10            # three devices: nodes 10, 11 and 12
   canopener sim io.eds --node-id 3 --app cia401           # CiA 401 I/O; inputs via 2000h=1 and 2001h
   canopener sim device.eds --node-id 5 --state-dir state/ # 1010h \"save\" survives restarts
+  canopener sim io.eds io.eds io.eds --serial 100         # three LSS-unconfigured devices, serials 100-102
   canopener sim device.eds --node-id 5 --format json | jq 'select(.event == \"nmt_state\")'
 Logs boot-up, NMT state changes, SDO writes and aborts, EMCY and LSS (stderr, or JSON lines on stdout).
 Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error.")]
@@ -365,6 +366,16 @@ pub(crate) fn parse_index(text: &str) -> Result<u16, String> {
         .map_err(|_| format!("'{text}' is not an object index; write e.g. 1018, 0x1018 or 1018h"))
 }
 
+/// Reads an UNSIGNED32 in decimal or with a `0x` prefix in hexadecimal.
+fn parse_u32_number(text: &str) -> Result<u32, String> {
+    let t = text.trim();
+    let parsed = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(hex) => u32::from_str_radix(hex, 16),
+        None => t.parse(),
+    };
+    parsed.map_err(|_| format!("'{text}' is not an UNSIGNED32; write e.g. 4660 or 0x1234"))
+}
+
 #[derive(Debug, Subcommand)]
 pub(crate) enum BusCommand {
     /// Serve CAN buses over the socketcand protocol (python-can `interface="socketcand"` connects).
@@ -544,8 +555,13 @@ pub(crate) struct SimArgs {
     #[command(flatten)]
     pub(crate) bus: BusArg,
     /// Node-ID of devices whose file is not a DCF with a node-ID (several files: N, N+1, ... in order).
+    /// Without it such devices start LSS-unconfigured (node-ID FFh) and wait for an LSS master.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=127), value_name = "N")]
     pub(crate) node_id: Option<u8>,
+    /// Serial number 1018h:04 of the devices (several files: S, S+1, ... in order), so that devices from
+    /// one EDS have distinct LSS addresses. Decimal or 0x-hex.
+    #[arg(long, value_parser = parse_u32_number, value_name = "S")]
+    pub(crate) serial: Option<u32>,
     /// Keep saved parameters (1010h "save", 1011h "load") in this directory, one file per node-ID.
     #[arg(long, value_name = "DIR")]
     pub(crate) state_dir: Option<PathBuf>,

@@ -18,7 +18,7 @@ use std::time::Duration;
 use canopener_can::{CanFrame, Instant};
 use canopener_device::application::{Application, NoApplication};
 use canopener_device::cia401::{Cia401Io, install_objects};
-use canopener_device::device::{Device, DeviceEvent};
+use canopener_device::device::{Device, DeviceEvent, UNCONFIGURED};
 use canopener_device::faults::{Fault, FaultSet};
 use canopener_device::heartbeat::{ConsumerEvent, ErrorControlEvent};
 use canopener_device::lss_slave::{LssEvent, LssState};
@@ -30,6 +30,7 @@ use canopener_device::store::StoreEvent;
 use canopener_device::sync::SyncEvent;
 use canopener_device::time_stamp::TimeEvent;
 use canopener_eds::{Eds, Severity};
+use canopener_od::ObjectKey;
 use canopener_transport::{CanBus, TransportError, WallClock};
 use canopener_wire::abort::abort_code_text;
 use serde_json::{Map, Value, json};
@@ -57,7 +58,11 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
     let mut sim = Simulator {
         devices: plans
             .into_iter()
-            .map(|plan| build(plan, args.app, args.state_dir.as_deref(), &args.faults))
+            .enumerate()
+            .map(|(position, plan)| {
+                let serial = args.serial.map(|first| first.wrapping_add(position as u32));
+                build(plan, serial, args.app, args.state_dir.as_deref(), &args.faults)
+            })
             .collect::<CliResult<_>>()?,
     };
     let mut bus = open_bus(args.bus.spec.as_deref(), "sim")?;
@@ -87,7 +92,7 @@ struct Plan {
 }
 
 /// Loads every file and gives each a node-ID: the DCF's own, else `--node-id` N, N+1, ... in order for the
-/// files without one.
+/// files without one, else none: the device starts LSS-unconfigured (FFh) and waits for an LSS master.
 fn plan(args: &SimArgs) -> CliResult<Vec<Plan>> {
     let mut plans = Vec::with_capacity(args.files.len());
     let mut next = args.node_id.map(u16::from);
@@ -97,10 +102,12 @@ fn plan(args: &SimArgs) -> CliResult<Vec<Plan>> {
             Some(node_id) => node_id,
             None => {
                 let Some(node_id) = next else {
-                    return Err(CliError::Usage(format!(
-                        "{}: no node-ID: the file is not a DCF with a NodeID; pass --node-id N",
-                        path.display()
-                    )));
+                    plans.push(Plan {
+                        path: path.clone(),
+                        eds,
+                        node_id: UNCONFIGURED,
+                    });
+                    continue;
                 };
                 next = Some(node_id + 1);
                 u8::try_from(node_id)
@@ -114,7 +121,10 @@ fn plan(args: &SimArgs) -> CliResult<Vec<Plan>> {
                     })?
             }
         };
-        if let Some(other) = plans.iter().find(|p: &&Plan| p.node_id == node_id) {
+        if let Some(other) = plans
+            .iter()
+            .find(|p: &&Plan| p.node_id == node_id && node_id != UNCONFIGURED)
+        {
             return Err(CliError::Usage(format!(
                 "{} and {} would both be node {node_id}; two devices on one bus need different node-IDs",
                 other.path.display(),
@@ -181,7 +191,13 @@ struct SimDevice {
     store: Option<PathBuf>,
 }
 
-fn build(plan: Plan, app: SimApp, state_dir: Option<&Path>, faults: &[Fault]) -> CliResult<SimDevice> {
+fn build(
+    plan: Plan,
+    serial: Option<u32>,
+    app: SimApp,
+    state_dir: Option<&Path>,
+    faults: &[Fault],
+) -> CliResult<SimDevice> {
     let Plan { path, eds, node_id } = plan;
     let refused = |err: &dyn std::fmt::Display| {
         CliError::InvalidInput(format!("{}: cannot build the device: {err}", path.display()))
@@ -200,15 +216,35 @@ fn build(plan: Plan, app: SimApp, state_dir: Option<&Path>, faults: &[Fault]) ->
         // The file has no CiA 401 I/O at all: add the objects and default PDOs. (A device made from a
         // dictionary rather than the EDS keeps its $NODEID defaults when LSS changes the node-ID, and
         // accepts no dummy mapping.)
-        let mut built = build_od(&eds, node_id).map_err(|e| refused(&e))?;
-        install_objects(&mut built.od, node_id).map_err(|e| refused(&e))?;
+        // An unconfigured device's $NODEID defaults are placeholders until LSS gives it a node-ID.
+        let build_id = if node_id == UNCONFIGURED { 1 } else { node_id };
+        let mut built = build_od(&eds, build_id).map_err(|e| refused(&e))?;
+        install_objects(&mut built.od, build_id).map_err(|e| refused(&e))?;
         device = Device::new(built.od, node_id, application()).map_err(|e| refused(&e))?;
+    }
+    if let Some(serial) = serial {
+        device = device
+            .with_value(ObjectKey::new(0x1018, 4), &serial.to_le_bytes())
+            .map_err(|err| {
+                CliError::InvalidInput(format!(
+                    "{}: cannot set the serial number 1018h:04 to {serial}: {err}; --serial needs an identity \
+                     object with sub-index 4 (UNSIGNED32)",
+                    path.display()
+                ))
+            })?;
     }
     if !faults.is_empty() {
         device = device.with_faults(faults.iter().copied().collect::<FaultSet>());
     }
     let mut store = None;
     if let Some(dir) = state_dir {
+        if node_id == UNCONFIGURED {
+            return Err(CliError::Usage(format!(
+                "{}: --state-dir keeps saved parameters per node-ID, and this device starts without one; \
+                 pass --node-id N, or drop --state-dir",
+                path.display()
+            )));
+        }
         let file = FileStore::open(dir, node_id)?;
         store = Some(file.path().to_owned());
         device = device.with_parameter_store(Box::new(file));
@@ -298,6 +334,15 @@ impl Simulator {
     }
 }
 
+/// The node-ID a log line names: the active one, or FFh while the device is LSS-unconfigured.
+fn node_label(device: &Device) -> u8 {
+    if device.is_configured() {
+        device.node_id().get()
+    } else {
+        UNCONFIGURED
+    }
+}
+
 /// Where and how the log goes.
 enum Sink {
     Stderr,
@@ -373,7 +418,7 @@ impl Log {
             .with("bus", bus)
             .with("entries", device.od().len())
             .with("build_notes", notes.len());
-        self.write(Some(device.node_id().get()), entry)
+        self.write(Some(node_label(device)), entry)
     }
 
     fn stopped(&mut self, clean: bool) -> CliResult {
@@ -383,7 +428,7 @@ impl Log {
 
     fn event(&mut self, device: &Device, event: &DeviceEvent) -> CliResult {
         match describe(device, event) {
-            Some(entry) => self.write(Some(device.node_id().get()), entry),
+            Some(entry) => self.write(Some(node_label(device)), entry),
             None => Ok(()),
         }
     }
@@ -394,6 +439,7 @@ impl Log {
             .as_secs_f64();
         let line = match self.format {
             SimFormat::Human => match node {
+                Some(UNCONFIGURED) => format!("{elapsed:9.3} node FFh: {}", entry.text),
                 Some(node) => format!("{elapsed:9.3} node {node:>3}: {}", entry.text),
                 None => format!("{elapsed:9.3} {}", entry.text),
             },
@@ -585,8 +631,9 @@ fn describe(device: &Device, event: &DeviceEvent) -> Option<Entry> {
             ),
         ),
         DeviceEvent::NodeIdChanged { from, to } => {
-            Entry::new("node_id", format!("node-ID changed from {from} to {to}"))
-                .with("from", from.get())
+            let before = from.map_or_else(|| "FFh (unconfigured)".to_owned(), |node| node.to_string());
+            Entry::new("node_id", format!("node-ID changed from {before} to {to}"))
+                .with("from", from.map(|node| node.get()))
                 .with("to", to.get())
         }
     })
@@ -650,6 +697,7 @@ mod tests {
             files,
             bus: crate::cli::BusArg { spec: None },
             node_id,
+            serial: None,
             state_dir: None,
             app: SimApp::None,
             format: SimFormat::Json,
@@ -686,9 +734,10 @@ mod tests {
         let ids: Vec<u8> = plans.iter().map(|p| p.node_id).collect();
         assert_eq!(ids, [10, 11, 12]);
 
-        let none = plan(&args(vec![base_eds()], None)).unwrap_err();
-        assert_eq!(none.exit_code(), 2);
-        assert!(none.to_string().contains("pass --node-id N"), "{none}");
+        // Without a node-ID the devices start LSS-unconfigured; any number of them may.
+        let none = plan(&args(vec![base_eds(), base_eds()], None)).unwrap();
+        let ids: Vec<u8> = none.iter().map(|p| p.node_id).collect();
+        assert_eq!(ids, [UNCONFIGURED, UNCONFIGURED]);
 
         let high = plan(&args(vec![base_eds(), base_eds()], Some(127))).unwrap_err();
         assert_eq!(high.exit_code(), 2);
@@ -754,7 +803,7 @@ mod tests {
             devices: plan(&args(vec![eds.clone(), eds], Some(5)))
                 .unwrap()
                 .into_iter()
-                .map(|p| build(p, SimApp::None, None, &[]).unwrap())
+                .map(|p| build(p, None, SimApp::None, None, &[]).unwrap())
                 .collect(),
         };
         let mut bus = FakeBus::new();
@@ -802,6 +851,7 @@ mod tests {
             devices: vec![
                 build(
                     plan(&args(vec![base_eds()], Some(5))).unwrap().remove(0),
+                    None,
                     SimApp::None,
                     None,
                     &[],
@@ -844,6 +894,7 @@ mod tests {
     fn cia401_objects_are_installed_only_when_the_file_has_no_io() {
         let sim = build(
             plan(&args(vec![base_eds()], Some(5))).unwrap().remove(0),
+            None,
             SimApp::Cia401,
             None,
             &[],
@@ -861,6 +912,7 @@ mod tests {
         std::fs::write(&bare, &text[..cut]).unwrap();
         let sim = build(
             plan(&args(vec![bare], Some(5))).unwrap().remove(0),
+            None,
             SimApp::Cia401,
             Some(&dir),
             &[],

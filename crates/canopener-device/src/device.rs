@@ -62,14 +62,14 @@ use std::collections::{BTreeSet, VecDeque};
 
 use canopener_can::{CanFrame, CanId, Instant, StandardId};
 use canopener_eds::model::Eds;
-use canopener_od::{DynamicOd, ObjectKey};
+use canopener_od::{DynamicOd, ObjectKey, OdError};
 use canopener_wire::{NodeId, abort};
 
 use crate::application::{AppChanges, Application};
 use crate::emcy::{EmcyEvent, EmcyProducer};
 use crate::faults::{Fault, FaultLayer, FaultSet, Source};
 use crate::heartbeat::{ConsumerEvent, ErrorControl, ErrorControlEvent, HeartbeatConsumer};
-use crate::lss_slave::{LssEvent, LssSlave};
+use crate::lss_slave::{BitTiming, LssEvent, LssSlave, LssStorage, LssStoreError};
 use crate::nmt_slave::{CommService, NmtEvent, NmtSlave, NmtSlaveState};
 use crate::od_build::{BuildNote, OdBuildError, build_od};
 use crate::pdo::{Direction, DummyUsage, Mapped, PdoEngine, PdoEvent, PdoRef};
@@ -88,6 +88,8 @@ const COMMUNICATION_ERROR: u8 = 0x10;
 /// The default SDO server parameter; 1201h–127Fh are the additional servers.
 const SDO_SERVER_FIRST: u16 = 0x1200;
 const SDO_SERVER_LAST: u16 = 0x127F;
+/// 1F80h bit 2 (CiA 302-2): set = do not enter Operational on its own.
+const NMT_STARTUP_NO_AUTOSTART: u32 = 0x04;
 
 /// Why a device cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -95,10 +97,22 @@ pub enum DeviceError {
     /// The object dictionary could not be built from the EDS.
     #[error(transparent)]
     Build(#[from] OdBuildError),
-    /// A node-ID outside 1..=127.
-    #[error("node-ID {0} is outside 1..=127; give the device a node-ID in that range")]
+    /// A node-ID outside 1..=127 (and not FFh, unconfigured).
+    #[error(
+        "node-ID {0} is outside 1..=127; give the device a node-ID in that range, or FFh to start it unconfigured"
+    )]
     NodeId(u8),
+    /// An unconfigured start (node-ID FFh) on a device without LSS.
+    #[error(
+        "the device cannot start unconfigured (node-ID FFh): that needs LSS, which needs the identity object \
+         1018h with at least the vendor-ID (sub 1); give the device a node-ID instead"
+    )]
+    NoLss,
 }
+
+/// The node-ID that starts a device unconfigured (CiA 305): silent except for LSS until an LSS master
+/// configures a node-ID and switches it back to waiting.
+pub const UNCONFIGURED: u8 = canopener_wire::lss::UNCONFIGURED_NODE_ID;
 
 /// A value in the dictionary a core could not take when it was (re)created at a reset; the core
 /// keeps its own default instead.
@@ -153,8 +167,8 @@ pub enum DeviceEvent {
     ConfigRefused(ConfigRefused),
     /// A reset communication made a new node-ID active.
     NodeIdChanged {
-        /// The node-ID before.
-        from: NodeId,
+        /// The node-ID before (`None`: the device was unconfigured).
+        from: Option<NodeId>,
         /// The node-ID now.
         to: NodeId,
     },
@@ -166,7 +180,10 @@ pub struct Device {
     pristine: DynamicOd,
     eds: Option<Box<Eds>>,
     notes: Vec<BuildNote>,
+    /// The active node-ID; a placeholder (1) while `configured` is false.
     node: NodeId,
+    /// False while the node-ID is FFh: only LSS runs (CiA 305), nothing else sends or listens.
+    configured: bool,
     dummies: DummyUsage,
     nmt: NmtSlave,
     sdo: Vec<(u16, SdoServer)>,
@@ -179,10 +196,14 @@ pub struct Device {
     store: StoreRestore,
     params: Box<dyn ParameterStore>,
     lss: Option<LssSlave>,
+    lss_storage: Box<dyn LssStorage>,
+    /// Power-on values set by [`Device::with_value`], re-applied when the defaults are rebuilt.
+    overrides: Vec<(ObjectKey, Vec<u8>)>,
     app: Box<dyn Application>,
     /// Sources of the active 8130h EMCY: consumed nodes lost, and 0 for life guarding.
     lost: BTreeSet<u8>,
     reset_application: bool,
+    booted: bool,
     faults: FaultLayer,
     transmit: VecDeque<CanFrame>,
     events: VecDeque<DeviceEvent>,
@@ -199,11 +220,15 @@ impl std::fmt::Debug for Device {
 }
 
 impl Device {
-    /// A device built from `eds` with node-ID `node_id`, the in-memory parameter store and `app`.
-    /// The build notes are kept ([`Device::notes`]); dummy mapping follows the EDS `[DummyUsage]`.
-    /// The device is in Initialisation until [`Device::boot`].
+    /// A device built from `eds` with node-ID `node_id` ([`UNCONFIGURED`] for an LSS-unconfigured
+    /// start), the in-memory parameter store and `app`. The build notes are kept
+    /// ([`Device::notes`]); dummy mapping follows the EDS `[DummyUsage]`. The device is in
+    /// Initialisation until [`Device::boot`].
     pub fn from_eds(eds: &Eds, node_id: u8, app: Box<dyn Application>) -> Result<Device, DeviceError> {
-        let built = build_od(eds, node_id)?;
+        // An unconfigured device's `$NODEID` values are rebuilt for the configured node-ID at the
+        // reset communication that makes it active; until then nothing reads them.
+        let build_id = if node_id == UNCONFIGURED { 1 } else { node_id };
+        let built = build_od(eds, build_id)?;
         let mut device = Device::new(built.od, node_id, app)?;
         device.notes = built.notes;
         device.dummies = dummy_usage(eds);
@@ -212,13 +237,22 @@ impl Device {
         Ok(device)
     }
 
-    /// A device on `od` (its values are the power-on defaults) with node-ID `node_id`, the
-    /// in-memory parameter store and `app`, accepting no dummy mapping. In Initialisation until
-    /// [`Device::boot`].
+    /// A device on `od` (its values are the power-on defaults) with node-ID `node_id`
+    /// ([`UNCONFIGURED`] for an LSS-unconfigured start), the in-memory parameter store and `app`,
+    /// accepting no dummy mapping. In Initialisation until [`Device::boot`].
     pub fn new(od: DynamicOd, node_id: u8, app: Box<dyn Application>) -> Result<Device, DeviceError> {
-        let node = NodeId::new(node_id).ok_or(DeviceError::NodeId(node_id))?;
-        let lss = LssSlave::from_od(&od, Some(node)).ok();
+        let configured = node_id != UNCONFIGURED;
+        let node = match NodeId::new(node_id) {
+            Some(node) => node,
+            None if !configured => NodeId::new(1).ok_or(DeviceError::NodeId(node_id))?,
+            None => return Err(DeviceError::NodeId(node_id)),
+        };
+        let lss = LssSlave::from_od(&od, configured.then_some(node)).ok();
+        if !configured && lss.is_none() {
+            return Err(DeviceError::NoLss);
+        }
         Ok(Device {
+            configured,
             pristine: od.clone(),
             od,
             eds: None,
@@ -236,9 +270,12 @@ impl Device {
             store: StoreRestore::new(),
             params: Box::new(MemoryStore::new()),
             lss,
+            lss_storage: Box::new(StoredLss::default()),
+            overrides: Vec::new(),
             app,
             lost: BTreeSet::new(),
             reset_application: false,
+            booted: false,
             faults: FaultLayer::new(FaultSet::none()),
             transmit: VecDeque::new(),
             events: VecDeque::new(),
@@ -249,6 +286,28 @@ impl Device {
     /// [`Device::boot`], which applies the values it holds.
     pub fn with_parameter_store(mut self, store: Box<dyn ParameterStore>) -> Device {
         self.params = store;
+        self
+    }
+
+    /// Sets the power-on value of `key` to `value` (checked against the entry's type, not its
+    /// access), kept across every reset, for example a serial number 1018h:04 so that several
+    /// devices from one EDS have distinct LSS addresses. Call before [`Device::boot`].
+    pub fn with_value(mut self, key: ObjectKey, value: &[u8]) -> Result<Device, OdError> {
+        self.od.set_value(key, value)?;
+        self.pristine.set_value(key, value)?;
+        self.overrides.retain(|(k, _)| *k != key);
+        self.overrides.push((key, value.to_vec()));
+        if key.index == 0x1018 {
+            // The LSS address is the identity object's value at power-on.
+            self.lss = LssSlave::from_od(&self.od, self.configured.then_some(self.node)).ok();
+        }
+        Ok(self)
+    }
+
+    /// Uses `storage` for LSS store configuration (CiA 305) instead of the in-memory one, which keeps
+    /// the stored node-ID and bit rate for as long as the `Device` lives ([`Device::lss_stored`]).
+    pub fn with_lss_storage(mut self, storage: Box<dyn LssStorage>) -> Device {
+        self.lss_storage = storage;
         self
     }
 
@@ -267,9 +326,10 @@ impl Device {
     /// Power-on: reset application and reset communication (defaults, then saved values), then
     /// the boot-up message and Pre-operational. Does nothing once booted.
     pub fn boot(&mut self, now: Instant) {
-        if self.nmt.state() != NmtSlaveState::Initialisation {
+        if self.booted {
             return;
         }
+        self.booted = true;
         self.reset(now, true);
         self.pump(now);
     }
@@ -295,7 +355,12 @@ impl Device {
         self.nmt.state()
     }
 
-    /// The active node-ID.
+    /// Whether the device has a node-ID; false while it is LSS-unconfigured (FFh).
+    pub fn is_configured(&self) -> bool {
+        self.configured
+    }
+
+    /// The active node-ID (a placeholder while [`Device::is_configured`] is false).
     pub fn node_id(&self) -> NodeId {
         self.node
     }
@@ -322,6 +387,14 @@ impl Device {
     /// Feeds a received frame to every core whose COB-ID it matches, in the NMT states where CiA
     /// 301 runs that service.
     pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+        if !self.configured {
+            // CiA 305: a node without a node-ID takes part in LSS only.
+            if let Some(lss) = &mut self.lss {
+                lss.handle_frame_with(now, frame, &mut *self.lss_storage);
+            }
+            self.pump(now);
+            return;
+        }
         let sdo_request = self.sdo.iter().any(|(_, server)| server.rx_id() == frame.id());
         let Some(frame) = self.faults.inbound(frame, self.node, sdo_request) else {
             return;
@@ -337,7 +410,7 @@ impl Device {
         }
         self.nmt.handle_frame(now, frame);
         if let Some(lss) = &mut self.lss {
-            lss.handle_frame(now, frame);
+            lss.handle_frame_with(now, frame, &mut *self.lss_storage);
         }
         if state.is_active(CommService::ErrorControl) {
             self.error_control.handle_frame(now, frame);
@@ -372,6 +445,13 @@ impl Device {
 
     /// Runs every timer due at `now`, in every core and the application.
     pub fn handle_timeout(&mut self, now: Instant) {
+        if !self.configured {
+            if let Some(lss) = &mut self.lss {
+                lss.handle_timeout(now);
+            }
+            self.pump(now);
+            return;
+        }
         let mut released = Vec::new();
         self.faults.release(now, &mut released);
         self.transmit.extend(released);
@@ -409,6 +489,9 @@ impl Device {
     /// and the application.
     pub fn poll_timeout(&self) -> Option<Instant> {
         let lss = self.lss.as_ref().and_then(LssSlave::poll_timeout);
+        if !self.configured {
+            return lss;
+        }
         [
             self.error_control.poll_timeout(),
             self.consumer.poll_timeout(),
@@ -556,7 +639,7 @@ impl Device {
         made.extend(std::iter::from_fn(|| self.sync.poll_transmit()).map(|f| (Source::Sync, f)));
         made.extend(std::iter::from_fn(|| self.pdo.poll_transmit()).map(|f| (Source::Other, f)));
         made.extend(std::iter::from_fn(|| self.time.poll_transmit()).map(|f| (Source::Other, f)));
-        if silent {
+        if silent || !self.configured {
             made.truncate(lss_frames);
         }
         let mut frames = Vec::with_capacity(made.len());
@@ -730,6 +813,23 @@ impl Device {
                 .raise(now, EMCY_HEARTBEAT, COMMUNICATION_ERROR, [source, 0, 0, 0, 0]);
         }
         self.lost.insert(source);
+        self.error_behaviour();
+    }
+
+    /// CiA 301 1029h sub 1, the reaction to a communication error (heartbeat or life guarding
+    /// lost; reference §2.8): 0 = Pre-operational if Operational, 1 = no change, 2 = Stopped.
+    /// Without 1029h (or with a reserved value) the state is left alone: CiA 301 makes the reaction
+    /// of such a device manufacturer-specific, and changing state unasked would surprise a tester.
+    fn error_behaviour(&mut self) {
+        let reaction = match self.od.get(ObjectKey::new(0x1029, 1)).map(|e| e.value()) {
+            Some(&[value]) => value,
+            _ => return,
+        };
+        match (reaction, self.nmt.state()) {
+            (0, NmtSlaveState::Operational) => self.nmt.enter_local(NmtSlaveState::PreOperational),
+            (2, state) if state != NmtSlaveState::Stopped => self.nmt.enter_local(NmtSlaveState::Stopped),
+            _ => {}
+        }
     }
 
     fn comm_resumed(&mut self, now: Instant, source: u8) {
@@ -810,19 +910,27 @@ impl Device {
                 self.apply_saved(group);
             }
         }
-        if let Some(lss) = &mut self.lss
-            && let Some(node) = lss.reset_communication()
-            && node != self.node
-        {
-            self.events.push_back(DeviceEvent::NodeIdChanged {
-                from: self.node,
-                to: node,
-            });
-            self.node = node;
-            if let Some(eds) = &self.eds
-                && let Ok(built) = build_od(eds, node.get())
-            {
-                self.pristine = built.od;
+        if let Some(lss) = &mut self.lss {
+            match lss.reset_communication() {
+                Some(node) if !self.configured || node != self.node => {
+                    self.events.push_back(DeviceEvent::NodeIdChanged {
+                        from: self.configured.then_some(self.node),
+                        to: node,
+                    });
+                    self.node = node;
+                    self.configured = true;
+                    if let Some(eds) = &self.eds
+                        && let Ok(built) = build_od(eds, node.get())
+                    {
+                        self.pristine = built.od;
+                        for (key, value) in &self.overrides {
+                            let _ = self.pristine.set_value(*key, value);
+                        }
+                    }
+                }
+                Some(_) => {}
+                // LSS configured FFh: the node leaves the network until it gets a node-ID again.
+                None => self.configured = false,
             }
         }
         self.restore_defaults(0x1000..=0x1FFF);
@@ -835,7 +943,9 @@ impl Device {
         }
         self.faults.reset_guard_toggle();
         self.nmt.set_node_id(self.node);
-        self.nmt.boot(now);
+        if self.configured {
+            self.nmt.boot(now);
+        }
     }
 
     fn restore_defaults(&mut self, range: std::ops::RangeInclusive<u16>) {
@@ -913,6 +1023,13 @@ impl Device {
         self.pdo = PdoEngine::new().with_dummy_usage(self.dummies);
         self.pdo.reload(now, &self.od);
         self.load_sdo_servers();
+
+        // CiA 302-2 1F80h bit 2 = 0: a self-starting device enters Operational on its own after the
+        // boot-up message (reference §2.7; TR-Electronic and CANopenNode slaves read it so). Without
+        // 1F80h the device waits for the NMT master, as CiA 301 devices do.
+        let self_starting =
+            u32_at(&self.od, 0x1F80, 0).is_some_and(|value| value & NMT_STARTUP_NO_AUTOSTART == 0);
+        self.nmt.set_auto_start(self_starting);
     }
 
     fn refused(&mut self, key: ObjectKey, abort_code: u32) {
@@ -1037,6 +1154,19 @@ impl SdoHooks for Hooks<'_> {
                 _ => {}
             }
         }
+        Ok(())
+    }
+}
+
+/// The default LSS storage: accepts store configuration and keeps what was stored in memory.
+#[derive(Debug, Default)]
+struct StoredLss {
+    stored: Option<(Option<NodeId>, Option<BitTiming>)>,
+}
+
+impl LssStorage for StoredLss {
+    fn store(&mut self, node_id: Option<NodeId>, bit_timing: Option<BitTiming>) -> Result<(), LssStoreError> {
+        self.stored = Some((node_id, bit_timing));
         Ok(())
     }
 }

@@ -7,7 +7,7 @@ use std::rc::Rc;
 
 use canopener_can::{CanFrame, Instant};
 use canopener_device::application::{AppChanges, Application, NoApplication};
-use canopener_device::device::{Device, DeviceEvent};
+use canopener_device::device::{self, Device, DeviceEvent};
 use canopener_device::nmt_slave::NmtSlaveState;
 use canopener_device::od_build::build_od;
 use canopener_od::{DynamicOd, ObjectKey};
@@ -369,4 +369,160 @@ proptest! {
             bus.advance(t + 5_000);
         }
     }
+}
+
+/// A device from the EDS at `path` with `extra` entries added to its dictionary.
+fn device_with(path: &str, node: u8, extra: Vec<canopener_od::Entry>) -> Device {
+    let od = build_od(&eds(path), node).expect("od").od;
+    let capacity = od.len() + extra.len();
+    let od = DynamicOd::from_entries(capacity, od.iter().cloned().chain(extra)).expect("dictionary");
+    Device::new(od, node, Box::new(NoApplication)).expect("device")
+}
+
+fn u8_array(index: u16, values: &[u8]) -> Vec<canopener_od::Entry> {
+    use canopener_od::{Access, DataType, Entry};
+    let count = u8::try_from(values.len()).expect("few subs");
+    let mut entries = vec![
+        Entry::new(
+            ObjectKey::new(index, 0),
+            DataType::UNSIGNED8,
+            Access::Const,
+            &[count],
+        )
+        .expect("sub 0"),
+    ];
+    for (sub, value) in (1..).zip(values) {
+        entries.push(
+            Entry::new(
+                ObjectKey::new(index, sub),
+                DataType::UNSIGNED8,
+                Access::Rw,
+                &[*value],
+            )
+            .expect("entry"),
+        );
+    }
+    entries
+}
+
+#[test]
+fn unconfigured_device_is_silent_except_lss_until_fastscan_and_configuration() {
+    let dev = Device::from_eds(&eds(BASE), device::UNCONFIGURED, Box::new(NoApplication)).expect("device");
+    let mut bus = Bus::booted(dev);
+    assert!(!bus.dev.is_configured());
+    // No boot-up, no heartbeat, no NMT, no SDO: the node has no node-ID (CiA 305).
+    bus.rx(10, "000#0100");
+    bus.rx(20, "601#4018100100000000");
+    bus.advance(5_000);
+    assert_eq!(bus.sent(), Vec::<String>::new());
+    assert_eq!(bus.dev.state(), NmtSlaveState::Initialisation);
+    // Identify non-configured remote slave, and the fastscan probe, are answered.
+    bus.rx(5_001, "7E5#4C00000000000000");
+    bus.rx(5_002, "7E5#5100000000800000");
+    assert_eq!(
+        bus.sent(),
+        ["5001.000 7E4#5000000000000000", "5002.000 7E4#4F00000000000000"]
+    );
+    // Configuration: switch state global, configure node-ID 20h, store, back to waiting.
+    bus.rx(5_003, "7E5#0401000000000000");
+    bus.rx(5_004, "7E5#1120000000000000");
+    bus.rx(5_005, "7E5#1700000000000000");
+    bus.rx(5_006, "7E5#0400000000000000");
+    assert!(bus.dev.is_configured());
+    assert_eq!(bus.dev.node_id().get(), 0x20);
+    assert_eq!(
+        bus.sent(),
+        [
+            "5004.000 7E4#1100000000000000",
+            "5005.000 7E4#1700000000000000",
+            "5006.000 720#00"
+        ]
+    );
+    assert!(bus.events().iter().any(|e| matches!(
+        e,
+        DeviceEvent::NodeIdChanged { from: None, to } if to.get() == 0x20
+    )));
+    // Now a node like any other: SDO on 620h/5A0h with the $NODEID defaults of node 20h.
+    bus.rx(5_010, "620#4018100100000000");
+    assert_eq!(bus.sent(), ["5010.000 5A0#43181001BC0A0000"]);
+    assert_eq!(bus.value(0x1800, 1), 0x1A0u32.to_le_bytes());
+}
+
+#[test]
+fn unconfigured_start_needs_lss_and_a_serial_number_override_sets_the_lss_address() {
+    let mut od = build_od(&eds(BASE), 1).expect("od").od;
+    od.remove(ObjectKey::new(0x1018, 1));
+    let refused = Device::new(od, device::UNCONFIGURED, Box::new(NoApplication)).unwrap_err();
+    assert!(refused.to_string().contains("1018h"), "{refused}");
+
+    let dev = Device::from_eds(&eds(BASE), device::UNCONFIGURED, Box::new(NoApplication))
+        .expect("device")
+        .with_value(ObjectKey::new(0x1018, 4), &0x0001_2345u32.to_le_bytes())
+        .expect("serial");
+    let mut bus = Bus::booted(dev);
+    bus.rx(1, "7E5#0401000000000000");
+    bus.rx(2, "7E5#5D00000000000000");
+    assert_eq!(bus.sent(), ["2.000 7E4#5D45230100000000"]);
+    // The override survives the rebuilt defaults of the node-ID LSS gives.
+    bus.rx(3, "7E5#1107000000000000");
+    bus.rx(4, "7E5#0400000000000000");
+    bus.rx(5, "607#4018100400000000");
+    assert_eq!(
+        bus.sent(),
+        [
+            "3.000 7E4#1100000000000000",
+            "4.000 707#00",
+            "5.000 587#4318100445230100"
+        ]
+    );
+}
+
+#[test]
+fn nmt_startup_1f80h_bit_2_clear_makes_the_device_start_on_its_own() {
+    use canopener_od::{Access, DataType, Entry};
+    for (value, state) in [
+        (0x0000_0000u32, NmtSlaveState::Operational),
+        (0x0000_0004, NmtSlaveState::PreOperational),
+    ] {
+        let entry = Entry::new(
+            ObjectKey::new(0x1F80, 0),
+            DataType::UNSIGNED32,
+            Access::Rw,
+            &value.to_le_bytes(),
+        );
+        let dev = device_with(BASE, 5, vec![entry.expect("entry")]);
+        let bus = Bus::booted(dev);
+        assert_eq!(bus.dev.state(), state, "1F80h = {value:#x}");
+    }
+    // Without 1F80h the device waits for the NMT master.
+    assert_eq!(
+        Bus::booted(base_device(5)).dev.state(),
+        NmtSlaveState::PreOperational
+    );
+}
+
+#[test]
+fn error_behaviour_1029h_on_a_lost_heartbeat() {
+    for (reaction, after) in [
+        (0u8, NmtSlaveState::PreOperational),
+        (1, NmtSlaveState::Operational),
+        (2, NmtSlaveState::Stopped),
+    ] {
+        let dev = device_with(DS301, 10, u8_array(0x1029, &[reaction, 1]));
+        let mut bus = Bus::booted(dev);
+        bus.rx(0, "000#010A");
+        bus.rx(1, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+        bus.rx(10, "703#05");
+        assert_eq!(bus.dev.state(), NmtSlaveState::Operational);
+        bus.advance(200);
+        assert_eq!(bus.dev.state(), after, "1029h sub 1 = {reaction}");
+        assert!(bus.sent().iter().any(|f| f.ends_with("08A#3081110300000000")));
+    }
+    // Without 1029h the state stays.
+    let mut bus = Bus::booted(ds301_device(10));
+    bus.rx(0, "000#010A");
+    bus.rx(1, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+    bus.rx(10, "703#05");
+    bus.advance(200);
+    assert_eq!(bus.dev.state(), NmtSlaveState::Operational);
 }

@@ -213,7 +213,7 @@ fn sim_keeps_saved_parameters_in_the_state_dir_across_restarts() {
 }
 
 #[test]
-fn sim_refuses_bad_files_and_missing_node_ids() {
+fn sim_refuses_bad_files_and_a_state_dir_without_node_id() {
     let dir = temp_dir("sim-bad");
     let bad = dir.join("broken.eds");
     std::fs::write(&bad, "garbage without sections\n").unwrap();
@@ -229,9 +229,13 @@ fn sim_refuses_bad_files_and_missing_node_ids() {
     assert!(stderr(&output).contains("broken.eds"), "{}", stderr(&output));
 
     let eds = base_eds();
+    // Saved parameters are kept per node-ID, so an unconfigured start cannot have them.
+    let state = dir.join("state");
     let no_node = run(&[
         "sim",
         eds.to_str().unwrap(),
+        "--state-dir",
+        state.to_str().unwrap(),
         "--bus",
         "socketcand://127.0.0.1:9/can0",
     ]);
@@ -243,6 +247,69 @@ fn sim_refuses_bad_files_and_missing_node_ids() {
     assert!(
         String::from_utf8_lossy(&help.stdout).contains("Examples:"),
         "{help:?}"
+    );
+}
+
+#[test]
+fn unconfigured_sims_are_found_by_lss_and_boot_with_the_node_id_it_gives() {
+    let hub = HubProc::start();
+    let dir = temp_dir("sim-lss");
+    let mut bus = client(&hub);
+    let eds = base_eds();
+    let eds = eds.to_str().unwrap();
+    let spec = hub.spec("can0");
+    let mut sim = SimProc::spawn(
+        &dir,
+        &[eds, eds, "--serial", "0x100", "--bus", &spec, "--format", "json"],
+    );
+    // Both devices are unconfigured: each answers "identify non-configured remote slave".
+    // Asked again until the simulator is on the hub (it may still be starting).
+    let deadline = Instant::now() + WAIT;
+    let mut answers = Vec::new();
+    while answers.is_empty() && Instant::now() < deadline {
+        send(&mut *bus, "7E5#4C00000000000000");
+        let window = Instant::now() + Duration::from_millis(300);
+        while let Some(wait) = window.checked_duration_since(Instant::now()) {
+            if let Some(received) = bus.recv(wait).expect("recv") {
+                answers.push(CanFrame::to_string(&received.frame));
+            }
+        }
+    }
+    assert_eq!(
+        answers,
+        ["7E4#5000000000000000", "7E4#5000000000000000"],
+        "both devices answer; sim stderr:\n{}",
+        sim.stderr()
+    );
+    // Select the second device by its LSS address (base.eds: vendor ABCh, product 401h, revision
+    // 10002h; serial 101h from --serial), give it node-ID 9, and let it boot.
+    for frame in [
+        "7E5#40BC0A0000000000",
+        "7E5#4101040000000000",
+        "7E5#4202000100000000",
+        "7E5#4301010000000000",
+    ] {
+        send(&mut *bus, frame);
+    }
+    assert_eq!(expect_frame(&mut *bus, "7E4#", &sim), "7E4#4400000000000000");
+    send(&mut *bus, "7E5#1109000000000000");
+    assert_eq!(expect_frame(&mut *bus, "7E4#", &sim), "7E4#1100000000000000");
+    send(&mut *bus, "7E5#0400000000000000");
+    assert_eq!(expect_frame(&mut *bus, "709#", &sim), "709#00");
+    send(&mut *bus, "609#4018100400000000");
+    assert_eq!(expect_frame(&mut *bus, "589#", &sim), "589#4318100401010000");
+
+    assert_eq!(sim.terminate().code(), Some(0), "stderr:\n{}", sim.stderr());
+    let events: Vec<serde_json::Value> = sim
+        .stdout()
+        .lines()
+        .map(|line| serde_json::from_str(line).expect("JSON line"))
+        .collect();
+    assert!(
+        events
+            .iter()
+            .any(|e| e["event"] == "node_id" && e["from"].is_null() && e["to"] == 9),
+        "{events:?}"
     );
 }
 
