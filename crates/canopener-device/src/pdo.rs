@@ -1109,20 +1109,21 @@ impl PdoEngine {
                         // CiA 301 SYNC start value: with a counter in the SYNC, the SYNC whose
                         // counter equals it counts as the first; otherwise the first SYNC seen.
                         let start = tpdo.comm.sync_start;
-                        let first = start == 0 || counter.is_none_or(|c| c == start);
-                        if first {
+                        if start == 0 || counter.is_none_or(|c| c == start) {
                             tpdo.sync_started = true;
                             tpdo.sync_left = transmission_type;
                         }
-                        first
-                    } else {
+                    }
+                    // "Every n-th SYNC", the first counting as one: type 2 goes out with the 2nd,
+                    // 4th, ... SYNC, as lely and CANopenNode count.
+                    if tpdo.sync_started {
                         tpdo.sync_left = tpdo.sync_left.saturating_sub(1);
                         if tpdo.sync_left == 0 {
                             tpdo.sync_left = transmission_type;
-                            true
-                        } else {
-                            false
                         }
+                        tpdo.sync_left == transmission_type
+                    } else {
+                        false
                     }
                 }
                 _ => false,
@@ -1572,8 +1573,8 @@ mod tests {
         }
         assert_eq!(
             trace.sent(),
-            ["10.000 185#01", "40.000 185#04", "70.000 185#07"],
-            "the first SYNC, then every third"
+            ["30.000 185#03", "60.000 185#06"],
+            "every third SYNC, the first counting as one"
         );
     }
 
@@ -1588,8 +1589,8 @@ mod tests {
         }
         assert_eq!(
             trace.sent(),
-            ["30.000 185#00", "50.000 185#00", "70.000 185#00"],
-            "the SYNC with counter 3 is the first"
+            ["40.000 185#00", "60.000 185#00", "80.000 185#00"],
+            "the SYNC with counter 3 is the first, so every second from there"
         );
         // Without a counter in the SYNC the start value has no effect.
         let mut trace = bench(|od| {
@@ -1599,7 +1600,7 @@ mod tests {
         for i in 1..=4 {
             sync(&mut trace, ms(i * 10), None);
         }
-        assert_eq!(trace.sent(), ["10.000 185#00", "30.000 185#00"]);
+        assert_eq!(trace.sent(), ["20.000 185#00", "40.000 185#00"]);
     }
 
     #[test]

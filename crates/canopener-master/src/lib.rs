@@ -1,0 +1,19 @@
+//! The master side of CANopen as sans-IO client cores (CiA 301, CiA 305).
+//!
+//! Every core here follows the same discipline as `canopener-device`: frames and the current time go
+//! in (`handle_frame(now, &frame)`, `handle_timeout(now)`), frames, events and the next deadline come out
+//! (`poll_transmit()`, `poll_event()`, `poll_timeout()`). Nothing here opens a socket, starts a thread or
+//! reads a clock; the CLI drives the cores over a real bus and the tests drive them on virtual time.
+//!
+//! The cores share the frame codecs of `canopener-wire` with the device side, but no state.
+
+pub mod emcy_consumer;
+pub mod error_control;
+pub mod lss_master;
+pub mod nmt_master;
+pub mod pdo_config;
+pub mod pdo_decode;
+pub mod sdo_client;
+pub mod sync_producer;
+pub mod time_producer;
+pub mod value;

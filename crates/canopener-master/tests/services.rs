@@ -1,0 +1,614 @@
+//! The master's service cores against real `canopener_device::device::Device`s on virtual time: NMT
+//! module control, heartbeat and node guarding monitoring, EMCY decoding, SYNC and TIME production.
+//!
+//! Devices are built from the checker's fixture `base.eds` (node 5), CANopenNode's
+//! `DS301_profile.eds` (node 10; SYNC, TIME, 1019h) and CANopenSocket's `CANopenSocket.eds`
+//! (node 4; the only one with 100Ch/100Dh for node guarding).
+
+use std::time::Duration;
+
+use canopener_can::candump::parse_compact_frame;
+use canopener_can::{CanFrame, Instant};
+use canopener_device::application::NoApplication;
+use canopener_device::device::{Device, DeviceEvent};
+use canopener_device::faults::{Fault, FaultSet};
+use canopener_device::nmt_slave::NmtSlaveState;
+use canopener_device::od_build::build_od;
+use canopener_master::emcy_consumer::EmcyConsumer;
+use canopener_master::error_control::{ConsumerTime, GuardingConfig, NodeMonitor};
+use canopener_master::nmt_master::{NmtMaster, NmtTarget, expected_state};
+use canopener_master::sync_producer::{SyncConfig, SyncProducer};
+use canopener_master::time_producer::TimeProducer;
+use canopener_od::ObjectKey;
+use canopener_wire::{NmtCommand, NodeId};
+
+const BASE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../canopener-check/test_data/checks/base.eds"
+);
+const DS301: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__DS301_profile.eds"
+);
+const SOCKET: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/corpus/eds/CANopenNode__CANopenSocket__canopend__objDict__CANopenSocket.eds"
+);
+
+/// A device from `path` with dictionary values set before power-on (`(index, sub, bytes)`).
+fn device(path: &str, node: u8, values: &[(u16, u8, &[u8])]) -> Device {
+    let eds = canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds;
+    let mut built = build_od(&eds, node).expect("builds");
+    for (index, sub, bytes) in values {
+        built
+            .od
+            .set_value(ObjectKey::new(*index, *sub), bytes)
+            .expect("value set");
+    }
+    Device::new(built.od, node, Box::new(NoApplication)).expect("device")
+}
+
+fn node(raw: u8) -> NodeId {
+    NodeId::new(raw).expect("node-ID")
+}
+
+fn stamp(now: Instant) -> String {
+    let micros = now.as_micros();
+    format!("{}.{:03}", micros / 1000, micros % 1000)
+}
+
+/// An expedited SDO download request to `node` as compact candump text.
+fn download(node: u8, index: u16, sub: u8, data: &[u8]) -> String {
+    let command = 0x23 | ((4 - data.len() as u8) << 2);
+    let mut bytes = vec![command, index as u8, (index >> 8) as u8, sub];
+    bytes.extend_from_slice(data);
+    bytes.resize(8, 0);
+    let hex: String = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    format!("{:03X}#{hex}", 0x600 + u16::from(node))
+}
+
+/// Who put a frame on the bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Sender {
+    Device(usize),
+    Monitor,
+    Master,
+}
+
+/// A bus on virtual time: devices on one side, the master's cores on the other. Every frame
+/// reaches every party but its sender; an unplugged device neither sends nor receives.
+struct Net {
+    now: Instant,
+    devices: Vec<Device>,
+    unplugged: Vec<bool>,
+    nmt: NmtMaster,
+    monitor: NodeMonitor,
+    emcy: EmcyConsumer,
+    sync: Option<SyncProducer>,
+    time: TimeProducer,
+    /// Frames on the bus as `"<ms>.<µs> <frame>"`.
+    frames: Vec<String>,
+    /// Monitor events as `"<ms>.<µs> <event>"` (`Display`).
+    monitored: Vec<String>,
+    /// EMCY consumer events, likewise.
+    emcys: Vec<String>,
+    device_events: Vec<(usize, DeviceEvent)>,
+}
+
+impl Net {
+    fn new(devices: Vec<Device>, default_consumer: ConsumerTime) -> Net {
+        let mut net = Net {
+            now: Instant::ZERO,
+            unplugged: vec![false; devices.len()],
+            devices,
+            nmt: NmtMaster::new(),
+            monitor: NodeMonitor::new(default_consumer),
+            emcy: EmcyConsumer::new(),
+            sync: None,
+            time: TimeProducer::new(),
+            frames: Vec::new(),
+            monitored: Vec::new(),
+            emcys: Vec::new(),
+            device_events: Vec::new(),
+        };
+        for dev in &mut net.devices {
+            dev.boot(Instant::ZERO);
+        }
+        net.exchange();
+        net
+    }
+
+    fn collect(&mut self) -> Vec<(Sender, CanFrame)> {
+        let mut res = Vec::new();
+        for (idx, dev) in self.devices.iter_mut().enumerate() {
+            while let Some(frame) = dev.poll_transmit() {
+                if !self.unplugged[idx] {
+                    res.push((Sender::Device(idx), frame));
+                }
+            }
+            while let Some(event) = dev.poll_event() {
+                self.device_events.push((idx, event));
+            }
+        }
+        while let Some(frame) = self.monitor.poll_transmit() {
+            res.push((Sender::Monitor, frame));
+        }
+        while let Some(frame) = self.nmt.poll_transmit() {
+            res.push((Sender::Master, frame));
+        }
+        if let Some(sync) = &mut self.sync {
+            while let Some(frame) = sync.poll_transmit() {
+                res.push((Sender::Master, frame));
+            }
+        }
+        while let Some(frame) = self.time.poll_transmit() {
+            res.push((Sender::Master, frame));
+        }
+        res
+    }
+
+    /// Delivers every frame until nobody has anything to send at `now`.
+    fn exchange(&mut self) {
+        loop {
+            let frames = self.collect();
+            if frames.is_empty() {
+                break;
+            }
+            for (sender, frame) in frames {
+                self.deliver(sender, &frame);
+            }
+        }
+        let now = stamp(self.now);
+        while let Some(event) = self.monitor.poll_event() {
+            self.monitored.push(format!("{now} {event}"));
+        }
+        while let Some(event) = self.emcy.poll_event() {
+            self.emcys.push(format!("{now} {event}"));
+        }
+    }
+
+    fn deliver(&mut self, sender: Sender, frame: &CanFrame) {
+        self.frames.push(format!("{} {frame}", stamp(self.now)));
+        for (idx, dev) in self.devices.iter_mut().enumerate() {
+            if sender != Sender::Device(idx) && !self.unplugged[idx] {
+                dev.handle_frame(self.now, frame);
+            }
+        }
+        if sender != Sender::Monitor {
+            self.monitor.handle_frame(self.now, frame);
+        }
+        self.emcy.handle_frame(self.now, frame);
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        self.devices
+            .iter()
+            .filter_map(Device::poll_timeout)
+            .chain(self.monitor.poll_timeout())
+            .chain(self.sync.as_ref().and_then(SyncProducer::poll_timeout))
+            .chain(self.time.poll_timeout())
+            .min()
+    }
+
+    /// Runs every timer due up to and including `until_ms`, then sets the clock there.
+    fn advance(&mut self, until_ms: u64) {
+        let until = Instant::from_millis(until_ms);
+        self.exchange();
+        while let Some(due) = self.next_deadline() {
+            if due > until {
+                break;
+            }
+            assert!(due >= self.now, "timer in the past");
+            self.now = due;
+            for dev in &mut self.devices {
+                if dev.poll_timeout().is_some_and(|at| at <= due) {
+                    dev.handle_timeout(due);
+                }
+            }
+            self.monitor.handle_timeout(due);
+            if let Some(sync) = &mut self.sync {
+                sync.handle_timeout(due);
+            }
+            self.time.handle_timeout(due);
+            self.exchange();
+        }
+        self.now = until;
+    }
+
+    /// Advances to `at_ms`, then sends `command` to `target`.
+    fn nmt(&mut self, at_ms: u64, command: NmtCommand, target: NmtTarget) {
+        self.advance(at_ms);
+        self.nmt.send(self.now, command, target);
+        self.exchange();
+    }
+
+    /// Advances to `at_ms`, then puts `text` on the bus as sent by the master tool.
+    fn inject(&mut self, at_ms: u64, text: &str) {
+        self.advance(at_ms);
+        let frame = parse_compact_frame(text).expect("test frame");
+        self.deliver(Sender::Master, &frame);
+        self.exchange();
+    }
+
+    fn take_monitored(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.monitored)
+    }
+
+    fn take_emcys(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.emcys)
+    }
+
+    fn take_frames(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.frames)
+    }
+}
+
+fn without_intervals(lines: Vec<String>) -> Vec<String> {
+    lines
+        .into_iter()
+        .filter(|line| !line.contains("interval"))
+        .collect()
+}
+
+#[test]
+fn nmt_commands_change_the_device_state_and_the_monitor_follows() {
+    let hundred_ms = 100u16.to_le_bytes();
+    let mut net = Net::new(
+        vec![device(BASE, 5, &[(0x1017, 0, &hundred_ms)])],
+        ConsumerTime::Learn,
+    );
+    let five = NmtTarget::Node(node(5));
+    let steps = [
+        (250, NmtCommand::StartRemoteNode, five, NmtSlaveState::Operational),
+        (400, NmtCommand::StopRemoteNode, five, NmtSlaveState::Stopped),
+        (
+            550,
+            NmtCommand::EnterPreOperational,
+            NmtTarget::All,
+            NmtSlaveState::PreOperational,
+        ),
+        (700, NmtCommand::ResetNode, five, NmtSlaveState::PreOperational),
+    ];
+    for (at, command, target, device_state) in steps {
+        net.nmt(at, command, target);
+        assert_eq!(net.devices[0].state(), device_state, "after {command}");
+        assert_eq!(
+            net.monitor.state(node(5)),
+            Some(expected_state(command)),
+            "after {command}"
+        );
+    }
+    net.advance(850);
+    let frames = net.take_frames();
+    let error_control: Vec<&String> = frames
+        .iter()
+        .filter(|line| line.contains(" 000#") || line.contains(" 705#"))
+        .collect();
+    assert_eq!(
+        error_control,
+        [
+            "0.000 705#00",
+            "100.000 705#7F",
+            "200.000 705#7F",
+            "250.000 000#0105",
+            "250.000 705#05",
+            "350.000 705#05",
+            "400.000 000#0205",
+            "400.000 705#04",
+            "500.000 705#04",
+            "550.000 000#8000",
+            "550.000 705#7F",
+            "650.000 705#7F",
+            "700.000 000#8105",
+            "700.000 705#00",
+            "800.000 705#7F",
+        ]
+    );
+    let monitored = net.take_monitored();
+    assert_eq!(
+        without_intervals(monitored.clone()),
+        [
+            "0.000 node 5: boot-up",
+            "100.000 node 5: BOOT-UP -> PRE-OPERATIONAL",
+            "250.000 node 5: PRE-OPERATIONAL -> OPERATIONAL",
+            "400.000 node 5: OPERATIONAL -> STOPPED",
+            "550.000 node 5: STOPPED -> PRE-OPERATIONAL",
+            "700.000 node 5: boot-up",
+            "800.000 node 5: BOOT-UP -> PRE-OPERATIONAL",
+        ]
+    );
+    // Every same-state gap is the 1017h period; the state-change heartbeats are no samples.
+    let intervals: Vec<&String> = monitored
+        .iter()
+        .filter(|line| line.contains("interval"))
+        .collect();
+    assert_eq!(
+        intervals,
+        [
+            "200.000 node 5: heartbeat interval 100.000 ms",
+            "350.000 node 5: heartbeat interval 100.000 ms",
+            "500.000 node 5: heartbeat interval 100.000 ms",
+            "650.000 node 5: heartbeat interval 100.000 ms",
+        ]
+    );
+    let status = net.monitor.status(node(5)).expect("heard");
+    assert_eq!(status.learned_period, Some(Duration::from_millis(100)));
+    assert!(!status.heartbeat_lost);
+}
+
+#[test]
+fn heartbeat_lost_when_the_device_stops_producing_or_is_unplugged() {
+    let hundred_ms = 100u16.to_le_bytes();
+    let fifty_ms = 50u16.to_le_bytes();
+    let mut net = Net::new(
+        vec![
+            device(BASE, 5, &[(0x1017, 0, &hundred_ms)]),
+            device(DS301, 10, &[(0x1017, 0, &fifty_ms)]),
+        ],
+        ConsumerTime::Off,
+    );
+    net.monitor
+        .set_consumer_time(node(5), ConsumerTime::Fixed(Duration::from_millis(150)));
+    net.monitor
+        .set_consumer_time(node(10), ConsumerTime::Fixed(Duration::from_millis(75)));
+    // Node 5: 1017h = 0 over SDO after the heartbeat at 300 ms, back to 100 ms at 600 ms.
+    net.inject(300, &download(5, 0x1017, 0, &[0, 0]));
+    // Node 10: unplugged from 320 ms to 420 ms.
+    net.advance(320);
+    net.unplugged[1] = true;
+    net.advance(420);
+    net.unplugged[1] = false;
+    net.inject(600, &download(5, 0x1017, 0, &hundred_ms));
+    net.advance(750);
+    let monitored = without_intervals(net.take_monitored());
+    assert_eq!(
+        monitored,
+        [
+            "0.000 node 5: boot-up",
+            "0.000 node 10: boot-up",
+            "50.000 node 10: BOOT-UP -> PRE-OPERATIONAL",
+            "100.000 node 5: BOOT-UP -> PRE-OPERATIONAL",
+            "375.000 node 10: heartbeat lost (silent for 75 ms)",
+            "450.000 node 5: heartbeat lost (silent for 150 ms)",
+            "450.000 node 10: heartbeat resumed",
+            "700.000 node 5: heartbeat resumed",
+        ]
+    );
+    assert!(net.frames.contains(&"300.000 585#6017100000000000".to_string()));
+    let status = net.monitor.status(node(5)).expect("heard");
+    assert!(!status.heartbeat_lost);
+    assert_eq!(status.last_heard, Some(Instant::from_millis(700)));
+}
+
+#[test]
+fn guarding_a_device_configured_with_100ch_100dh() {
+    let guard_ms = 100u16.to_le_bytes();
+    let mut net = Net::new(
+        vec![device(SOCKET, 4, &[(0x100C, 0, &guard_ms), (0x100D, 0, &[3])])],
+        ConsumerTime::Off,
+    );
+    // This device starts operational on its own (1F80h bit 2 clear).
+    assert_eq!(net.devices[0].state(), NmtSlaveState::Operational);
+    let config = GuardingConfig {
+        guard_time: Duration::from_millis(100),
+        life_time_factor: 3,
+    };
+    net.monitor
+        .start_guarding(net.now, node(4), config)
+        .expect("guarding");
+    net.nmt(250, NmtCommand::EnterPreOperational, NmtTarget::Node(node(4)));
+    net.nmt(350, NmtCommand::StartRemoteNode, NmtTarget::Node(node(4)));
+    net.advance(450);
+    let frames: Vec<String> = net
+        .take_frames()
+        .into_iter()
+        .filter(|line| line.contains(" 704#") || line.contains(" 000#"))
+        .collect();
+    // Answers carry the state and a toggle that starts at 0 after the boot-up.
+    assert_eq!(
+        frames,
+        [
+            "0.000 704#00",
+            "0.000 704#R1",
+            "0.000 704#05",
+            "100.000 704#R1",
+            "100.000 704#85",
+            "200.000 704#R1",
+            "200.000 704#05",
+            "250.000 000#8004",
+            "300.000 704#R1",
+            "300.000 704#FF",
+            "350.000 000#0104",
+            "400.000 704#R1",
+            "400.000 704#05",
+        ]
+    );
+    assert_eq!(
+        net.take_monitored(),
+        [
+            "0.000 node 4: boot-up",
+            "0.000 node 4: BOOT-UP -> OPERATIONAL",
+            "300.000 node 4: OPERATIONAL -> PRE-OPERATIONAL",
+            "400.000 node 4: PRE-OPERATIONAL -> OPERATIONAL",
+        ]
+    );
+    // Unplugged: no answers, so guarding is lost a life time after the last correct one. The
+    // device loses life guarding too and falls back to pre-operational (1029h:01 = 0).
+    net.unplugged[0] = true;
+    net.advance(750);
+    net.unplugged[0] = false;
+    net.advance(850);
+    assert_eq!(
+        net.take_monitored(),
+        [
+            "700.000 node 4: node guarding lost",
+            "800.000 node 4: node guarding resumed",
+            "800.000 node 4: OPERATIONAL -> PRE-OPERATIONAL",
+        ]
+    );
+    assert_eq!(net.devices[0].state(), NmtSlaveState::PreOperational);
+    // The first request after the loss resumed the device's life guarding: error reset.
+    assert_eq!(
+        net.take_emcys(),
+        [
+            "800.000 node 4: EMCY 0000h error reset or no error, error register 00h, manufacturer 00 00 00 00 00"
+        ]
+    );
+    net.take_frames();
+    // The master stops guarding: the device's life guarding runs out 300 ms after the last request.
+    net.monitor.stop_guarding(node(4));
+    net.advance(1300);
+    let emcys = net.take_emcys();
+    assert_eq!(emcys.len(), 1, "{emcys:?}");
+    assert!(
+        emcys[0].starts_with(
+            "1100.000 node 4: EMCY 8130h life guard error or heartbeat error, error register 11h"
+        ),
+        "{emcys:?}"
+    );
+    assert!(net.take_monitored().is_empty());
+    assert!(
+        !net.take_frames().iter().any(|line| line.contains("#R")),
+        "no more requests"
+    );
+}
+
+#[test]
+fn sync_producer_drives_the_device_sync_consumer() {
+    use canopener_device::sync::SyncEvent as DeviceSync;
+    let mut net = Net::new(vec![device(DS301, 10, &[(0x1019, 0, &[5])])], ConsumerTime::Off);
+    let config = SyncConfig {
+        counter_overflow: Some(5),
+        ..SyncConfig::new(Duration::from_millis(10))
+    };
+    let mut sync = SyncProducer::new(config).expect("config");
+    sync.start(Instant::from_millis(10));
+    net.sync = Some(sync);
+    net.advance(75);
+    let counters: Vec<Option<u8>> = net
+        .device_events
+        .drain(..)
+        .filter_map(|(_, event)| match event {
+            DeviceEvent::Sync(DeviceSync::Sync { counter }) => Some(counter),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        counters,
+        [1, 2, 3, 4, 5, 1, 2].map(Some),
+        "the device's SYNC consumer accepts every counter"
+    );
+    let syncs: Vec<String> = net
+        .take_frames()
+        .into_iter()
+        .filter(|line| line.contains(" 080#"))
+        .collect();
+    assert_eq!(syncs[0], "10.000 080#01");
+    assert_eq!(syncs[6], "70.000 080#02");
+    // A producer without the counter: the device expects one (1019h = 5) and raises EMCY 8240h.
+    let mut plain = SyncProducer::new(SyncConfig::new(Duration::from_millis(10))).expect("config");
+    plain.start(Instant::from_millis(80));
+    net.sync = Some(plain);
+    net.advance(80);
+    assert_eq!(
+        net.take_emcys(),
+        [
+            "80.000 node 10: EMCY 8240h unexpected SYNC data length, error register 11h (generic, \
+          communication), manufacturer 01 00 00 00 00"
+        ]
+    );
+}
+
+#[test]
+fn time_producer_reaches_the_device_time_consumer() {
+    use canopener_device::time_stamp::TimeEvent as DeviceTime;
+    let consumer = 0x8000_0100u32.to_le_bytes();
+    let mut net = Net::new(
+        vec![device(DS301, 10, &[(0x1012, 0, &consumer)])],
+        ConsumerTime::Off,
+    );
+    // 2024-01-01 12:00:00.000 UTC.
+    let noon =
+        canopener_master::time_producer::since_1984_from_unix_millis(1_704_110_400_000).expect("after 1984");
+    net.time.set_clock(Instant::from_millis(100), noon);
+    net.time
+        .start_periodic(Instant::from_millis(100), Duration::from_secs(1))
+        .expect("clock set");
+    net.advance(2100);
+    let times: Vec<String> = net
+        .device_events
+        .drain(..)
+        .filter_map(|(_, event)| match event {
+            DeviceEvent::Time(DeviceTime::Time { time }) => Some(time.to_string()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        times,
+        [
+            "2024-01-01 12:00:00.000",
+            "2024-01-01 12:00:01.000",
+            "2024-01-01 12:00:02.000"
+        ]
+    );
+    assert!(net.frames.contains(&"100.000 100#002E93021239".to_string()));
+}
+
+#[test]
+fn emcy_from_an_rpdo_length_error_and_its_reset() {
+    let mut net = Net::new(vec![device(BASE, 5, &[])], ConsumerTime::Off);
+    net.nmt(1, NmtCommand::StartRemoteNode, NmtTarget::All);
+    net.inject(4, "205#");
+    net.inject(5, "205#01");
+    assert_eq!(
+        net.take_emcys(),
+        [
+            "4.000 node 5: EMCY 8210h PDO not processed due to length error, error register 11h \
+             (generic, communication), manufacturer 01 00 00 00 00",
+            "5.000 node 5: EMCY 0000h error reset or no error, error register 00h, manufacturer 00 00 00 00 00",
+        ]
+    );
+    assert_eq!(net.emcy.error_register(node(5)), Some(0));
+}
+
+#[test]
+fn faulty_heartbeats_are_reported() {
+    let hundred_ms = 100u16.to_le_bytes();
+    let wrong_state =
+        device(BASE, 5, &[(0x1017, 0, &hundred_ms)]).with_faults(FaultSet::from(Fault::HeartbeatStateWrong));
+    let too_fast =
+        device(DS301, 10, &[(0x1017, 0, &hundred_ms)]).with_faults(FaultSet::from(Fault::HeartbeatTooFast));
+    let mut net = Net::new(vec![wrong_state, too_fast], ConsumerTime::Learn);
+    net.nmt(150, NmtCommand::StartRemoteNode, NmtTarget::Node(node(5)));
+    net.advance(330);
+    let monitored = net.take_monitored();
+    let node5: Vec<&String> = monitored.iter().filter(|line| line.contains("node 5:")).collect();
+    assert_eq!(
+        node5,
+        [
+            "0.000 node 5: boot-up",
+            "100.000 node 5: unknown NMT state byte 80h",
+            "150.000 node 5: unknown NMT state byte 01h",
+            "250.000 node 5: unknown NMT state byte 01h",
+        ]
+    );
+    // Heartbeats 1 ms apart pull the minimum interval down to 1 ms.
+    let node10: Vec<&String> = monitored
+        .iter()
+        .filter(|line| line.contains("node 10: heartbeat interval"))
+        .collect();
+    assert_eq!(
+        node10,
+        [
+            "101.000 node 10: heartbeat interval 1.000 ms",
+            "200.000 node 10: heartbeat interval 99.000 ms",
+            "201.000 node 10: heartbeat interval 1.000 ms",
+            "300.000 node 10: heartbeat interval 99.000 ms",
+            "301.000 node 10: heartbeat interval 1.000 ms",
+        ]
+    );
+    assert!(
+        !monitored.iter().any(|line| line.contains("lost")),
+        "{monitored:?}"
+    );
+}
