@@ -14,3 +14,5 @@ mkdir -p bench-results
 "$python" bench/run.py "$@"
 "$python" bench/eds_load.py "$@"
 "$python" bench/eds_check.py "$@"
+"$python" bench/sdo_server.py "$@"
+"$python" bench/sdo_client.py "$@"
