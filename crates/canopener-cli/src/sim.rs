@@ -23,7 +23,6 @@ use canopener_device::faults::{Fault, FaultSet};
 use canopener_device::heartbeat::{ConsumerEvent, ErrorControlEvent};
 use canopener_device::lss_slave::{LssEvent, LssState};
 use canopener_device::nmt_slave::{NmtEvent, NmtSlaveState};
-use canopener_device::od_build::build_od;
 use canopener_device::pdo::PdoEvent;
 use canopener_device::sdo_server::{self, AbortOrigin};
 use canopener_device::store::StoreEvent;
@@ -208,20 +207,14 @@ fn build(
             SimApp::Cia401 => Box::new(Cia401Io::new()),
         }
     };
-    let mut device = Device::from_eds(&eds, node_id, application()).map_err(|e| refused(&e))?;
-    let has_io = [0x6000, 0x6200, 0x6401]
-        .into_iter()
-        .any(|index| !device.od().object(index).is_empty());
-    if app == SimApp::Cia401 && !has_io {
-        // The file has no CiA 401 I/O at all: add the objects and default PDOs. (A device made from a
-        // dictionary rather than the EDS keeps its $NODEID defaults when LSS changes the node-ID, and
-        // accepts no dummy mapping.)
-        // An unconfigured device's $NODEID defaults are placeholders until LSS gives it a node-ID.
-        let build_id = if node_id == UNCONFIGURED { 1 } else { node_id };
-        let mut built = build_od(&eds, build_id).map_err(|e| refused(&e))?;
-        install_objects(&mut built.od, build_id).map_err(|e| refused(&e))?;
-        device = Device::new(built.od, node_id, application()).map_err(|e| refused(&e))?;
+    let mut device = match app {
+        SimApp::None => Device::from_eds(&eds, node_id, application()),
+        // The CiA 401 objects and factory test registers the file lacks are added (only those).
+        SimApp::Cia401 => Device::from_eds_extended(&eds, node_id, application(), |od, node| {
+            install_objects(od, node).map(drop).map_err(|err| err.to_string())
+        }),
     }
+    .map_err(|e| refused(&e))?;
     if let Some(serial) = serial {
         device = device
             .with_value(ObjectKey::new(0x1018, 4), &serial.to_le_bytes())
@@ -891,7 +884,7 @@ mod tests {
     }
 
     #[test]
-    fn cia401_objects_are_installed_only_when_the_file_has_no_io() {
+    fn cia401_adds_only_the_objects_the_file_lacks() {
         let sim = build(
             plan(&args(vec![base_eds()], Some(5))).unwrap().remove(0),
             None,
@@ -900,9 +893,11 @@ mod tests {
             &[],
         )
         .unwrap();
-        // base.eds has 6000h and 6200h: kept as they are, no factory test registers added.
-        assert!(sim.device.od().object(0x2001).is_empty());
-        assert!(!sim.device.od().object(0x6000).is_empty());
+        // base.eds has 6000h and 6200h: kept as they are (two inputs), the factory test registers
+        // and the analogue inputs it lacks are added.
+        assert!(!sim.device.od().object(0x2001).is_empty());
+
+        assert!(!sim.device.od().object(0x6401).is_empty());
 
         let dir = std::env::temp_dir().join(format!("canopener-sim-unit-401-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

@@ -102,6 +102,9 @@ pub enum DeviceError {
         "node-ID {0} is outside 1..=127; give the device a node-ID in that range, or FFh to start it unconfigured"
     )]
     NodeId(u8),
+    /// The objects an application adds to the dictionary could not be added.
+    #[error("cannot add the application's objects: {0}")]
+    Extension(String),
     /// An unconfigured start (node-ID FFh) on a device without LSS.
     #[error(
         "the device cannot start unconfigured (node-ID FFh): that needs LSS, which needs the identity object \
@@ -109,6 +112,11 @@ pub enum DeviceError {
     )]
     NoLss,
 }
+
+/// Adds an application's objects to a dictionary built from an EDS for a node-ID (for example
+/// [`crate::cia401::install_objects`]); applied again whenever the power-on dictionary is rebuilt
+/// for a new node-ID.
+pub type OdExtension = fn(&mut DynamicOd, u8) -> Result<(), String>;
 
 /// The node-ID that starts a device unconfigured (CiA 305): silent except for LSS until an LSS master
 /// configures a node-ID and switches it back to waiting.
@@ -199,6 +207,8 @@ pub struct Device {
     lss_storage: Box<dyn LssStorage>,
     /// Power-on values set by [`Device::with_value`], re-applied when the defaults are rebuilt.
     overrides: Vec<(ObjectKey, Vec<u8>)>,
+    /// Objects the application adds, re-added when the defaults are rebuilt.
+    extension: Option<OdExtension>,
     app: Box<dyn Application>,
     /// Sources of the active 8130h EMCY: consumed nodes lost, and 0 for life guarding.
     lost: BTreeSet<u8>,
@@ -225,11 +235,35 @@ impl Device {
     /// ([`Device::notes`]); dummy mapping follows the EDS `[DummyUsage]`. The device is in
     /// Initialisation until [`Device::boot`].
     pub fn from_eds(eds: &Eds, node_id: u8, app: Box<dyn Application>) -> Result<Device, DeviceError> {
+        Device::build(eds, node_id, app, None)
+    }
+
+    /// [`Device::from_eds`] with objects `extension` adds to the dictionary (objects the EDS lacks,
+    /// such as an application's test registers), also after LSS changes the node-ID.
+    pub fn from_eds_extended(
+        eds: &Eds,
+        node_id: u8,
+        app: Box<dyn Application>,
+        extension: OdExtension,
+    ) -> Result<Device, DeviceError> {
+        Device::build(eds, node_id, app, Some(extension))
+    }
+
+    fn build(
+        eds: &Eds,
+        node_id: u8,
+        app: Box<dyn Application>,
+        extension: Option<OdExtension>,
+    ) -> Result<Device, DeviceError> {
         // An unconfigured device's `$NODEID` values are rebuilt for the configured node-ID at the
         // reset communication that makes it active; until then nothing reads them.
         let build_id = if node_id == UNCONFIGURED { 1 } else { node_id };
-        let built = build_od(eds, build_id)?;
+        let mut built = build_od(eds, build_id)?;
+        if let Some(extend) = extension {
+            extend(&mut built.od, build_id).map_err(DeviceError::Extension)?;
+        }
         let mut device = Device::new(built.od, node_id, app)?;
+        device.extension = extension;
         device.notes = built.notes;
         device.dummies = dummy_usage(eds);
         device.pdo = PdoEngine::new().with_dummy_usage(device.dummies);
@@ -272,6 +306,7 @@ impl Device {
             lss,
             lss_storage: Box::new(StoredLss::default()),
             overrides: Vec::new(),
+            extension: None,
             app,
             lost: BTreeSet::new(),
             reset_application: false,
@@ -920,7 +955,10 @@ impl Device {
                     self.node = node;
                     self.configured = true;
                     if let Some(eds) = &self.eds
-                        && let Ok(built) = build_od(eds, node.get())
+                        && let Ok(mut built) = build_od(eds, node.get())
+                        && self
+                            .extension
+                            .is_none_or(|extend| extend(&mut built.od, node.get()).is_ok())
                     {
                         self.pristine = built.od;
                         for (key, value) in &self.overrides {

@@ -369,6 +369,17 @@ pub(crate) mod trace {
             }
         }
 
+        /// Runs the next timer `late` after it was due, as a driver woken by a coarse OS timer
+        /// would, and returns when that was.
+        pub(crate) fn wake_late(&mut self, late: std::time::Duration) -> Instant {
+            self.drain();
+            let due = self.core.poll_timeout().expect("a timer is armed");
+            self.now = due + late;
+            self.core.handle_timeout(self.now);
+            self.drain();
+            self.now
+        }
+
         /// Runs every timer due up to and including `until`, then sets the clock to `until`.
         pub(crate) fn advance(&mut self, until: Instant) {
             self.drain();

@@ -1154,17 +1154,27 @@ impl PdoEngine {
                     tpdo.pending_since = due;
                 }
             }
-            if tpdo.event_pending && now >= tpdo.pending_since.max(tpdo.inhibit_until) {
+            let scheduled = tpdo.pending_since.max(tpdo.inhibit_until);
+            if tpdo.event_pending && now >= scheduled {
                 let data = sample(od, &tpdo.map);
                 if let Ok(frame) = CanFrame::new(id, &data[..tpdo.bytes]) {
                     self.transmit.push_back(frame);
                 }
                 tpdo.event_pending = false;
                 // Inhibit time in 100 µs units, event timer in ms (CiA 301, PDO communication
-                // parameter); the event timer restarts on every transmission.
-                tpdo.inhibit_until = now + Duration::from_micros(u64::from(tpdo.comm.inhibit_100us) * 100);
-                tpdo.event_due = (tpdo.comm.event_ms > 0)
-                    .then(|| now + Duration::from_millis(u64::from(tpdo.comm.event_ms)));
+                // parameter); the event timer restarts on every transmission. Both run from when
+                // the transmission was due, so a driver that wakes up late (a real-time loop on a
+                // busy OS) does not stretch every period; one later than a whole period starts
+                // afresh rather than catching up in a burst.
+                let inhibit = Duration::from_micros(u64::from(tpdo.comm.inhibit_100us) * 100);
+                let period = Duration::from_millis(u64::from(tpdo.comm.event_ms));
+                let base = if now.saturating_duration_since(scheduled) < period.max(inhibit) {
+                    scheduled
+                } else {
+                    now
+                };
+                tpdo.inhibit_until = base + inhibit;
+                tpdo.event_due = (tpdo.comm.event_ms > 0).then(|| base + period);
             }
         }
         for rpdo in &mut self.rpdos {
@@ -1536,6 +1546,25 @@ mod tests {
             ]
         );
         assert_eq!(trace.core.poll_timeout(), Some(ms(230)));
+    }
+
+    #[test]
+    fn event_timer_keeps_its_period_when_the_driver_wakes_up_late() {
+        let mut trace = bench(|od| set(od, 0x1800, 5, 100));
+        // Every wake-up comes 4 ms after the deadline, as a coarse OS timer delivers it.
+        for _ in 0..3 {
+            trace.wake_late(Duration::from_millis(4));
+        }
+        assert_eq!(
+            trace.sent(),
+            ["4.000 185#00", "104.000 185#00", "204.000 185#00"],
+            "each sent 4 ms late, but one every 100 ms"
+        );
+        // A wake-up more than a period late starts the period afresh instead of a burst.
+        let woke = trace.wake_late(Duration::from_millis(250));
+        assert_eq!(woke, ms(550));
+        assert_eq!(trace.sent(), ["550.000 185#00"]);
+        assert_eq!(trace.core.poll_timeout(), Some(ms(650)));
     }
 
     #[test]

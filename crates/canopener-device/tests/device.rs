@@ -526,3 +526,40 @@ fn error_behaviour_1029h_on_a_lost_heartbeat() {
     bus.advance(200);
     assert_eq!(bus.dev.state(), NmtSlaveState::Operational);
 }
+
+#[test]
+fn an_extension_adds_the_cia401_test_registers_to_a_real_cia401_eds_and_survives_a_new_node_id() {
+    const IO: &str = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__IO.eds"
+    );
+    let io = eds(IO);
+    let plain = Device::from_eds(&io, 5, Box::new(NoApplication)).expect("device");
+    assert!(!plain.od().object(0x6000).is_empty(), "a CiA 401 EDS");
+    assert!(
+        plain.od().object(0x2001).is_empty(),
+        "without the factory test registers"
+    );
+    let extended = Device::from_eds_extended(&io, 5, Box::new(NoApplication), |od, node| {
+        canopener_device::cia401::install_objects(od, node)
+            .map(drop)
+            .map_err(|err| err.to_string())
+    })
+    .expect("device");
+    let mut bus = Bus::booted(extended);
+    for index in [0x2000, 0x2001, 0x2002] {
+        assert!(!bus.dev.od().object(index).is_empty(), "{index:04X}h added");
+    }
+    // LSS gives node-ID 9: the power-on dictionary is rebuilt for it, the registers stay.
+    bus.rx(1, "7E5#0401000000000000");
+    bus.rx(2, "7E5#1109000000000000");
+    bus.rx(3, "7E5#0400000000000000");
+    bus.rx(4, "000#8205");
+    assert_eq!(bus.dev.node_id().get(), 9);
+    assert!(!bus.dev.od().object(0x2001).is_empty());
+    bus.rx(5, "609#4001200000000000");
+    assert!(
+        bus.sent().iter().any(|f| f.starts_with("5.000 589#4")),
+        "2001h answered"
+    );
+}
