@@ -371,7 +371,7 @@ pub(crate) mod trace {
 
         /// Runs the next timer `late` after it was due, as a driver woken by a coarse OS timer
         /// would, and returns when that was.
-        pub(crate) fn wake_late(&mut self, late: std::time::Duration) -> Instant {
+        pub(crate) fn wake_late(&mut self, late: Duration) -> Instant {
             self.drain();
             let due = self.core.poll_timeout().expect("a timer is armed");
             self.now = due + late;
