@@ -36,6 +36,8 @@ Exit codes:
   4  bus error: the CAN bus could not be opened, or the connection was lost
   5  output error: a result could not be written (file exists, disk full, permission)
   6  check failed: the command ran and found a problem (e.g. frames lost in `demo`)
+  7  device error: the device refused a request (SDO abort, LSS error) or did not answer in time
+130  interrupted: Ctrl-C or SIGTERM while talking to a device (a running transfer is aborted on the bus)
 
 `eds` commands follow diff(1) instead:
   0  success (`eds diff`: both files describe the same device and object dictionary;
@@ -71,6 +73,33 @@ pub(crate) enum Command {
 Logs boot-up, NMT state changes, SDO writes and aborts, EMCY and LSS (stderr, or JSON lines on stdout).
 Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error.")]
     Sim(SimArgs),
+    /// Read and write objects of a device over SDO (expedited, segmented, block).
+    #[command(subcommand)]
+    Sdo(crate::cli_master::SdoCommand),
+    /// Send an NMT command (start, stop, preop, reset, reset-comm) to one node or all.
+    #[command(after_help = "Examples:
+  canopener nmt start 5
+  canopener nmt preop all
+  canopener nmt reset 5 --confirm                     # wait for the boot-up message
+Exit status: 0 sent (and confirmed with --confirm), 7 no confirmation, 2 bad arguments, 4 bus error.")]
+    Nmt(crate::cli_master::NmtArgs),
+    /// Inspect devices: identity and state of one node, scan for nodes, dump a node's objects into a DCF.
+    #[command(subcommand)]
+    Node(crate::cli_master::NodeCommand),
+    /// Layer setting services (CiA 305): fastscan for unconfigured devices, configure node-ID and bit rate.
+    #[command(subcommand)]
+    Lss(crate::cli_master::LssCommand),
+    /// Configure PDO mappings and watch PDOs decoded.
+    #[command(subcommand)]
+    Pdo(crate::cli_master::PdoCommand),
+    /// Produce SYNC messages at a fixed period (with a counter if asked).
+    #[command(after_help = "Examples:
+  canopener sync --period 10ms
+  canopener sync --period 1ms --counter 240 --count 1000")]
+    Sync(crate::cli_master::SyncArgs),
+    /// Watch heartbeats: every node's NMT state and heartbeat timing.
+    #[command(subcommand)]
+    Heartbeat(crate::cli_master::HeartbeatCommand),
 }
 
 #[derive(Debug, Subcommand)]

@@ -14,6 +14,10 @@ pub(crate) mod exit_code {
     pub(crate) const BUS: u8 = 4;
     pub(crate) const OUTPUT: u8 = 5;
     pub(crate) const CHECK_FAILED: u8 = 6;
+    pub(crate) const DEVICE: u8 = 7;
+    /// Ctrl-C or SIGTERM ended a command that was talking to a device (a transfer in progress was
+    /// aborted on the bus); the shell convention 128 + SIGINT.
+    pub(crate) const INTERRUPTED: u8 = 130;
 }
 
 /// Everything a command can fail with, grouped by what the user has to do about it.
@@ -39,6 +43,10 @@ pub(crate) enum CliError {
     /// The command ran to the end and found a problem it was asked to check for.
     #[error("{0}")]
     CheckFailed(String),
+    /// A device refused a request (SDO abort, LSS error code) or did not answer in time; the message
+    /// names the node and object and decodes the abort code.
+    #[error("{0}")]
+    Device(String),
     /// A bug or an environment problem we did not anticipate.
     #[error(transparent)]
     Internal(#[from] anyhow::Error),
@@ -65,6 +73,7 @@ impl CliError {
             CliError::Bus(_) => exit_code::BUS,
             CliError::Output { .. } => exit_code::OUTPUT,
             CliError::CheckFailed(_) => exit_code::CHECK_FAILED,
+            CliError::Device(_) => exit_code::DEVICE,
             CliError::Internal(_) => exit_code::INTERNAL,
             CliError::EdsTrouble(_) => exit_code::USAGE,
             CliError::Exit(code) => *code,

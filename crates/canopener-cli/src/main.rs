@@ -11,6 +11,7 @@ mod bus_replay;
 mod bus_send;
 mod bus_serve;
 mod cli;
+mod cli_master;
 mod demo;
 mod eds_check;
 mod eds_check_inputs;
@@ -24,17 +25,32 @@ mod eds_input_xdd;
 mod eds_rules;
 mod eds_show;
 mod error;
+mod heartbeat;
+mod lss;
+mod master_io;
 mod monitor;
+mod nmt;
+mod node;
+mod node_dump;
+mod node_list;
+mod node_scan;
 mod output_file;
+mod pdo;
+mod pdo_watch;
+mod sdo;
+mod sdo_session;
+mod sdo_typing;
 mod sim;
 mod sim_store;
 mod stop;
+mod sync;
 
 use std::process::ExitCode;
 
 use clap::Parser;
 
 use crate::cli::{BusCommand, Cli, Command, EdsCommand, EdsRulesCommand};
+use crate::cli_master::{HeartbeatCommand, LssCommand, NodeCommand, PdoCommand, SdoCommand};
 
 use crate::error::{CliError, exit_code};
 
@@ -81,6 +97,21 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Eds(EdsCommand::Rules(EdsRulesCommand::List(args))) => eds_rules::list(args),
         Command::Eds(EdsCommand::Fix(args)) => eds_fix::run(args),
         Command::Sim(args) => sim::run(args),
+        Command::Sdo(SdoCommand::Read(args)) => sdo::read(args),
+        Command::Sdo(SdoCommand::Write(args)) => sdo::write(args),
+        Command::Sdo(SdoCommand::Upload(args)) => sdo::upload(args),
+        Command::Sdo(SdoCommand::Download(args)) => sdo::download(args),
+        Command::Nmt(args) => nmt::run(args),
+        Command::Node(NodeCommand::Info(args)) => node::info(args),
+        Command::Node(NodeCommand::Scan(args)) => node::scan(args),
+        Command::Node(NodeCommand::Dump(args)) => node::dump(args),
+        Command::Lss(LssCommand::Scan(args)) => lss::scan(args),
+        Command::Lss(LssCommand::Configure(args)) => lss::configure(args),
+        Command::Lss(LssCommand::Inquire(args)) => lss::inquire(args),
+        Command::Pdo(PdoCommand::Map(args)) => pdo::map(args),
+        Command::Pdo(PdoCommand::Watch(args)) => pdo::watch(args),
+        Command::Sync(args) => sync::run(args),
+        Command::Heartbeat(HeartbeatCommand::Watch(args)) => heartbeat::watch(args),
     }
 }
 

@@ -9,6 +9,9 @@ mod support;
 
 mod eds;
 mod eds_check;
+mod master_pdo;
+mod master_sdo;
+mod master_services;
 mod sim;
 
 use std::process::Output;

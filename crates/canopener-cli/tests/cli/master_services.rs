@@ -1,0 +1,592 @@
+//! `canopener nmt`, `sync`, `heartbeat watch` and `lss scan|configure|inquire` against `canopener sim`
+//! devices on a hub, checked by a test client on the same hub.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use canopener_can::CanFrame;
+use canopener_can::candump::parse_compact_frame;
+use canopener_transport::{BusSpec, CanBus, open};
+use serde_json::Value;
+
+use crate::support::{HubProc, canopener, workspace_root};
+use crate::{run, stderr, stdout, temp_dir};
+
+/// Generous: the machine running the tests may be loaded.
+const WAIT: Duration = Duration::from_secs(10);
+
+/// A bus nobody listens on: argument errors must be found before the bus is opened.
+const NO_BUS: &str = "socketcand://127.0.0.1:9/can0";
+
+fn base_eds() -> PathBuf {
+    workspace_root().join("crates/canopener-check/test_data/checks/base.eds")
+}
+
+/// base.eds with a producer heartbeat time (1017h) of 100 ms, so that NMT states can be confirmed.
+fn heartbeat_eds(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(base_eds()).expect("read base.eds");
+    let section = text.find("[1017]").expect("base.eds has 1017h");
+    let default = section
+        + text[section..]
+            .find("DefaultValue=0")
+            .expect("1017h has a default");
+    let mut patched = text.clone();
+    patched.replace_range(default..default + "DefaultValue=0".len(), "DefaultValue=100");
+    let path = dir.join("heartbeat.eds");
+    std::fs::write(&path, patched).expect("write heartbeat.eds");
+    path
+}
+
+/// A `canopener` child with stdout and stderr in files (no pipe to fill up), killed when dropped.
+struct Background {
+    child: Child,
+    stdout: PathBuf,
+    stderr: PathBuf,
+}
+
+impl Background {
+    fn spawn(dir: &Path, name: &str, args: &[&str]) -> Background {
+        let stdout = dir.join(format!("{name}.stdout"));
+        let stderr = dir.join(format!("{name}.stderr"));
+        let child = canopener()
+            .args(args)
+            .env_remove("CANOPENER_BUS")
+            .stdin(Stdio::null())
+            .stdout(std::fs::File::create(&stdout).expect("stdout file"))
+            .stderr(std::fs::File::create(&stderr).expect("stderr file"))
+            .spawn()
+            .expect("spawn canopener");
+        Background {
+            child,
+            stdout,
+            stderr,
+        }
+    }
+
+    fn stdout(&self) -> String {
+        std::fs::read_to_string(&self.stdout).unwrap_or_default()
+    }
+
+    fn stderr(&self) -> String {
+        std::fs::read_to_string(&self.stderr).unwrap_or_default()
+    }
+
+    /// Waits for the child to end by itself; its exit code.
+    fn wait(&mut self, timeout: Duration) -> Option<i32> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if let Some(status) = self.child.try_wait().expect("try_wait") {
+                return status.code();
+            }
+            assert!(
+                Instant::now() < deadline,
+                "canopener did not end within {timeout:?}; stderr:\n{}",
+                self.stderr()
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for Background {
+    fn drop(&mut self) {
+        self.kill();
+    }
+}
+
+fn client(hub: &HubProc) -> Box<dyn CanBus> {
+    let spec = BusSpec::Socketcand {
+        host: hub.addr.ip().to_string(),
+        port: hub.addr.port(),
+        bus: "can0".into(),
+    };
+    open(&spec).expect("test client connects to the hub")
+}
+
+fn send(bus: &mut dyn CanBus, text: &str) {
+    bus.send(&parse_compact_frame(text).expect("frame"))
+        .expect("send");
+}
+
+/// The first frame received within [`WAIT`] whose text starts with `prefix` (e.g. `"585#"`).
+fn expect_frame(bus: &mut dyn CanBus, prefix: &str, context: &dyn Fn() -> String) -> String {
+    let deadline = Instant::now() + WAIT;
+    let mut seen = Vec::new();
+    while Instant::now() < deadline {
+        if let Some(received) = bus.recv(Duration::from_millis(100)).expect("recv") {
+            let text = CanFrame::to_string(&received.frame);
+            if text.starts_with(prefix) {
+                return text;
+            }
+            seen.push(text);
+        }
+    }
+    let tail = &seen[seen.len().saturating_sub(20)..];
+    panic!(
+        "no frame {prefix}… within {WAIT:?}; last seen {tail:?}; {}",
+        context()
+    );
+}
+
+/// Asks "identify non-configured remote slave" until `count` devices answer, so that a test
+/// starts once the simulator is on the hub.
+fn wait_for_unconfigured(bus: &mut dyn CanBus, count: usize, sim: &Background) {
+    let deadline = Instant::now() + WAIT;
+    loop {
+        send(bus, "7E5#4C00000000000000");
+        let window = Instant::now() + Duration::from_millis(300);
+        let mut answers = 0;
+        while let Some(wait) = window.checked_duration_since(Instant::now()) {
+            if let Some(received) = bus.recv(wait).expect("recv")
+                && CanFrame::to_string(&received.frame) == "7E4#5000000000000000"
+            {
+                answers += 1;
+            }
+        }
+        if answers == count {
+            return;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{answers} of {count} unconfigured devices answered; sim stderr:\n{}",
+            sim.stderr()
+        );
+    }
+}
+
+fn json_of(output: &Output) -> Value {
+    let text = stdout(output);
+    serde_json::from_str(text.trim()).unwrap_or_else(|err| {
+        panic!(
+            "stdout is not one JSON object ({err}):\n{text}\nstderr:\n{}",
+            stderr(output)
+        )
+    })
+}
+
+/// Runs `canopener` on the hub's bus and expects exit status `code`.
+fn run_on(hub: &HubProc, args: &[&str], code: i32) -> Output {
+    let spec = hub.spec("can0");
+    let mut all = args.to_vec();
+    all.extend(["--bus", spec.as_str()]);
+    let output = run(&all);
+    assert_eq!(
+        output.status.code(),
+        Some(code),
+        "canopener {all:?}\nstdout:\n{}\nstderr:\n{}",
+        stdout(&output),
+        stderr(&output)
+    );
+    output
+}
+
+#[test]
+fn nmt_commands_are_confirmed_by_heartbeats_and_boot_up() {
+    let hub = HubProc::start();
+    let dir = temp_dir("master-nmt");
+    let mut bus = client(&hub);
+    let eds = heartbeat_eds(&dir);
+    let spec = hub.spec("can0");
+    let sim = Background::spawn(
+        &dir,
+        "sim",
+        &["sim", eds.to_str().unwrap(), "--node-id", "5", "--bus", &spec],
+    );
+    let context = || format!("sim stderr:\n{}", sim.stderr());
+    assert_eq!(expect_frame(&mut *bus, "705#", &context), "705#00");
+
+    for (command, state, boot_up) in [
+        ("start", "operational", false),
+        ("stop", "stopped", false),
+        ("preop", "pre-operational", false),
+        ("reset", "pre-operational", true),
+        ("reset-comm", "pre-operational", true),
+    ] {
+        let output = run_on(&hub, &["nmt", command, "5", "--confirm", "--format", "json"], 0);
+        let json = json_of(&output);
+        assert_eq!(json["command"], command, "{json}");
+        assert_eq!(json["target"], 5, "{json}");
+        assert_eq!(json["confirmed"], true, "{json}");
+        assert_eq!(json["state"], state, "{json}");
+        assert_eq!(json["boot_up"], boot_up, "{json}");
+        let after = json["after_ms"].as_f64().expect("after_ms");
+        assert!(after > 0.0 && after < 1000.0, "{json}");
+    }
+
+    // Every node heard is confirmed; here the one simulated node.
+    let output = run_on(&hub, &["nmt", "stop", "all", "--confirm", "--format", "json"], 0);
+    let json = json_of(&output);
+    assert_eq!(json["target"], "all");
+    assert_eq!(json["confirmed"], true);
+    assert_eq!(json["nodes"].as_array().map(Vec::len), Some(1), "{json}");
+    assert_eq!(json["nodes"][0]["node"], 5);
+    assert_eq!(json["nodes"][0]["state"], "stopped");
+
+    // Text without --confirm just says what was sent.
+    let output = run_on(&hub, &["nmt", "start", "5"], 0);
+    assert_eq!(stdout(&output), "sent start to node 5\n");
+
+    // Nobody is node 9: not confirmed, exit 7, and the message says what was waited for and how long.
+    let output = run_on(
+        &hub,
+        &[
+            "nmt",
+            "start",
+            "9",
+            "--confirm",
+            "--timeout",
+            "300ms",
+            "--format",
+            "json",
+        ],
+        7,
+    );
+    let json = json_of(&output);
+    assert_eq!(json["confirmed"], false);
+    assert_eq!(json["state"], Value::Null);
+    let message = stderr(&output);
+    assert!(
+        message
+            .contains("node 9 did not confirm start: no heartbeat or boot-up message from it within 300 ms"),
+        "{message}"
+    );
+    assert!(message.contains("1017"), "{message}");
+}
+
+#[test]
+fn heartbeat_watch_sees_a_stop_and_a_lost_heartbeat() {
+    let hub = HubProc::start();
+    let dir = temp_dir("master-heartbeat");
+    let mut bus = client(&hub);
+    let eds = heartbeat_eds(&dir);
+    let spec = hub.spec("can0");
+    let mut sim = Background::spawn(
+        &dir,
+        "sim",
+        &["sim", eds.to_str().unwrap(), "--node-id", "5", "--bus", &spec],
+    );
+    let context = || format!("sim stderr:\n{}", sim.stderr());
+    assert_eq!(expect_frame(&mut *bus, "705#", &context), "705#00");
+    let mut watch = Background::spawn(
+        &dir,
+        "watch",
+        &[
+            "heartbeat",
+            "watch",
+            "--duration",
+            "4s",
+            "--format",
+            "json",
+            "--fail-on-loss",
+            "--bus",
+            &spec,
+        ],
+    );
+    // Long enough for the watch to learn the 100 ms period from its heartbeats.
+    std::thread::sleep(Duration::from_millis(1000));
+    run_on(&hub, &["nmt", "stop", "5"], 0);
+    std::thread::sleep(Duration::from_millis(700));
+    sim.kill();
+    assert_eq!(watch.wait(WAIT), Some(6), "a loss with --fail-on-loss exits 6");
+    assert!(
+        watch.stderr().contains("heartbeat lost: node 5"),
+        "{}",
+        watch.stderr()
+    );
+    let lines: Vec<Value> = watch
+        .stdout()
+        .lines()
+        .map(|line| serde_json::from_str(line).expect("JSON line"))
+        .collect();
+    assert!(
+        lines
+            .iter()
+            .any(|e| e["event"] == "state" && e["node"] == 5 && e["to"] == "stopped"),
+        "{lines:?}"
+    );
+    let lost = lines
+        .iter()
+        .position(|e| e["event"] == "lost" && e["node"] == 5)
+        .unwrap_or_else(|| panic!("no lost event: {lines:?}"));
+    let stopped = lines
+        .iter()
+        .position(|e| e["event"] == "state" && e["to"] == "stopped")
+        .unwrap();
+    assert!(stopped < lost, "{lines:?}");
+    let summary = lines.last().unwrap();
+    assert_eq!(summary["event"], "summary", "{summary}");
+    let node = &summary["nodes"][0];
+    assert_eq!(node["node"], 5, "{summary}");
+    assert_eq!(node["state"], "stopped", "{summary}");
+    assert_eq!(node["lost"], true, "{summary}");
+    assert_eq!(node["losses"], 1, "{summary}");
+    assert!(node["heartbeats"].as_u64().unwrap() >= 10, "{summary}");
+    let median = node["period_ms"]["median"].as_f64().unwrap();
+    assert!((50.0..200.0).contains(&median), "{summary}");
+}
+
+#[test]
+fn sync_sends_the_counted_syncs_a_client_receives() {
+    let hub = HubProc::start();
+    let mut bus = client(&hub);
+    // Past the hub's hold-back of a new client's traffic, so the client misses no SYNC.
+    std::thread::sleep(Duration::from_millis(200));
+    let output = run_on(
+        &hub,
+        &[
+            "sync",
+            "--period",
+            "5ms",
+            "--count",
+            "20",
+            "--counter",
+            "10",
+            "--format",
+            "json",
+        ],
+        0,
+    );
+    let json = json_of(&output);
+    assert_eq!(json["sent"], 20, "{json}");
+    assert_eq!(json["counter_overflow"], 10, "{json}");
+    let median = json["gap_ms"]["median"].as_f64().expect("gap median");
+    assert!((2.5..=12.0).contains(&median), "{json}");
+    let context = || String::new();
+    let counters: Vec<String> = (0..20)
+        .map(|_| expect_frame(&mut *bus, "080#", &context))
+        .collect();
+    let expected: Vec<String> = (1..=10)
+        .chain(1..=10)
+        .map(|counter| format!("080#{counter:02X}"))
+        .collect();
+    assert_eq!(counters, expected);
+
+    let output = run_on(&hub, &["sync", "--period", "2ms", "--duration", "100ms"], 0);
+    let text = stdout(&output);
+    assert!(
+        text.contains("no counter") && text.contains("gaps between SYNCs"),
+        "{text}"
+    );
+}
+
+#[test]
+fn lss_scan_gives_three_unconfigured_devices_node_ids_they_then_answer_sdo_on() {
+    let hub = HubProc::start();
+    let dir = temp_dir("master-lss-scan");
+    let mut bus = client(&hub);
+    let eds = base_eds();
+    let eds = eds.to_str().unwrap();
+    let spec = hub.spec("can0");
+    let sim = Background::spawn(
+        &dir,
+        "sim",
+        &["sim", eds, eds, eds, "--serial", "100", "--bus", &spec],
+    );
+    wait_for_unconfigured(&mut *bus, 3, &sim);
+
+    // Without --timeout: the LSS default of 100 ms, not the 1 s SDO default.
+    let output = run_on(&hub, &["lss", "scan", "--assign", "10-20", "--format", "json"], 0);
+    let json = json_of(&output);
+    assert_eq!(json["timeout_ms"], 100.0, "{json}");
+    assert_eq!(json["complete"], true, "{json}");
+    assert_eq!(json["found"], 3, "{json}");
+    let devices: Vec<(u64, u64)> = json["devices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|device| {
+            assert_eq!(device["vendor_id"], 0xABC, "{device}");
+            assert_eq!(device["product_code"], 0x401, "{device}");
+            assert_eq!(device["revision_number"], 0x10002, "{device}");
+            (
+                device["serial_number"].as_u64().unwrap(),
+                device["node_id"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    // Fastscan finds the lowest address first.
+    assert_eq!(devices, [(100, 10), (101, 11), (102, 12)]);
+    assert!(json["frames_sent"].as_u64().unwrap() > 100, "{json}");
+
+    // Each device now runs with its node-ID: SDO upload of 1018h:04, its serial number.
+    let context = || format!("sim stderr:\n{}", sim.stderr());
+    for (node, serial) in [(10u8, 100u8), (11, 101), (12, 102)] {
+        let response = 0x580 + u16::from(node);
+        send(&mut *bus, &format!("6{node:02X}#4018100400000000"));
+        let answer = expect_frame(&mut *bus, &format!("{response:03X}#"), &context);
+        assert_eq!(answer, format!("{response:03X}#43181004{serial:02X}000000"));
+    }
+
+    // Nothing unconfigured is left.
+    let output = run_on(&hub, &["lss", "scan", "--timeout", "50ms"], 0);
+    assert!(
+        stdout(&output).starts_with("0 device(s) found"),
+        "{}",
+        stdout(&output)
+    );
+}
+
+#[test]
+fn lss_inquire_and_configure_one_device() {
+    let hub = HubProc::start();
+    let dir = temp_dir("master-lss-configure");
+    let mut bus = client(&hub);
+    let eds = base_eds();
+    let spec = hub.spec("can0");
+    let sim = Background::spawn(
+        &dir,
+        "sim",
+        &["sim", eds.to_str().unwrap(), "--serial", "0x55", "--bus", &spec],
+    );
+    wait_for_unconfigured(&mut *bus, 1, &sim);
+
+    let json = json_of(&run_on(&hub, &["lss", "inquire", "--format", "json"], 0));
+    assert_eq!(json["vendor_id"], 0xABC, "{json}");
+    assert_eq!(json["product_code"], 0x401, "{json}");
+    assert_eq!(json["revision_number"], 0x10002, "{json}");
+    assert_eq!(json["serial_number"], 0x55, "{json}");
+    assert_eq!(json["node_id"], 255, "unconfigured: {json}");
+    assert_eq!(json["selected"], "global");
+    assert_eq!(json["several_answered"], false);
+
+    let address = [
+        "--vendor",
+        "0xABC",
+        "--product",
+        "0x401",
+        "--revision",
+        "10002h",
+        "--serial",
+        "85",
+    ];
+    let mut args = vec!["lss", "configure"];
+    args.extend(address);
+    args.extend([
+        "--node-id",
+        "7",
+        "--bitrate",
+        "250",
+        "--store",
+        "--format",
+        "json",
+    ]);
+    let json = json_of(&run_on(&hub, &args, 0));
+    assert_eq!(json["previous_node_id"], 255, "{json}");
+    assert_eq!(json["node_id"], 7, "{json}");
+    assert_eq!(json["bitrate_kbit"], 250, "{json}");
+    assert_eq!(json["stored"], true, "{json}");
+    let context = || format!("sim stderr:\n{}", sim.stderr());
+    // Switched back to waiting, the unconfigured device takes node-ID 7 and boots.
+    assert_eq!(expect_frame(&mut *bus, "707#", &context), "707#00");
+
+    let mut args = vec!["lss", "inquire"];
+    args.extend(address);
+    let text = stdout(&run_on(&hub, &args, 0));
+    assert!(text.contains("serial number    0x00000055"), "{text}");
+    assert!(text.contains("node-ID          7"), "{text}");
+
+    // Another serial number: nobody answers, exit 7 naming the address and the service.
+    let output = run_on(
+        &hub,
+        &[
+            "lss",
+            "configure",
+            "--vendor",
+            "0xABC",
+            "--product",
+            "0x401",
+            "--revision",
+            "0x10002",
+            "--serial",
+            "0x56",
+            "--node-id",
+            "8",
+        ],
+        7,
+    );
+    let message = stderr(&output);
+    assert!(
+        message.contains("serial number 0x00000056 answered switch state selective within 100 ms"),
+        "{message}"
+    );
+}
+
+#[test]
+fn bad_arguments_exit_2_with_an_example() {
+    let cases: [(&[&str], &str); 8] = [
+        (&["nmt", "start", "200"], "e.g. `canopener nmt start 5`"),
+        (
+            &["lss", "configure", "--serial", "1", "--node-id", "5"],
+            "e.g. `canopener lss configure --vendor",
+        ),
+        (
+            &["lss", "configure", "--node-id", "5"],
+            "e.g. `canopener lss configure --vendor",
+        ),
+        (
+            &[
+                "lss",
+                "configure",
+                "--vendor",
+                "1",
+                "--product",
+                "2",
+                "--revision",
+                "3",
+                "--serial",
+                "4",
+                "--node-id",
+                "0",
+            ],
+            "255 to make the device unconfigured",
+        ),
+        (
+            &[
+                "lss",
+                "configure",
+                "--vendor",
+                "1",
+                "--product",
+                "2",
+                "--revision",
+                "3",
+                "--serial",
+                "4",
+                "--node-id",
+                "5",
+                "--bitrate",
+                "100",
+            ],
+            "--bitrate 250",
+        ),
+        (
+            &["lss", "scan", "--assign", "10-12,11"],
+            "e.g. `canopener lss scan --assign 10-20`",
+        ),
+        (
+            &["heartbeat", "watch", "--nodes", "0-5"],
+            "e.g. `canopener heartbeat watch --nodes",
+        ),
+        (&["sync", "--period", "0ms"], "e.g. `canopener sync --period 10ms"),
+    ];
+    for (args, example) in cases {
+        let mut all = args.to_vec();
+        all.extend(["--bus", NO_BUS]);
+        let output = run(&all);
+        assert_eq!(output.status.code(), Some(2), "{all:?}: {}", stderr(&output));
+        assert!(stderr(&output).contains(example), "{all:?}: {}", stderr(&output));
+    }
+    let partial = run(&["lss", "inquire", "--vendor", "1", "--bus", NO_BUS]);
+    assert_eq!(partial.status.code(), Some(2));
+    assert!(
+        stderr(&partial).contains("--product, --revision, --serial are missing"),
+        "{}",
+        stderr(&partial)
+    );
+}
