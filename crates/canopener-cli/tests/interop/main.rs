@@ -3,6 +3,7 @@
 //!
 //! The Python peers come from the venv `cargo xtask setup` creates (pinned in tests/python/requirements.txt).
 
+mod master_cli;
 mod sim_master;
 mod support;
 
