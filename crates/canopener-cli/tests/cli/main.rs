@@ -9,6 +9,7 @@ mod support;
 
 mod eds;
 mod eds_check;
+mod harness;
 mod master_pdo;
 mod master_sdo;
 mod master_services;

@@ -2,21 +2,16 @@
 //! with a test client on the same hub that drives the inputs, starts the node and sends SYNC.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use canopener_can::CanFrame;
-use canopener_can::candump::parse_compact_frame;
-use canopener_transport::{BusSpec, CanBus, open};
+use canopener_transport::CanBus;
 use serde_json::Value;
 
+use crate::harness::{
+    Background, NO_BUS, WAIT, client, expect_frame, json_lines, json_of, run_exiting, run_on, send,
+};
 use crate::support::{HubProc, Proc, canopener, corpus_eds};
-use crate::{run, stderr, stdout, temp_dir};
-
-/// Generous: the machine running the tests may be loaded.
-const WAIT: Duration = Duration::from_secs(10);
-
-/// A bus nobody listens on: refusals must come before the bus is opened.
-const NO_BUS: &str = "socketcand://127.0.0.1:9/can0";
+use crate::{stderr, stdout, temp_dir};
 
 /// CANopenNode's CiA 401 example (6000h, 6401h, TPDO1..4 with 8-entry mappings) plus the factory
 /// test registers 2000h..2002h of the CiA 401 application, so the test drives the inputs over SDO.
@@ -43,44 +38,11 @@ fn io_eds(dir: &Path) -> PathBuf {
     path
 }
 
-fn client(hub: &HubProc) -> Box<dyn CanBus> {
-    let spec = BusSpec::Socketcand {
-        host: hub.addr.ip().to_string(),
-        port: hub.addr.port(),
-        bus: "can0".into(),
-    };
-    open(&spec).expect("test client connects to the hub")
-}
-
-fn send(bus: &mut dyn CanBus, text: &str) {
-    bus.send(&parse_compact_frame(text).expect("frame"))
-        .expect("send");
-}
-
-/// The first frame received within [`WAIT`] whose text starts with `prefix`.
-fn expect_frame(bus: &mut dyn CanBus, prefix: &str, sim: &Proc) -> String {
-    let deadline = Instant::now() + WAIT;
-    let mut seen = Vec::new();
-    while Instant::now() < deadline {
-        if let Some(received) = bus.recv(Duration::from_millis(100)).expect("recv") {
-            let text = CanFrame::to_string(&received.frame);
-            if text.starts_with(prefix) {
-                return text;
-            }
-            seen.push(text);
-        }
-    }
-    panic!(
-        "no frame {prefix}… within {WAIT:?}; saw {seen:?}; sim stderr:\n{}",
-        sim.stderr()
-    );
-}
-
 /// Node 5 simulated from [`io_eds`] with the CiA 401 application, booted; the test client on the hub.
 struct Bench {
     hub: HubProc,
     bus: Box<dyn CanBus>,
-    sim: Proc,
+    sim: Background,
     eds: PathBuf,
 }
 
@@ -89,13 +51,13 @@ impl Bench {
         let hub = HubProc::start();
         let mut bus = client(&hub);
         let eds = io_eds(dir);
-        let mut command = canopener();
-        command
-            .args(["sim", eds.to_str().unwrap(), "--node-id", "5", "--app", "cia401"])
-            .args(["--bus", &hub.spec("can0")])
-            .env_remove("CANOPENER_BUS");
-        let sim = Proc::spawn("canopener sim", command);
-        assert_eq!(expect_frame(&mut *bus, "705#", &sim), "705#00");
+        let sim = Background::sim(
+            &hub,
+            dir,
+            "sim",
+            &[eds.to_str().unwrap(), "--node-id", "5", "--app", "cia401"],
+        );
+        assert_eq!(expect_frame(&mut *bus, "705#", &|| sim.report()), "705#00");
         Bench { hub, bus, sim, eds }
     }
 
@@ -112,7 +74,7 @@ impl Bench {
     fn sdo(&mut self, request: &str) -> String {
         self.drain();
         send(&mut *self.bus, request);
-        expect_frame(&mut *self.bus, "585#", &self.sim)
+        expect_frame(&mut *self.bus, "585#", &|| self.sim.report())
     }
 
     /// An expedited SDO download from the test client, confirmed by the device.
@@ -130,18 +92,19 @@ impl Bench {
     }
 
     fn pdo(&self, args: &[&str]) -> std::process::Output {
-        let spec = self.spec();
-        let mut argv = vec!["pdo"];
-        argv.extend_from_slice(args);
-        argv.extend_from_slice(&["--bus", &spec]);
-        run(&argv)
+        run_on(&self.spec(), &pdo_args(args))
     }
 }
 
-fn json_lines(text: &str) -> Vec<Value> {
-    text.lines()
-        .map(|line| serde_json::from_str(line).unwrap_or_else(|err| panic!("{err}: {line}")))
-        .collect()
+fn pdo_args<'a>(args: &[&'a str]) -> Vec<&'a str> {
+    let mut all = vec!["pdo"];
+    all.extend_from_slice(args);
+    all
+}
+
+/// `canopener pdo ARGS` on [`NO_BUS`], which must exit 2 without touching the bus: its stderr.
+fn refusal(args: &[&str]) -> String {
+    stderr(&run_exiting(NO_BUS, &pdo_args(args), 2))
 }
 
 #[test]
@@ -263,7 +226,7 @@ fn a_non_mappable_object_stops_the_plan_at_its_step_with_exit_7() {
         "json",
     ]);
     assert_eq!(json.status.code(), Some(7), "{}", stderr(&json));
-    let report: Value = serde_json::from_str(stdout(&json).trim()).expect("one JSON object");
+    let report = json_of(&json);
     assert_eq!(report["configured"], false);
     assert_eq!(report["current_cob_id"], "80000185");
     assert_eq!(report["steps"][2]["outcome"], "aborted");
@@ -273,11 +236,8 @@ fn a_non_mappable_object_stops_the_plan_at_its_step_with_exit_7() {
 
 #[test]
 fn planner_refusals_exit_2_before_the_bus_is_opened() {
-    let output = run(&[
-        "pdo",
+    let err = refusal(&[
         "map",
-        "--bus",
-        NO_BUS,
         "--node",
         "5",
         "--tpdo",
@@ -286,8 +246,6 @@ fn planner_refusals_exit_2_before_the_bus_is_opened() {
         "6401:02:32",
         "6000:01:1",
     ]);
-    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
-    let err = stderr(&output);
     assert!(
         err.contains("the mapping takes 65 bits; a classical CAN PDO carries at most 64 (8 bytes)"),
         "{err}"
@@ -297,29 +255,11 @@ fn planner_refusals_exit_2_before_the_bus_is_opened() {
         "{err}"
     );
 
-    let bad_entry = run(&[
-        "pdo",
-        "map",
-        "--bus",
-        NO_BUS,
-        "--node",
-        "5",
-        "--tpdo",
-        "1",
-        "6000-01-8",
-    ]);
-    assert_eq!(bad_entry.status.code(), Some(2));
-    assert!(
-        stderr(&bad_entry).contains("like 6000:01:8"),
-        "{}",
-        stderr(&bad_entry)
-    );
+    let bad_entry = refusal(&["map", "--node", "5", "--tpdo", "1", "6000-01-8"]);
+    assert!(bad_entry.contains("like 6000:01:8"), "{bad_entry}");
 
-    let restricted = run(&[
-        "pdo",
+    let restricted = refusal(&[
         "map",
-        "--bus",
-        NO_BUS,
         "--node",
         "5",
         "--rpdo",
@@ -328,25 +268,10 @@ fn planner_refusals_exit_2_before_the_bus_is_opened() {
         "--cob-id",
         "0x605",
     ]);
-    assert_eq!(restricted.status.code(), Some(2));
-    assert!(
-        stderr(&restricted).contains("CAN-ID 605h is restricted"),
-        "{}",
-        stderr(&restricted)
-    );
+    assert!(restricted.contains("CAN-ID 605h is restricted"), "{restricted}");
 
-    let missing_eds = run(&[
-        "pdo",
-        "watch",
-        "--bus",
-        NO_BUS,
-        "--node",
-        "5",
-        "--eds",
-        "/nonexistent/device.eds",
-    ]);
-    assert_eq!(missing_eds.status.code(), Some(2), "{}", stderr(&missing_eds));
-    assert!(stderr(&missing_eds).contains("/nonexistent/device.eds"));
+    let missing_eds = refusal(&["watch", "--node", "5", "--eds", "/nonexistent/device.eds"]);
+    assert!(missing_eds.contains("/nonexistent/device.eds"));
 }
 
 #[test]

@@ -3,122 +3,98 @@
 //! byte, aborts and silent nodes (exit 7), argument errors (exit 2), and DCFs the checker loads.
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Output, Stdio};
+use std::process::Output;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-use crate::support::{HubProc, canopener, workspace_root};
+use crate::harness::{Background, NO_BUS, WAIT, base_eds, json_of, run_exiting, run_on};
+use crate::support::HubProc;
 use crate::{run, stderr, stdout, temp_dir};
 
-/// Generous: the machine running the tests may be loaded.
-const WAIT: Duration = Duration::from_secs(10);
+/// The test device: an object of every type at 2200h, a DOMAIN at 2100h.
+const FIXTURE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/cli/fixtures/master_sdo.eds");
 
-fn fixture() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/cli/fixtures/master_sdo.eds")
-}
-
-fn base_eds() -> PathBuf {
-    workspace_root().join("crates/canopener-check/test_data/checks/base.eds")
-}
-
-/// `canopener sim` as a child, output in files, killed when dropped.
-struct Sim {
-    child: Child,
-    stderr: PathBuf,
-}
-
-impl Sim {
-    /// Starts a simulator on the hub and waits until node `first_node` answers SDO.
-    fn start(hub: &HubProc, dir: &Path, name: &str, first_node: u8, args: &[&str]) -> Sim {
-        let stderr = dir.join(format!("{name}.stderr"));
-        let child = canopener()
-            .arg("sim")
-            .args(args)
-            .args(["--bus", &hub.spec("can0")])
-            .env_remove("CANOPENER_BUS")
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(std::fs::File::create(&stderr).expect("stderr file"))
-            .spawn()
-            .expect("spawn canopener sim");
-        let sim = Sim { child, stderr };
-        let node = first_node.to_string();
-        let deadline = Instant::now() + WAIT;
-        loop {
-            let probe = run(&[
-                "sdo",
-                "read",
-                "--node",
-                &node,
-                "1000",
-                "0",
-                "--timeout",
-                "200ms",
-                "--bus",
-                &hub.spec("can0"),
-            ]);
-            if probe.status.success() {
-                return sim;
-            }
-            assert!(
-                Instant::now() < deadline,
-                "node {node} did not answer within {WAIT:?}; sim stderr:\n{}",
-                std::fs::read_to_string(&sim.stderr).unwrap_or_default()
-            );
-        }
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// A hub with the fixture device as node 5.
+/// A hub, a directory for the test's files, and the simulators started on the hub.
 struct Bench {
     hub: HubProc,
-    _sim: Sim,
+    spec: String,
     dir: PathBuf,
+    sims: Vec<Background>,
 }
 
 impl Bench {
-    fn start(name: &str) -> Bench {
+    /// No device yet.
+    fn empty(name: &str) -> Bench {
         let hub = HubProc::start();
-        let dir = temp_dir(name);
-        let eds = fixture();
-        let sim = Sim::start(&hub, &dir, "sim", 5, &[eds.to_str().unwrap(), "--node-id", "5"]);
-        Bench { hub, _sim: sim, dir }
+        let spec = hub.spec("can0");
+        Bench {
+            hub,
+            spec,
+            dir: temp_dir(name),
+            sims: Vec::new(),
+        }
+    }
+
+    /// The fixture device as node 5.
+    fn start(name: &str) -> Bench {
+        let mut bench = Bench::empty(name);
+        bench.add_sim("sim", 5, "200ms", &[FIXTURE, "--node-id", "5"]);
+        bench
+    }
+
+    /// Starts `canopener sim ARGS` on the hub and waits until node `first_node` answers an SDO read
+    /// within `timeout` (longer than the response delay of a slow device).
+    fn add_sim(&mut self, name: &str, first_node: u8, timeout: &str, args: &[&str]) {
+        let sim = Background::sim(&self.hub, &self.dir, name, args);
+        let node = first_node.to_string();
+        let deadline = Instant::now() + WAIT;
+        while !self
+            .run(&["sdo", "read", "--node", &node, "1000", "0", "--timeout", timeout])
+            .status
+            .success()
+        {
+            assert!(
+                Instant::now() < deadline,
+                "node {node} did not answer within {WAIT:?}; {}",
+                sim.report()
+            );
+        }
+        self.sims.push(sim);
     }
 
     /// `canopener ARGS --bus <hub>`.
     fn run(&self, args: &[&str]) -> Output {
-        let spec = self.hub.spec("can0");
-        let mut all: Vec<&str> = args.to_vec();
-        all.extend(["--bus", &spec]);
-        run(&all)
+        run_on(&self.spec, args)
     }
 
     /// Runs and expects exit 0, returning stdout.
     fn ok(&self, args: &[&str]) -> String {
-        let output = self.run(args);
-        assert!(
-            output.status.success(),
-            "{args:?} failed with {:?}:\n{}",
-            output.status.code(),
-            stderr(&output)
-        );
-        stdout(&output)
+        stdout(&run_exiting(&self.spec, args, 0))
+    }
+
+    /// Downloads `bytes` to the DOMAIN 2100h of node 5 from a file `file_name`, with more `options`.
+    fn download_domain(&self, file_name: &str, bytes: &[u8], options: &[&str]) {
+        let file = self.dir.join(file_name);
+        std::fs::write(&file, bytes).unwrap();
+        let mut args = vec![
+            "sdo",
+            "download",
+            "--node",
+            "5",
+            "2100",
+            "0",
+            file.to_str().unwrap(),
+        ];
+        args.extend_from_slice(options);
+        self.ok(&args);
     }
 
     /// Runs with `--format json` and parses the one object printed.
     fn json(&self, args: &[&str]) -> Value {
         let mut all = args.to_vec();
         all.extend(["--format", "json"]);
-        let text = self.ok(&all);
-        serde_json::from_str(text.trim()).unwrap_or_else(|err| panic!("{args:?}: {err}: {text}"))
+        json_of(&run_exiting(&self.spec, &all, 0))
     }
 }
 
@@ -138,8 +114,7 @@ fn data(len: usize, seed: u32) -> Vec<u8> {
 #[test]
 fn sdo_reads_and_writes_every_type_in_both_formats() {
     let bench = Bench::start("sdo-types");
-    let eds = fixture();
-    let eds = eds.to_str().unwrap();
+    let eds = FIXTURE;
     // (sub of 2200h, type, value written, JSON value read back as typed by the EDS)
     let cases: [(&str, &str, &str, Value); 15] = [
         ("1", "i8", "-128", Value::from(-128)),
@@ -302,8 +277,7 @@ fn upload_and_download_of_a_large_domain_are_byte_identical() {
 #[test]
 fn aborts_silent_nodes_and_bad_arguments_give_clear_errors() {
     let bench = Bench::start("sdo-errors");
-    let eds = fixture();
-    let eds = eds.to_str().unwrap();
+    let eds = FIXTURE;
 
     let missing_sub = bench.run(&["sdo", "read", "--node", "5", "1018", "5"]);
     assert_eq!(missing_sub.status.code(), Some(7));
@@ -364,7 +338,6 @@ fn aborts_silent_nodes_and_bad_arguments_give_clear_errors() {
     assert!(stderr(&dead_info).contains("node 9, 1000h:00 (Device type): timed out after 200ms"));
 
     // Argument errors exit 2 with an example before the bus is opened (port 9 has no hub).
-    let nowhere = "socketcand://127.0.0.1:9/can0";
     for args in [
         vec!["sdo", "read", "--node", "5", "zz", "0"],
         vec!["sdo", "read", "--node", "5", "1018", "100"],
@@ -381,9 +354,7 @@ fn aborts_silent_nodes_and_bad_arguments_give_clear_errors() {
         vec!["node", "scan", "--range", "0-200"],
         vec!["node", "dump", "--node", "5", "--eds", eds, "--format", "json"],
     ] {
-        let mut all = args.clone();
-        all.extend(["--bus", nowhere]);
-        let output = run(&all);
+        let output = run_on(NO_BUS, &args);
         assert_eq!(output.status.code(), Some(2), "{args:?}: {}", stderr(&output));
         let text = stderr(&output);
         assert!(
@@ -391,38 +362,19 @@ fn aborts_silent_nodes_and_bad_arguments_give_clear_errors() {
             "{args:?} gives no example: {text}"
         );
     }
-    let zero = run(&[
-        "sdo",
-        "read",
-        "--node",
-        "5",
-        "1018",
-        "1",
-        "--timeout",
-        "0s",
-        "--bus",
-        nowhere,
-    ]);
+    let zero = run_on(
+        NO_BUS,
+        &["sdo", "read", "--node", "5", "1018", "1", "--timeout", "0s"],
+    );
     assert_eq!(zero.status.code(), Some(2), "{}", stderr(&zero));
 }
 
 #[test]
 fn misbehaving_devices_end_in_a_clean_abort_or_timeout() {
-    let hub = HubProc::start();
-    let dir = temp_dir("sdo-faults");
-    let eds = fixture();
-    let eds = eds.to_str().unwrap();
-    let _crc = Sim::start(
-        &hub,
-        &dir,
-        "crc",
-        7,
-        &[eds, "--node-id", "7", "--fault", "block-crc-wrong"],
-    );
-    let spec = hub.spec("can0");
-    let bad_crc = run(&[
-        "sdo", "read", "--node", "7", "1008", "0", "--block", "--bus", &spec,
-    ]);
+    let mut bench = Bench::empty("sdo-faults");
+    let args = [FIXTURE, "--node-id", "7", "--fault", "block-crc-wrong"];
+    bench.add_sim("crc", 7, "200ms", &args);
+    let bad_crc = bench.run(&["sdo", "read", "--node", "7", "1008", "0", "--block"]);
     assert_eq!(bad_crc.status.code(), Some(7), "{}", stderr(&bad_crc));
     assert!(
         stderr(&bad_crc).contains("node 7, 1008h:00: SDO transfer aborted by the client with 0x05040004"),
@@ -431,46 +383,11 @@ fn misbehaving_devices_end_in_a_clean_abort_or_timeout() {
     );
 
     // A device that answers later than the timeout, in the middle of a segmented transfer too.
-    let slow_sim = canopener()
-        .args([
-            "sim",
-            eds,
-            "--node-id",
-            "8",
-            "--fault",
-            "sdo-slow",
-            "--bus",
-            &spec,
-        ])
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn sim");
-    let _slow = Sim {
-        child: slow_sim,
-        stderr: dir.join("none"),
-    };
-    let deadline = Instant::now() + WAIT;
-    while !run(&[
-        "sdo",
-        "read",
-        "--node",
-        "8",
-        "1000",
-        "0",
-        "--timeout",
-        "2s",
-        "--bus",
-        &spec,
-    ])
-    .status
-    .success()
-    {
-        assert!(Instant::now() < deadline, "the slow sim never answered");
-    }
+    let args = [FIXTURE, "--node-id", "8", "--fault", "sdo-slow"];
+    bench.add_sim("slow", 8, "2s", &args);
     let started = Instant::now();
-    let slow = run(&[
+    let never = bench.dir.join("x");
+    let slow = bench.run(&[
         "sdo",
         "upload",
         "--node",
@@ -478,11 +395,9 @@ fn misbehaving_devices_end_in_a_clean_abort_or_timeout() {
         "1008",
         "0",
         "-o",
-        dir.join("x").to_str().unwrap(),
+        never.to_str().unwrap(),
         "--timeout",
         "250ms",
-        "--bus",
-        &spec,
     ]);
     assert_eq!(slow.status.code(), Some(7));
     assert!(
@@ -491,10 +406,7 @@ fn misbehaving_devices_end_in_a_clean_abort_or_timeout() {
         stderr(&slow)
     );
     assert!(started.elapsed() < Duration::from_secs(3));
-    assert!(
-        !dir.join("x").exists(),
-        "nothing is written after a failed upload"
-    );
+    assert!(!never.exists(), "nothing is written after a failed upload");
 }
 
 #[test]
@@ -548,32 +460,14 @@ fn node_info_reports_identity_names_and_heartbeat_state() {
 
 #[test]
 fn node_scan_finds_two_sims_among_127_node_ids_in_about_one_timeout() {
-    let hub = HubProc::start();
-    let dir = temp_dir("node-scan");
-    let eds = fixture();
-    let eds = eds.to_str().unwrap();
-    let _sims = Sim::start(
-        &hub,
-        &dir,
-        "sims",
-        20,
-        &[eds, eds, "--node-id", "20", "--serial", "0x100"],
-    );
-    let spec = hub.spec("can0");
+    let mut bench = Bench::empty("node-scan");
+    let args = [FIXTURE, FIXTURE, "--node-id", "20", "--serial", "0x100"];
+    bench.add_sim("sims", 20, "200ms", &args);
     let started = Instant::now();
-    let output = run(&[
-        "node",
-        "scan",
-        "--timeout",
-        "500ms",
-        "--format",
-        "json",
-        "--bus",
-        &spec,
-    ]);
+    let output = bench.run(&["node", "scan", "--timeout", "500ms", "--format", "json"]);
     let took = started.elapsed();
     assert!(output.status.success(), "{}", stderr(&output));
-    let json: Value = serde_json::from_str(stdout(&output).trim()).unwrap();
+    let json = json_of(&output);
     assert_eq!(json["asked"], 127);
     let nodes: Vec<(u64, u64)> = json["nodes"]
         .as_array()
@@ -590,7 +484,7 @@ fn node_scan_finds_two_sims_among_127_node_ids_in_about_one_timeout() {
         json["elapsed_ms"].as_f64().unwrap_or_default()
     );
 
-    let table = stdout(&run(&[
+    let table = stdout(&bench.run(&[
         "node",
         "scan",
         "--range",
@@ -599,8 +493,6 @@ fn node_scan_finds_two_sims_among_127_node_ids_in_about_one_timeout() {
         "200ms",
         "--parallel",
         "4",
-        "--bus",
-        &spec,
     ]));
     assert!(
         table.contains(
@@ -632,8 +524,7 @@ fn p_errors(file: &Path) -> Vec<String> {
 #[test]
 fn node_dump_writes_a_dcf_of_the_device_values_that_the_checker_loads() {
     let bench = Bench::start("node-dump");
-    let eds = fixture();
-    let eds_arg = eds.to_str().unwrap();
+    let eds_arg = FIXTURE;
     // Values the EDS does not have: a written parameter, a string, a short and a long DOMAIN.
     bench.ok(&[
         "sdo", "write", "--node", "5", "2000", "0", "0x1F4", "--type", "u16",
@@ -649,17 +540,7 @@ fn node_dump_writes_a_dcf_of_the_device_values_that_the_checker_loads() {
         "--type",
         "str",
     ]);
-    let short = bench.dir.join("short.bin");
-    std::fs::write(&short, [0xDE, 0xAD, 0xBE, 0xEF]).unwrap();
-    bench.ok(&[
-        "sdo",
-        "download",
-        "--node",
-        "5",
-        "2100",
-        "0",
-        short.to_str().unwrap(),
-    ]);
+    bench.download_domain("short.bin", &[0xDE, 0xAD, 0xBE, 0xEF], &[]);
 
     let dcf = bench.dir.join("node5.dcf");
     let dcf_arg = dcf.to_str().unwrap();
@@ -696,23 +577,12 @@ fn node_dump_writes_a_dcf_of_the_device_values_that_the_checker_loads() {
     );
 
     // The checker loads it with no P-series error the EDS did not already have.
-    assert_eq!(p_errors(&dcf), p_errors(&eds));
+    assert_eq!(p_errors(&dcf), p_errors(Path::new(FIXTURE)));
 
     // A DOMAIN too long for a line goes to a file named by UploadFile; the DCF is not overwritten
     // without --force.
-    let long = bench.dir.join("long.bin");
     let bytes = data(5000, 3);
-    std::fs::write(&long, &bytes).unwrap();
-    bench.ok(&[
-        "sdo",
-        "download",
-        "--node",
-        "5",
-        "2100",
-        "0",
-        long.to_str().unwrap(),
-        "--block",
-    ]);
+    bench.download_domain("long.bin", &bytes, &["--block"]);
     let refused = bench.run(&["node", "dump", "--node", "5", "--eds", eds_arg, "-o", dcf_arg]);
     assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
     let line = bench.ok(&[
@@ -725,7 +595,7 @@ fn node_dump_writes_a_dcf_of_the_device_values_that_the_checker_loads() {
         Some("node5_2100sub0.bin")
     );
     assert!(std::fs::read(bench.dir.join("node5_2100sub0.bin")).unwrap() == bytes);
-    assert_eq!(p_errors(&dcf), p_errors(&eds));
+    assert_eq!(p_errors(&dcf), p_errors(Path::new(FIXTURE)));
 
     // To stdout: the DCF there, the summary on stderr; the long DOMAIN becomes a comment.
     let to_stdout = bench.run(&["node", "dump", "--node", "5", "--eds", eds_arg]);

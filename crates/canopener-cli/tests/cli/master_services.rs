@@ -2,26 +2,17 @@
 //! devices on a hub, checked by a test client on the same hub.
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use canopener_can::CanFrame;
-use canopener_can::candump::parse_compact_frame;
-use canopener_transport::{BusSpec, CanBus, open};
+use canopener_transport::CanBus;
 use serde_json::Value;
 
-use crate::support::{HubProc, canopener, workspace_root};
-use crate::{run, stderr, stdout, temp_dir};
-
-/// Generous: the machine running the tests may be loaded.
-const WAIT: Duration = Duration::from_secs(10);
-
-/// A bus nobody listens on: argument errors must be found before the bus is opened.
-const NO_BUS: &str = "socketcand://127.0.0.1:9/can0";
-
-fn base_eds() -> PathBuf {
-    workspace_root().join("crates/canopener-check/test_data/checks/base.eds")
-}
+use crate::harness::{
+    Background, NO_BUS, WAIT, base_eds, client, expect_frame, identify_unconfigured, json_lines, json_of,
+    run_exiting, run_on, send,
+};
+use crate::support::HubProc;
+use crate::{stderr, stdout, temp_dir};
 
 /// base.eds with a producer heartbeat time (1017h) of 100 ms, so that NMT states can be confirmed.
 fn heartbeat_eds(dir: &Path) -> PathBuf {
@@ -38,168 +29,50 @@ fn heartbeat_eds(dir: &Path) -> PathBuf {
     path
 }
 
-/// A `canopener` child with stdout and stderr in files (no pipe to fill up), killed when dropped.
-struct Background {
-    child: Child,
-    stdout: PathBuf,
-    stderr: PathBuf,
-}
-
-impl Background {
-    fn spawn(dir: &Path, name: &str, args: &[&str]) -> Background {
-        let stdout = dir.join(format!("{name}.stdout"));
-        let stderr = dir.join(format!("{name}.stderr"));
-        let child = canopener()
-            .args(args)
-            .env_remove("CANOPENER_BUS")
-            .stdin(Stdio::null())
-            .stdout(std::fs::File::create(&stdout).expect("stdout file"))
-            .stderr(std::fs::File::create(&stderr).expect("stderr file"))
-            .spawn()
-            .expect("spawn canopener");
-        Background {
-            child,
-            stdout,
-            stderr,
-        }
-    }
-
-    fn stdout(&self) -> String {
-        std::fs::read_to_string(&self.stdout).unwrap_or_default()
-    }
-
-    fn stderr(&self) -> String {
-        std::fs::read_to_string(&self.stderr).unwrap_or_default()
-    }
-
-    /// Waits for the child to end by itself; its exit code.
-    fn wait(&mut self, timeout: Duration) -> Option<i32> {
-        let deadline = Instant::now() + timeout;
-        loop {
-            if let Some(status) = self.child.try_wait().expect("try_wait") {
-                return status.code();
-            }
-            assert!(
-                Instant::now() < deadline,
-                "canopener did not end within {timeout:?}; stderr:\n{}",
-                self.stderr()
-            );
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    }
-
-    fn kill(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-impl Drop for Background {
-    fn drop(&mut self) {
-        self.kill();
-    }
-}
-
-fn client(hub: &HubProc) -> Box<dyn CanBus> {
-    let spec = BusSpec::Socketcand {
-        host: hub.addr.ip().to_string(),
-        port: hub.addr.port(),
-        bus: "can0".into(),
-    };
-    open(&spec).expect("test client connects to the hub")
-}
-
-fn send(bus: &mut dyn CanBus, text: &str) {
-    bus.send(&parse_compact_frame(text).expect("frame"))
-        .expect("send");
-}
-
-/// The first frame received within [`WAIT`] whose text starts with `prefix` (e.g. `"585#"`).
-fn expect_frame(bus: &mut dyn CanBus, prefix: &str, context: &dyn Fn() -> String) -> String {
-    let deadline = Instant::now() + WAIT;
-    let mut seen = Vec::new();
-    while Instant::now() < deadline {
-        if let Some(received) = bus.recv(Duration::from_millis(100)).expect("recv") {
-            let text = CanFrame::to_string(&received.frame);
-            if text.starts_with(prefix) {
-                return text;
-            }
-            seen.push(text);
-        }
-    }
-    let tail = &seen[seen.len().saturating_sub(20)..];
-    panic!(
-        "no frame {prefix}… within {WAIT:?}; last seen {tail:?}; {}",
-        context()
-    );
-}
-
-/// Asks "identify non-configured remote slave" until `count` devices answer, so that a test
-/// starts once the simulator is on the hub.
-fn wait_for_unconfigured(bus: &mut dyn CanBus, count: usize, sim: &Background) {
+/// A hub with `count` unconfigured devices from base.eds, serial numbers `serial` and up, each
+/// answering LSS: the hub, a test client on it and the simulator.
+fn unconfigured_sims(name: &str, count: usize, serial: &str) -> (HubProc, Box<dyn CanBus>, Background) {
+    let hub = HubProc::start();
+    let dir = temp_dir(name);
+    let mut bus = client(&hub);
+    let eds = base_eds();
+    let mut args = vec![eds.to_str().unwrap(); count];
+    args.extend(["--serial", serial]);
+    let sim = Background::sim(&hub, &dir, "sim", &args);
+    // Asked until all answer, so that the test starts once the simulator is on the hub.
     let deadline = Instant::now() + WAIT;
     loop {
-        send(bus, "7E5#4C00000000000000");
-        let window = Instant::now() + Duration::from_millis(300);
-        let mut answers = 0;
-        while let Some(wait) = window.checked_duration_since(Instant::now()) {
-            if let Some(received) = bus.recv(wait).expect("recv")
-                && CanFrame::to_string(&received.frame) == "7E4#5000000000000000"
-            {
-                answers += 1;
-            }
-        }
+        let answers = identify_unconfigured(&mut *bus)
+            .iter()
+            .filter(|frame| *frame == "7E4#5000000000000000")
+            .count();
         if answers == count {
-            return;
+            return (hub, bus, sim);
         }
         assert!(
             Instant::now() < deadline,
-            "{answers} of {count} unconfigured devices answered; sim stderr:\n{}",
-            sim.stderr()
+            "{answers} of {count} unconfigured devices answered; {}",
+            sim.report()
         );
     }
 }
 
-fn json_of(output: &Output) -> Value {
-    let text = stdout(output);
-    serde_json::from_str(text.trim()).unwrap_or_else(|err| {
-        panic!(
-            "stdout is not one JSON object ({err}):\n{text}\nstderr:\n{}",
-            stderr(output)
-        )
-    })
-}
-
-/// Runs `canopener` on the hub's bus and expects exit status `code`.
-fn run_on(hub: &HubProc, args: &[&str], code: i32) -> Output {
-    let spec = hub.spec("can0");
-    let mut all = args.to_vec();
-    all.extend(["--bus", spec.as_str()]);
-    let output = run(&all);
-    assert_eq!(
-        output.status.code(),
-        Some(code),
-        "canopener {all:?}\nstdout:\n{}\nstderr:\n{}",
-        stdout(&output),
-        stderr(&output)
-    );
-    output
+/// A hub with node 5 simulated from [`heartbeat_eds`], its boot-up seen: the hub, the directory for
+/// the test's files and the simulator.
+fn heartbeat_node_5(name: &str) -> (HubProc, PathBuf, Background) {
+    let hub = HubProc::start();
+    let dir = temp_dir(name);
+    let mut bus = client(&hub);
+    let eds = heartbeat_eds(&dir);
+    let sim = Background::sim(&hub, &dir, "sim", &[eds.to_str().unwrap(), "--node-id", "5"]);
+    assert_eq!(expect_frame(&mut *bus, "705#", &|| sim.report()), "705#00");
+    (hub, dir, sim)
 }
 
 #[test]
 fn nmt_commands_are_confirmed_by_heartbeats_and_boot_up() {
-    let hub = HubProc::start();
-    let dir = temp_dir("master-nmt");
-    let mut bus = client(&hub);
-    let eds = heartbeat_eds(&dir);
+    let (hub, _dir, _sim) = heartbeat_node_5("master-nmt");
     let spec = hub.spec("can0");
-    let sim = Background::spawn(
-        &dir,
-        "sim",
-        &["sim", eds.to_str().unwrap(), "--node-id", "5", "--bus", &spec],
-    );
-    let context = || format!("sim stderr:\n{}", sim.stderr());
-    assert_eq!(expect_frame(&mut *bus, "705#", &context), "705#00");
 
     for (command, state, boot_up) in [
         ("start", "operational", false),
@@ -208,7 +81,7 @@ fn nmt_commands_are_confirmed_by_heartbeats_and_boot_up() {
         ("reset", "pre-operational", true),
         ("reset-comm", "pre-operational", true),
     ] {
-        let output = run_on(&hub, &["nmt", command, "5", "--confirm", "--format", "json"], 0);
+        let output = run_exiting(&spec, &["nmt", command, "5", "--confirm", "--format", "json"], 0);
         let json = json_of(&output);
         assert_eq!(json["command"], command, "{json}");
         assert_eq!(json["target"], 5, "{json}");
@@ -220,7 +93,7 @@ fn nmt_commands_are_confirmed_by_heartbeats_and_boot_up() {
     }
 
     // Every node heard is confirmed; here the one simulated node.
-    let output = run_on(&hub, &["nmt", "stop", "all", "--confirm", "--format", "json"], 0);
+    let output = run_exiting(&spec, &["nmt", "stop", "all", "--confirm", "--format", "json"], 0);
     let json = json_of(&output);
     assert_eq!(json["target"], "all");
     assert_eq!(json["confirmed"], true);
@@ -229,12 +102,12 @@ fn nmt_commands_are_confirmed_by_heartbeats_and_boot_up() {
     assert_eq!(json["nodes"][0]["state"], "stopped");
 
     // Text without --confirm just says what was sent.
-    let output = run_on(&hub, &["nmt", "start", "5"], 0);
+    let output = run_exiting(&spec, &["nmt", "start", "5"], 0);
     assert_eq!(stdout(&output), "sent start to node 5\n");
 
     // Nobody is node 9: not confirmed, exit 7, and the message says what was waited for and how long.
-    let output = run_on(
-        &hub,
+    let output = run_exiting(
+        &spec,
         &[
             "nmt",
             "start",
@@ -261,18 +134,8 @@ fn nmt_commands_are_confirmed_by_heartbeats_and_boot_up() {
 
 #[test]
 fn heartbeat_watch_sees_a_stop_and_a_lost_heartbeat() {
-    let hub = HubProc::start();
-    let dir = temp_dir("master-heartbeat");
-    let mut bus = client(&hub);
-    let eds = heartbeat_eds(&dir);
+    let (hub, dir, mut sim) = heartbeat_node_5("master-heartbeat");
     let spec = hub.spec("can0");
-    let mut sim = Background::spawn(
-        &dir,
-        "sim",
-        &["sim", eds.to_str().unwrap(), "--node-id", "5", "--bus", &spec],
-    );
-    let context = || format!("sim stderr:\n{}", sim.stderr());
-    assert_eq!(expect_frame(&mut *bus, "705#", &context), "705#00");
     let mut watch = Background::spawn(
         &dir,
         "watch",
@@ -290,20 +153,20 @@ fn heartbeat_watch_sees_a_stop_and_a_lost_heartbeat() {
     );
     // Long enough for the watch to learn the 100 ms period from its heartbeats.
     std::thread::sleep(Duration::from_millis(1000));
-    run_on(&hub, &["nmt", "stop", "5"], 0);
+    run_exiting(&spec, &["nmt", "stop", "5"], 0);
     std::thread::sleep(Duration::from_millis(700));
     sim.kill();
-    assert_eq!(watch.wait(WAIT), Some(6), "a loss with --fail-on-loss exits 6");
+    assert_eq!(
+        watch.wait(WAIT).code(),
+        Some(6),
+        "a loss with --fail-on-loss exits 6"
+    );
     assert!(
         watch.stderr().contains("heartbeat lost: node 5"),
         "{}",
         watch.stderr()
     );
-    let lines: Vec<Value> = watch
-        .stdout()
-        .lines()
-        .map(|line| serde_json::from_str(line).expect("JSON line"))
-        .collect();
+    let lines = json_lines(&watch.stdout());
     assert!(
         lines
             .iter()
@@ -334,11 +197,12 @@ fn heartbeat_watch_sees_a_stop_and_a_lost_heartbeat() {
 #[test]
 fn sync_sends_the_counted_syncs_a_client_receives() {
     let hub = HubProc::start();
+    let spec = hub.spec("can0");
     let mut bus = client(&hub);
     // Past the hub's hold-back of a new client's traffic, so the client misses no SYNC.
     std::thread::sleep(Duration::from_millis(200));
-    let output = run_on(
-        &hub,
+    let output = run_exiting(
+        &spec,
         &[
             "sync",
             "--period",
@@ -367,7 +231,7 @@ fn sync_sends_the_counted_syncs_a_client_receives() {
         .collect();
     assert_eq!(counters, expected);
 
-    let output = run_on(&hub, &["sync", "--period", "2ms", "--duration", "100ms"], 0);
+    let output = run_exiting(&spec, &["sync", "--period", "2ms", "--duration", "100ms"], 0);
     let text = stdout(&output);
     assert!(
         text.contains("no counter") && text.contains("gaps between SYNCs"),
@@ -377,21 +241,15 @@ fn sync_sends_the_counted_syncs_a_client_receives() {
 
 #[test]
 fn lss_scan_gives_three_unconfigured_devices_node_ids_they_then_answer_sdo_on() {
-    let hub = HubProc::start();
-    let dir = temp_dir("master-lss-scan");
-    let mut bus = client(&hub);
-    let eds = base_eds();
-    let eds = eds.to_str().unwrap();
+    let (hub, mut bus, sim) = unconfigured_sims("master-lss-scan", 3, "100");
     let spec = hub.spec("can0");
-    let sim = Background::spawn(
-        &dir,
-        "sim",
-        &["sim", eds, eds, eds, "--serial", "100", "--bus", &spec],
-    );
-    wait_for_unconfigured(&mut *bus, 3, &sim);
 
     // Without --timeout: the LSS default of 100 ms, not the 1 s SDO default.
-    let output = run_on(&hub, &["lss", "scan", "--assign", "10-20", "--format", "json"], 0);
+    let output = run_exiting(
+        &spec,
+        &["lss", "scan", "--assign", "10-20", "--format", "json"],
+        0,
+    );
     let json = json_of(&output);
     assert_eq!(json["timeout_ms"], 100.0, "{json}");
     assert_eq!(json["complete"], true, "{json}");
@@ -415,7 +273,7 @@ fn lss_scan_gives_three_unconfigured_devices_node_ids_they_then_answer_sdo_on() 
     assert!(json["frames_sent"].as_u64().unwrap() > 100, "{json}");
 
     // Each device now runs with its node-ID: SDO upload of 1018h:04, its serial number.
-    let context = || format!("sim stderr:\n{}", sim.stderr());
+    let context = || sim.report();
     for (node, serial) in [(10u8, 100u8), (11, 101), (12, 102)] {
         let response = 0x580 + u16::from(node);
         send(&mut *bus, &format!("6{node:02X}#4018100400000000"));
@@ -424,7 +282,7 @@ fn lss_scan_gives_three_unconfigured_devices_node_ids_they_then_answer_sdo_on() 
     }
 
     // Nothing unconfigured is left.
-    let output = run_on(&hub, &["lss", "scan", "--timeout", "50ms"], 0);
+    let output = run_exiting(&spec, &["lss", "scan", "--timeout", "50ms"], 0);
     assert!(
         stdout(&output).starts_with("0 device(s) found"),
         "{}",
@@ -434,19 +292,10 @@ fn lss_scan_gives_three_unconfigured_devices_node_ids_they_then_answer_sdo_on() 
 
 #[test]
 fn lss_inquire_and_configure_one_device() {
-    let hub = HubProc::start();
-    let dir = temp_dir("master-lss-configure");
-    let mut bus = client(&hub);
-    let eds = base_eds();
+    let (hub, mut bus, sim) = unconfigured_sims("master-lss-configure", 1, "0x55");
     let spec = hub.spec("can0");
-    let sim = Background::spawn(
-        &dir,
-        "sim",
-        &["sim", eds.to_str().unwrap(), "--serial", "0x55", "--bus", &spec],
-    );
-    wait_for_unconfigured(&mut *bus, 1, &sim);
 
-    let json = json_of(&run_on(&hub, &["lss", "inquire", "--format", "json"], 0));
+    let json = json_of(&run_exiting(&spec, &["lss", "inquire", "--format", "json"], 0));
     assert_eq!(json["vendor_id"], 0xABC, "{json}");
     assert_eq!(json["product_code"], 0x401, "{json}");
     assert_eq!(json["revision_number"], 0x10002, "{json}");
@@ -476,24 +325,24 @@ fn lss_inquire_and_configure_one_device() {
         "--format",
         "json",
     ]);
-    let json = json_of(&run_on(&hub, &args, 0));
+    let json = json_of(&run_exiting(&spec, &args, 0));
     assert_eq!(json["previous_node_id"], 255, "{json}");
     assert_eq!(json["node_id"], 7, "{json}");
     assert_eq!(json["bitrate_kbit"], 250, "{json}");
     assert_eq!(json["stored"], true, "{json}");
-    let context = || format!("sim stderr:\n{}", sim.stderr());
+    let context = || sim.report();
     // Switched back to waiting, the unconfigured device takes node-ID 7 and boots.
     assert_eq!(expect_frame(&mut *bus, "707#", &context), "707#00");
 
     let mut args = vec!["lss", "inquire"];
     args.extend(address);
-    let text = stdout(&run_on(&hub, &args, 0));
+    let text = stdout(&run_exiting(&spec, &args, 0));
     assert!(text.contains("serial number    0x00000055"), "{text}");
     assert!(text.contains("node-ID          7"), "{text}");
 
     // Another serial number: nobody answers, exit 7 naming the address and the service.
-    let output = run_on(
-        &hub,
+    let output = run_exiting(
+        &spec,
         &[
             "lss",
             "configure",
@@ -519,70 +368,60 @@ fn lss_inquire_and_configure_one_device() {
 
 #[test]
 fn bad_arguments_exit_2_with_an_example() {
-    let cases: [(&[&str], &str); 8] = [
-        (&["nmt", "start", "200"], "e.g. `canopener nmt start 5`"),
+    // A complete LSS address, so that only the argument under test is wrong.
+    let configure = |rest: &[&'static str]| {
+        let mut args = vec![
+            "lss",
+            "configure",
+            "--vendor",
+            "1",
+            "--product",
+            "2",
+            "--revision",
+            "3",
+            "--serial",
+            "4",
+        ];
+        args.extend_from_slice(rest);
+        args
+    };
+    let cases: [(Vec<&str>, &str); 8] = [
+        (vec!["nmt", "start", "200"], "e.g. `canopener nmt start 5`"),
         (
-            &["lss", "configure", "--serial", "1", "--node-id", "5"],
+            vec!["lss", "configure", "--serial", "1", "--node-id", "5"],
             "e.g. `canopener lss configure --vendor",
         ),
         (
-            &["lss", "configure", "--node-id", "5"],
+            vec!["lss", "configure", "--node-id", "5"],
             "e.g. `canopener lss configure --vendor",
         ),
         (
-            &[
-                "lss",
-                "configure",
-                "--vendor",
-                "1",
-                "--product",
-                "2",
-                "--revision",
-                "3",
-                "--serial",
-                "4",
-                "--node-id",
-                "0",
-            ],
+            configure(&["--node-id", "0"]),
             "255 to make the device unconfigured",
         ),
         (
-            &[
-                "lss",
-                "configure",
-                "--vendor",
-                "1",
-                "--product",
-                "2",
-                "--revision",
-                "3",
-                "--serial",
-                "4",
-                "--node-id",
-                "5",
-                "--bitrate",
-                "100",
-            ],
+            configure(&["--node-id", "5", "--bitrate", "100"]),
             "--bitrate 250",
         ),
         (
-            &["lss", "scan", "--assign", "10-12,11"],
+            vec!["lss", "scan", "--assign", "10-12,11"],
             "e.g. `canopener lss scan --assign 10-20`",
         ),
         (
-            &["heartbeat", "watch", "--nodes", "0-5"],
+            vec!["heartbeat", "watch", "--nodes", "0-5"],
             "e.g. `canopener heartbeat watch --nodes",
         ),
-        (&["sync", "--period", "0ms"], "e.g. `canopener sync --period 10ms"),
+        (
+            vec!["sync", "--period", "0ms"],
+            "e.g. `canopener sync --period 10ms",
+        ),
     ];
     for (args, example) in cases {
-        let mut all = args.to_vec();
-        all.extend(["--bus", NO_BUS]);
-        let output = run(&all);
-        assert_eq!(output.status.code(), Some(2), "{all:?}: {}", stderr(&output));
-        assert!(stderr(&output).contains(example), "{all:?}: {}", stderr(&output));
+        let output = run_on(NO_BUS, &args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {}", stderr(&output));
+        assert!(stderr(&output).contains(example), "{args:?}: {}", stderr(&output));
     }
-    let partial = run(&["lss", "inquire", "--vendor", "1", "--bus", NO_BUS]);
+    let partial = run_on(NO_BUS, &["lss", "inquire", "--vendor", "1"]);
     assert_eq!(partial.status.code(), Some(2));
     assert!(
         stderr(&partial).contains("--product, --revision, --serial are missing"),

@@ -1,120 +1,12 @@
 //! `canopener sim`: a simulated device from an EDS on a hub, driven by a test client over socketcand.
 
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use canopener_can::CanFrame;
-use canopener_can::candump::parse_compact_frame;
-use canopener_transport::{BusSpec, CanBus, open};
-
-use crate::support::{HubProc, canopener, workspace_root};
+use crate::harness::{
+    Background, NO_BUS, WAIT, base_eds, client, expect_frame, identify_unconfigured, json_lines, run_on, send,
+};
+use crate::support::HubProc;
 use crate::{run, stderr, stdout, temp_dir};
-
-/// Generous: the machine running the tests may be loaded.
-const WAIT: Duration = Duration::from_secs(10);
-
-fn base_eds() -> PathBuf {
-    workspace_root().join("crates/canopener-check/test_data/checks/base.eds")
-}
-
-/// `canopener sim` as a child with stdout and stderr in files (no pipe to fill up), killed when dropped
-/// unless it already ended.
-struct SimProc {
-    child: Child,
-    stdout: PathBuf,
-    stderr: PathBuf,
-}
-
-impl SimProc {
-    fn spawn(dir: &Path, args: &[&str]) -> SimProc {
-        let stdout = dir.join("sim.stdout");
-        let stderr = dir.join("sim.stderr");
-        let child = canopener()
-            .arg("sim")
-            .args(args)
-            .env_remove("CANOPENER_BUS")
-            .stdin(Stdio::null())
-            .stdout(std::fs::File::create(&stdout).expect("stdout file"))
-            .stderr(std::fs::File::create(&stderr).expect("stderr file"))
-            .spawn()
-            .expect("spawn canopener sim");
-        SimProc {
-            child,
-            stdout,
-            stderr,
-        }
-    }
-
-    fn stderr(&self) -> String {
-        std::fs::read_to_string(&self.stderr).unwrap_or_default()
-    }
-
-    fn stdout(&self) -> String {
-        std::fs::read_to_string(&self.stdout).unwrap_or_default()
-    }
-
-    /// SIGTERM, then the exit status.
-    fn terminate(&mut self) -> ExitStatus {
-        let status = Command::new("kill")
-            .args(["-TERM", &self.child.id().to_string()])
-            .status()
-            .expect("run kill");
-        assert!(status.success(), "kill -TERM failed");
-        let deadline = Instant::now() + WAIT;
-        loop {
-            if let Some(status) = self.child.try_wait().expect("try_wait") {
-                return status;
-            }
-            assert!(
-                Instant::now() < deadline,
-                "sim did not stop within {WAIT:?} of SIGTERM; stderr:\n{}",
-                self.stderr()
-            );
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    }
-}
-
-impl Drop for SimProc {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn client(hub: &HubProc) -> Box<dyn CanBus> {
-    let spec = BusSpec::Socketcand {
-        host: hub.addr.ip().to_string(),
-        port: hub.addr.port(),
-        bus: "can0".into(),
-    };
-    open(&spec).expect("test client connects to the hub")
-}
-
-fn send(bus: &mut dyn CanBus, text: &str) {
-    bus.send(&parse_compact_frame(text).expect("frame"))
-        .expect("send");
-}
-
-/// The first frame received within [`WAIT`] whose text starts with `prefix` (e.g. `"585#"`).
-fn expect_frame(bus: &mut dyn CanBus, prefix: &str, sim: &SimProc) -> String {
-    let deadline = Instant::now() + WAIT;
-    let mut seen = Vec::new();
-    while Instant::now() < deadline {
-        if let Some(received) = bus.recv(Duration::from_millis(100)).expect("recv") {
-            let text = CanFrame::to_string(&received.frame);
-            if text.starts_with(prefix) {
-                return text;
-            }
-            seen.push(text);
-        }
-    }
-    panic!(
-        "no frame {prefix}… within {WAIT:?}; saw {seen:?}; sim stderr:\n{}",
-        sim.stderr()
-    );
-}
 
 #[test]
 fn sim_boots_answers_sdo_runs_nmt_and_heartbeat_and_stops_cleanly() {
@@ -123,38 +15,28 @@ fn sim_boots_answers_sdo_runs_nmt_and_heartbeat_and_stops_cleanly() {
     // The client is on the hub before the device boots, so it sees the boot-up message.
     let mut bus = client(&hub);
     let eds = base_eds();
-    let spec = hub.spec("can0");
-    let mut sim = SimProc::spawn(
+    let mut sim = Background::sim(
+        &hub,
         &dir,
-        &[
-            eds.to_str().unwrap(),
-            "--node-id",
-            "5",
-            "--bus",
-            &spec,
-            "--format",
-            "json",
-        ],
+        "sim",
+        &[eds.to_str().unwrap(), "--node-id", "5", "--format", "json"],
     );
-    assert_eq!(expect_frame(&mut *bus, "705#", &sim), "705#00");
+    let context = || sim.report();
+    assert_eq!(expect_frame(&mut *bus, "705#", &context), "705#00");
 
     // Expedited upload of 1018h:01, the vendor-ID.
     send(&mut *bus, "605#4018100100000000");
-    assert_eq!(expect_frame(&mut *bus, "585#", &sim), "585#43181001BC0A0000");
+    assert_eq!(expect_frame(&mut *bus, "585#", &context), "585#43181001BC0A0000");
 
     // 1017h = 100 ms, then NMT start: heartbeats with state 05h.
     send(&mut *bus, "605#2B17100064000000");
-    assert_eq!(expect_frame(&mut *bus, "585#", &sim), "585#6017100000000000");
+    assert_eq!(expect_frame(&mut *bus, "585#", &context), "585#6017100000000000");
     send(&mut *bus, "000#0105");
-    assert_eq!(expect_frame(&mut *bus, "705#05", &sim), "705#05");
+    assert_eq!(expect_frame(&mut *bus, "705#05", &context), "705#05");
 
     let status = sim.terminate();
     assert_eq!(status.code(), Some(0), "stderr:\n{}", sim.stderr());
-    let events: Vec<serde_json::Value> = sim
-        .stdout()
-        .lines()
-        .map(|line| serde_json::from_str(line).expect("JSON line"))
-        .collect();
+    let events = json_lines(&sim.stdout());
     let kinds: Vec<&str> = events.iter().filter_map(|e| e["event"].as_str()).collect();
     for kind in ["started", "boot_up", "sdo_write", "nmt_state", "stopped"] {
         assert!(kinds.contains(&kind), "no {kind} event in {kinds:?}");
@@ -183,32 +65,31 @@ fn sim_keeps_saved_parameters_in_the_state_dir_across_restarts() {
     );
     let eds = dir.join("store.eds");
     std::fs::write(&eds, text).unwrap();
-    let spec = hub.spec("can0");
     let args = [
         eds.to_str().unwrap(),
         "--node-id",
         "7",
-        "--bus",
-        &spec,
         "--state-dir",
         state.to_str().unwrap(),
     ];
     let mut bus = client(&hub);
-    let mut sim = SimProc::spawn(&dir, &args);
-    expect_frame(&mut *bus, "707#00", &sim);
+    let mut sim = Background::sim(&hub, &dir, "sim", &args);
+    let context = || sim.report();
+    expect_frame(&mut *bus, "707#00", &context);
     send(&mut *bus, "607#2B171000FA000000");
-    assert_eq!(expect_frame(&mut *bus, "587#", &sim), "587#6017100000000000");
+    assert_eq!(expect_frame(&mut *bus, "587#", &context), "587#6017100000000000");
     // 1010h:01 = "save".
     send(&mut *bus, "607#2310100173617665");
-    assert_eq!(expect_frame(&mut *bus, "587#", &sim), "587#6010100100000000");
+    assert_eq!(expect_frame(&mut *bus, "587#", &context), "587#6010100100000000");
     assert_eq!(sim.terminate().code(), Some(0), "{}", sim.stderr());
     assert!(state.join("node-007.params").exists());
     drop(sim);
 
-    let mut sim = SimProc::spawn(&dir, &args);
-    expect_frame(&mut *bus, "707#00", &sim);
+    let mut sim = Background::sim(&hub, &dir, "sim", &args);
+    let context = || sim.report();
+    expect_frame(&mut *bus, "707#00", &context);
     send(&mut *bus, "607#4017100000000000");
-    assert_eq!(expect_frame(&mut *bus, "587#", &sim), "587#4B171000FA000000");
+    assert_eq!(expect_frame(&mut *bus, "587#", &context), "587#4B171000FA000000");
     assert_eq!(sim.terminate().code(), Some(0), "{}", sim.stderr());
 }
 
@@ -217,28 +98,22 @@ fn sim_refuses_bad_files_and_a_state_dir_without_node_id() {
     let dir = temp_dir("sim-bad");
     let bad = dir.join("broken.eds");
     std::fs::write(&bad, "garbage without sections\n").unwrap();
-    let output = run(&[
-        "sim",
-        bad.to_str().unwrap(),
-        "--node-id",
-        "5",
-        "--bus",
-        "socketcand://127.0.0.1:9/can0",
-    ]);
+    let output = run_on(NO_BUS, &["sim", bad.to_str().unwrap(), "--node-id", "5"]);
     assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
     assert!(stderr(&output).contains("broken.eds"), "{}", stderr(&output));
 
     let eds = base_eds();
     // Saved parameters are kept per node-ID, so an unconfigured start cannot have them.
     let state = dir.join("state");
-    let no_node = run(&[
-        "sim",
-        eds.to_str().unwrap(),
-        "--state-dir",
-        state.to_str().unwrap(),
-        "--bus",
-        "socketcand://127.0.0.1:9/can0",
-    ]);
+    let no_node = run_on(
+        NO_BUS,
+        &[
+            "sim",
+            eds.to_str().unwrap(),
+            "--state-dir",
+            state.to_str().unwrap(),
+        ],
+    );
     assert_eq!(no_node.status.code(), Some(2), "{}", stderr(&no_node));
     assert!(stderr(&no_node).contains("--node-id"), "{}", stderr(&no_node));
 
@@ -257,23 +132,18 @@ fn unconfigured_sims_are_found_by_lss_and_boot_with_the_node_id_it_gives() {
     let mut bus = client(&hub);
     let eds = base_eds();
     let eds = eds.to_str().unwrap();
-    let spec = hub.spec("can0");
-    let mut sim = SimProc::spawn(
+    let mut sim = Background::sim(
+        &hub,
         &dir,
-        &[eds, eds, "--serial", "0x100", "--bus", &spec, "--format", "json"],
+        "sim",
+        &[eds, eds, "--serial", "0x100", "--format", "json"],
     );
     // Both devices are unconfigured: each answers "identify non-configured remote slave".
     // Asked again until the simulator is on the hub (it may still be starting).
     let deadline = Instant::now() + WAIT;
     let mut answers = Vec::new();
     while answers.is_empty() && Instant::now() < deadline {
-        send(&mut *bus, "7E5#4C00000000000000");
-        let window = Instant::now() + Duration::from_millis(300);
-        while let Some(wait) = window.checked_duration_since(Instant::now()) {
-            if let Some(received) = bus.recv(wait).expect("recv") {
-                answers.push(CanFrame::to_string(&received.frame));
-            }
-        }
+        answers = identify_unconfigured(&mut *bus);
     }
     assert_eq!(
         answers,
@@ -291,20 +161,17 @@ fn unconfigured_sims_are_found_by_lss_and_boot_with_the_node_id_it_gives() {
     ] {
         send(&mut *bus, frame);
     }
-    assert_eq!(expect_frame(&mut *bus, "7E4#", &sim), "7E4#4400000000000000");
+    let context = || sim.report();
+    assert_eq!(expect_frame(&mut *bus, "7E4#", &context), "7E4#4400000000000000");
     send(&mut *bus, "7E5#1109000000000000");
-    assert_eq!(expect_frame(&mut *bus, "7E4#", &sim), "7E4#1100000000000000");
+    assert_eq!(expect_frame(&mut *bus, "7E4#", &context), "7E4#1100000000000000");
     send(&mut *bus, "7E5#0400000000000000");
-    assert_eq!(expect_frame(&mut *bus, "709#", &sim), "709#00");
+    assert_eq!(expect_frame(&mut *bus, "709#", &context), "709#00");
     send(&mut *bus, "609#4018100400000000");
-    assert_eq!(expect_frame(&mut *bus, "589#", &sim), "589#4318100401010000");
+    assert_eq!(expect_frame(&mut *bus, "589#", &context), "589#4318100401010000");
 
     assert_eq!(sim.terminate().code(), Some(0), "stderr:\n{}", sim.stderr());
-    let events: Vec<serde_json::Value> = sim
-        .stdout()
-        .lines()
-        .map(|line| serde_json::from_str(line).expect("JSON line"))
-        .collect();
+    let events = json_lines(&sim.stdout());
     assert!(
         events
             .iter()
