@@ -29,6 +29,7 @@ use canopener_device::store::StoreEvent;
 use canopener_device::sync::SyncEvent;
 use canopener_device::time_stamp::TimeEvent;
 use canopener_eds::{Eds, Severity};
+use canopener_master::time_producer::{since_1984_from_unix_millis, time_of_day};
 use canopener_od::ObjectKey;
 use canopener_transport::{CanBus, TransportError, WallClock};
 use canopener_wire::abort::abort_code_text;
@@ -40,6 +41,8 @@ use crate::error::{CliError, CliResult, stdout_error};
 use crate::sim_store::FileStore;
 use crate::stop::StopFlag;
 
+/// How often a TIME producer sends the time.
+const TIME_PERIOD: Duration = Duration::from_secs(1);
 /// The longest one receive waits: how quickly Ctrl-C/SIGTERM is noticed when no timer is due.
 const MAX_WAIT: Duration = Duration::from_millis(50);
 /// Frames the devices may pass among themselves in one round before the rest waits for the next one (a
@@ -188,6 +191,8 @@ struct SimDevice {
     path: PathBuf,
     app: SimApp,
     store: Option<PathBuf>,
+    /// When a TIME producer (1012h bit 30) next sends the wall time.
+    next_time: Option<Instant>,
 }
 
 fn build(
@@ -247,6 +252,7 @@ fn build(
         path,
         app,
         store,
+        next_time: None,
     })
 }
 
@@ -267,7 +273,7 @@ impl Simulator {
     /// One turn of the loop: due timers, then one receive bounded by the next deadline.
     fn step(&mut self, bus: &mut dyn CanBus, log: &mut Log) -> CliResult {
         let now = WallClock::now();
-        let mut ran = false;
+        let mut ran = self.produce_time(now);
         for sim in &mut self.devices {
             if sim.device.poll_timeout().is_some_and(|due| due <= now) {
                 sim.device.handle_timeout(now);
@@ -298,6 +304,30 @@ impl Simulator {
             }
             Err(err) => Err(err.into()),
         }
+    }
+
+    /// TIME producers send the wall clock's time once a second (CiA 301 leaves the rate to the
+    /// application; once a second is what a clock master typically does). Whether anything was sent.
+    fn produce_time(&mut self, now: Instant) -> bool {
+        let mut sent = false;
+        for sim in &mut self.devices {
+            if !sim.device.is_time_producer() {
+                sim.next_time = None;
+                continue;
+            }
+            if sim.next_time.is_some_and(|due| due > now) {
+                continue;
+            }
+            sim.next_time = Some(now + TIME_PERIOD);
+            let unix_millis = now.as_nanos() / 1_000_000;
+            let Some(time) = since_1984_from_unix_millis(unix_millis).and_then(|ms| time_of_day(ms).ok())
+            else {
+                continue;
+            };
+            // Refused outside the NMT states that run TIME: nothing to send then.
+            sent |= sim.device.produce_time(now, time).is_ok();
+        }
+        sent
     }
 
     /// Logs every event, sends every frame and feeds each sent frame to the other devices, until no

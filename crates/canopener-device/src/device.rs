@@ -63,6 +63,7 @@ use std::collections::{BTreeSet, VecDeque};
 use canopener_can::{CanFrame, CanId, Instant, StandardId};
 use canopener_eds::model::Eds;
 use canopener_od::{DynamicOd, ObjectKey, OdError};
+use canopener_wire::TimeOfDay;
 use canopener_wire::{NodeId, abort};
 
 use crate::application::{AppChanges, Application};
@@ -76,7 +77,7 @@ use crate::pdo::{Direction, DummyUsage, Mapped, PdoEngine, PdoEvent, PdoRef};
 use crate::sdo_server::{self, SdoHooks, SdoServer};
 use crate::store::{MemoryStore, ParameterGroup, ParameterStore, StorageError, StoreEvent, StoreRestore};
 use crate::sync::{EMCY_SYNC_LENGTH, SyncEvent, SyncService};
-use crate::time_stamp::{TimeEvent, TimeService};
+use crate::time_stamp::{ProduceError, TimeEvent, TimeService};
 
 /// EMCY error code of a heartbeat or life guarding event (CiA 301 emergency error codes:
 /// life guard error or heartbeat error).
@@ -508,6 +509,23 @@ impl Device {
             self.apply_changes(now, &changes);
         }
         self.pump(now);
+    }
+
+    /// Whether 1012h makes this device a TIME producer (bit 30).
+    pub fn is_time_producer(&self) -> bool {
+        self.configured && self.time.is_producer()
+    }
+
+    /// Sends a TIME frame carrying `time` (CiA 301 TIME producer, 1012h bit 30). The device has no
+    /// clock of its own: its driver says when and what time it is. Refused when the device is no
+    /// TIME producer or its NMT state does not run TIME.
+    pub fn produce_time(&mut self, now: Instant, time: TimeOfDay) -> Result<(), ProduceError> {
+        if !self.configured {
+            return Err(ProduceError::NotProducer);
+        }
+        self.time.produce(now, time)?;
+        self.pump(now);
+        Ok(())
     }
 
     /// The next frame to send.

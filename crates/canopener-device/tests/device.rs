@@ -563,3 +563,24 @@ fn an_extension_adds_the_cia401_test_registers_to_a_real_cia401_eds_and_survives
         "2001h answered"
     );
 }
+
+#[test]
+fn a_time_producer_sends_the_time_its_driver_gives() {
+    use canopener_wire::TimeOfDay;
+    let time = TimeOfDay {
+        millis: 0x0123_4567,
+        days: 0x3A98,
+    };
+    let mut bus = Bus::booted(ds301_device(10));
+    assert!(!bus.dev.is_time_producer(), "1012h = 100h: no producer");
+    assert!(bus.dev.produce_time(bus.now, time).is_err());
+    // 1012h bit 30: this node produces TIME (CiA 301); TIME runs in Pre-operational.
+    bus.rx(1, &download(10, 0x1012, 0, &0x4000_0100u32.to_le_bytes()));
+    assert!(bus.dev.is_time_producer());
+    bus.sent();
+    bus.dev.produce_time(bus.now, time).expect("producer");
+    assert_eq!(bus.sent(), ["1.000 100#67452301983A"]);
+    // Stopped runs no TIME.
+    bus.rx(2, "000#020A");
+    assert!(bus.dev.produce_time(bus.now, time).is_err());
+}

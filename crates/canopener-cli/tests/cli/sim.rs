@@ -5,7 +5,7 @@ use std::time::Instant;
 use crate::harness::{
     Background, NO_BUS, WAIT, base_eds, client, expect_frame, identify_unconfigured, json_lines, run_on, send,
 };
-use crate::support::HubProc;
+use crate::support::{HubProc, workspace_root};
 use crate::{run, stderr, stdout, temp_dir};
 
 #[test]
@@ -199,4 +199,38 @@ fn list_faults_describes_the_catalogue_and_unknown_faults_are_refused() {
         "the error lists the names: {}",
         stderr(&unknown)
     );
+}
+
+#[test]
+fn a_sim_made_time_producer_sends_the_wall_clock_time() {
+    let hub = HubProc::start();
+    let dir = temp_dir("sim-time");
+    let mut bus = client(&hub);
+    let eds =
+        workspace_root().join("../shared/corpus/eds/CANopenNode__CANopenNode__example__DS301_profile.eds");
+    let mut sim = Background::sim(&hub, &dir, "sim", &[eds.to_str().unwrap(), "--node-id", "7"]);
+    let context = || sim.report();
+    assert_eq!(expect_frame(&mut *bus, "707#", &context), "707#00");
+    // 1012h = 4000 0100h: produce TIME on 100h.
+    send(&mut *bus, "607#2312100000010040");
+    assert_eq!(expect_frame(&mut *bus, "587#", &context), "587#6012100000000000");
+    let frame = expect_frame(&mut *bus, "100#", &context);
+    let bytes: Vec<u8> = (4..16)
+        .step_by(2)
+        .map(|at| u8::from_str_radix(&frame[at..at + 2], 16).expect("hex"))
+        .collect();
+    let millis = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) & 0x0FFF_FFFF;
+    let days = u16::from_le_bytes([bytes[4], bytes[5]]);
+    // The days since 1984-01-01 of the machine's clock (either side of midnight).
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .expect("clock after 1970")
+        .as_millis();
+    let today = ((now - 441_763_200_000) / 86_400_000) as u16;
+    assert!(
+        days == today || days + 1 == today,
+        "{frame}: day {days}, expected {today}"
+    );
+    assert!(millis < 86_400_000, "{frame}");
+    sim.terminate();
 }
