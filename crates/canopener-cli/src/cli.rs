@@ -69,6 +69,7 @@ pub(crate) enum Command {
   canopener sim io.eds --node-id 3 --app cia401           # CiA 401 I/O; inputs via 2000h=1 and 2001h
   canopener sim device.eds --node-id 5 --state-dir state/ # 1010h \"save\" survives restarts
   canopener sim io.eds io.eds io.eds --serial 100         # three LSS-unconfigured devices, serials 100-102
+  canopener sim io.eds --serial 7 --state-dir state/      # LSS-stored node-ID used on the next start
   canopener sim device.eds --node-id 5 --format json | jq 'select(.event == \"nmt_state\")'
 Logs boot-up, NMT state changes, SDO writes and aborts, EMCY and LSS (stderr, or JSON lines on stdout).
 Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error.")]
@@ -591,7 +592,8 @@ pub(crate) struct SimArgs {
     /// one EDS have distinct LSS addresses. Decimal or 0x-hex.
     #[arg(long, value_parser = parse_u32_number, value_name = "S")]
     pub(crate) serial: Option<u32>,
-    /// Keep saved parameters (1010h "save", 1011h "load") in this directory, one file per node-ID.
+    /// Keep what devices store in this directory, so it survives restarts: saved parameters (1010h
+    /// "save", 1011h "load") and the LSS configuration (store configuration: the node-ID to start with).
     #[arg(long, value_name = "DIR")]
     pub(crate) state_dir: Option<PathBuf>,
     /// The application behind each device's object dictionary.

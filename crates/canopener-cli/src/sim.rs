@@ -38,7 +38,7 @@ use serde_json::{Map, Value, json};
 use crate::bus_open::open_bus;
 use crate::cli::{SimApp, SimArgs, SimFormat};
 use crate::error::{CliError, CliResult, stdout_error};
-use crate::sim_store::FileStore;
+use crate::sim_store::{FileStore, LssFile};
 use crate::stop::StopFlag;
 
 /// How often a TIME producer sends the time.
@@ -212,40 +212,55 @@ fn build(
             SimApp::Cia401 => Box::new(Cia401Io::new()),
         }
     };
-    let mut device = match app {
-        SimApp::None => Device::from_eds(&eds, node_id, application()),
-        // The CiA 401 objects and factory test registers the file lacks are added (only those).
-        SimApp::Cia401 => Device::from_eds_extended(&eds, node_id, application(), |od, node| {
-            install_objects(od, node).map(drop).map_err(|err| err.to_string())
-        }),
-    }
-    .map_err(|e| refused(&e))?;
-    if let Some(serial) = serial {
-        device = device
-            .with_value(ObjectKey::new(0x1018, 4), &serial.to_le_bytes())
-            .map_err(|err| {
-                CliError::InvalidInput(format!(
-                    "{}: cannot set the serial number 1018h:04 to {serial}: {err}; --serial needs an identity \
-                     object with sub-index 4 (UNSIGNED32)",
-                    path.display()
-                ))
-            })?;
-    }
-    if !faults.is_empty() {
-        device = device.with_faults(faults.iter().copied().collect::<FaultSet>());
-    }
+    let make = |node_id: u8| -> CliResult<Device> {
+        let mut device = match app {
+            SimApp::None => Device::from_eds(&eds, node_id, application()),
+            // The CiA 401 objects and factory test registers the file lacks are added (only those).
+            SimApp::Cia401 => Device::from_eds_extended(&eds, node_id, application(), |od, node| {
+                install_objects(od, node).map(drop).map_err(|err| err.to_string())
+            }),
+        }
+        .map_err(|e| refused(&e))?;
+        if let Some(serial) = serial {
+            device = device
+                .with_value(ObjectKey::new(0x1018, 4), &serial.to_le_bytes())
+                .map_err(|err| {
+                    CliError::InvalidInput(format!(
+                        "{}: cannot set the serial number 1018h:04 to {serial}: {err}; --serial needs an \
+                         identity object with sub-index 4 (UNSIGNED32)",
+                        path.display()
+                    ))
+                })?;
+        }
+        if !faults.is_empty() {
+            device = device.with_faults(faults.iter().copied().collect::<FaultSet>());
+        }
+        Ok(device)
+    };
+    let mut device = make(node_id)?;
     let mut store = None;
     if let Some(dir) = state_dir {
-        if node_id == UNCONFIGURED {
-            return Err(CliError::Usage(format!(
-                "{}: --state-dir keeps saved parameters per node-ID, and this device starts without one; \
-                 pass --node-id N, or drop --state-dir",
-                path.display()
-            )));
-        }
-        let file = FileStore::open(dir, node_id)?;
-        store = Some(file.path().to_owned());
-        device = device.with_parameter_store(Box::new(file));
+        let address = device.lss().map(|lss| *lss.identity());
+        let params = match (node_id, address) {
+            // A node-ID by LSS: the device is known by its LSS address, and starts with the node-ID
+            // it stored last time, as a real device does after power-on.
+            (UNCONFIGURED, Some(address)) => {
+                let lss = LssFile::open(dir, &address)?;
+                if let Some(stored) = lss.node_id() {
+                    device = make(stored.get())?;
+                }
+                device = device.with_lss_storage(Box::new(lss));
+                FileStore::open_lss(dir, &address)?
+            }
+            (_, address) => {
+                if let Some(address) = address {
+                    device = device.with_lss_storage(Box::new(LssFile::open(dir, &address)?));
+                }
+                FileStore::open(dir, node_id)?
+            }
+        };
+        store = Some(params.path().to_owned());
+        device = device.with_parameter_store(Box::new(params));
     }
     Ok(SimDevice {
         device,

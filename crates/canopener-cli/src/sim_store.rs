@@ -1,8 +1,13 @@
-//! `canopener sim --state-dir DIR`: saved parameters (1010h "save", 1011h "load") kept in one file per
-//! simulated device, so store/restore survives restarts of the simulator.
+//! `canopener sim --state-dir DIR`: what a real device keeps in non-volatile memory, in files per
+//! simulated device, so that it survives restarts of the simulator: saved parameters (1010h "save",
+//! 1011h "load") and the LSS configuration (CiA 305 store configuration: node-ID and bit rate).
 //!
-//! The file `DIR/node-NNN.params` (NNN the node-ID the device started with, in decimal) is plain text, one
-//! saved entry per line, `GROUP INDEX SUB HEX`: the group (`communication`, `application`,
+//! A device whose node-ID is fixed (a DCF's, or `--node-id`) keeps its parameters in
+//! `DIR/node-NNN.params` (NNN in decimal). A device that gets its node-ID by LSS is known by its LSS
+//! address instead: `DIR/lss-VVVVVVVV-PPPPPPPP-RRRRRRRR-SSSSSSSS.params` for the parameters and `.lss`
+//! for the stored LSS configuration, from which it starts with the stored node-ID next time.
+//!
+//! A `.params` file is plain text, one saved entry per line, `GROUP INDEX SUB HEX`: the group (`communication`, `application`,
 //! `manufacturer`), the index and sub-index in hex, and the value's little-endian bytes in hex (nothing for
 //! an empty value). Lines starting with `#` are comments. Every change rewrites the whole file atomically
 //! (`output_file::write_atomic`), so a crash leaves the old or the new state, never half of one.
@@ -11,8 +16,10 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use canopener_device::lss_slave::{BitTiming, LssIdentity, LssStorage, LssStoreError};
 use canopener_device::store::{ParameterGroup, ParameterStore, Snapshot, StorageError};
 use canopener_od::ObjectKey;
+use canopener_wire::NodeId;
 
 use crate::error::{CliError, CliResult};
 use crate::output_file::write_atomic;
@@ -28,10 +35,17 @@ impl FileStore {
     /// The store of node `node_id` in `dir` (created if missing), with what its file holds. A file that
     /// does not parse is invalid input (exit 3), named with the line.
     pub(crate) fn open(dir: &Path, node_id: u8) -> CliResult<FileStore> {
-        std::fs::create_dir_all(dir).map_err(|err| {
-            CliError::output(format!("creating the state directory {}", dir.display()), err)
-        })?;
-        let path = dir.join(format!("node-{node_id:03}.params"));
+        FileStore::open_named(dir, &format!("node-{node_id:03}"))
+    }
+
+    /// The store of the device with LSS address `address` in `dir`.
+    pub(crate) fn open_lss(dir: &Path, address: &LssIdentity) -> CliResult<FileStore> {
+        FileStore::open_named(dir, &lss_stem(address))
+    }
+
+    fn open_named(dir: &Path, stem: &str) -> CliResult<FileStore> {
+        create_state_dir(dir)?;
+        let path = dir.join(format!("{stem}.params"));
         let groups = match std::fs::read_to_string(&path) {
             Ok(text) => parse(&text).map_err(|(line, message)| {
                 CliError::InvalidInput(format!(
@@ -79,6 +93,112 @@ impl ParameterStore for FileStore {
         self.groups = groups;
         Ok(())
     }
+}
+
+/// The LSS configuration a device stored (CiA 305 store configuration), in `DIR/lss-ADDRESS.lss`:
+/// lines `node-id N` (decimal, or `none` for unconfigured) and `bit-timing TABLE INDEX`.
+#[derive(Debug)]
+pub(crate) struct LssFile {
+    path: PathBuf,
+    node_id: Option<NodeId>,
+    bit_timing: Option<BitTiming>,
+}
+
+impl LssFile {
+    /// The stored LSS configuration of the device with LSS address `address` (none stored yet if the
+    /// file does not exist). A file that does not parse is invalid input (exit 3), named with the line.
+    pub(crate) fn open(dir: &Path, address: &LssIdentity) -> CliResult<LssFile> {
+        create_state_dir(dir)?;
+        let path = dir.join(format!("{}.lss", lss_stem(address)));
+        let mut file = LssFile {
+            path,
+            node_id: None,
+            bit_timing: None,
+        };
+        let text = match std::fs::read_to_string(&file.path) {
+            Ok(text) => text,
+            Err(err) if err.kind() == std::io::ErrorKind::NotFound => return Ok(file),
+            Err(err) => return Err(CliError::read_file(&file.path, err)),
+        };
+        for (number, line) in (1..).zip(text.lines()) {
+            let line = line.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let words: Vec<&str> = line.split_whitespace().collect();
+            match words.as_slice() {
+                ["node-id", "none"] => file.node_id = None,
+                ["node-id", id] => {
+                    file.node_id = Some(id.parse().ok().and_then(NodeId::new).ok_or_else(|| {
+                        bad_lss_line(&file.path, number, "the node-ID must be 1 to 127 or `none`")
+                    })?);
+                }
+                ["bit-timing", table, index] => {
+                    let (Ok(table), Ok(index)) = (table.parse(), index.parse()) else {
+                        return Err(bad_lss_line(
+                            &file.path,
+                            number,
+                            "write `bit-timing TABLE INDEX`, e.g. `bit-timing 0 4`",
+                        ));
+                    };
+                    file.bit_timing = Some(BitTiming { table, index });
+                }
+                _ => {
+                    return Err(bad_lss_line(
+                        &file.path,
+                        number,
+                        "expected `node-id N`, `node-id none` or `bit-timing TABLE INDEX`",
+                    ));
+                }
+            }
+        }
+        Ok(file)
+    }
+
+    /// The node-ID stored, if any.
+    pub(crate) fn node_id(&self) -> Option<NodeId> {
+        self.node_id
+    }
+}
+
+impl LssStorage for LssFile {
+    fn store(&mut self, node_id: Option<NodeId>, bit_timing: Option<BitTiming>) -> Result<(), LssStoreError> {
+        let mut text = String::from(
+            "# LSS configuration stored by the simulated device (CiA 305 store configuration)\n",
+        );
+        match node_id {
+            Some(node) => {
+                let _ = writeln!(text, "node-id {}", node.get());
+            }
+            None => text.push_str("node-id none\n"),
+        }
+        if let Some(timing) = bit_timing {
+            let _ = writeln!(text, "bit-timing {} {}", timing.table, timing.index);
+        }
+        write_atomic(&self.path, text.as_bytes(), false).map_err(|_| LssStoreError::MediaAccess)?;
+        self.node_id = node_id;
+        self.bit_timing = bit_timing;
+        Ok(())
+    }
+}
+
+fn bad_lss_line(path: &Path, line: usize, message: &str) -> CliError {
+    CliError::InvalidInput(format!(
+        "{}:{line}: {message}; fix or delete the file to start unconfigured",
+        path.display()
+    ))
+}
+
+fn lss_stem(address: &LssIdentity) -> String {
+    format!(
+        "lss-{:08X}-{:08X}-{:08X}-{:08X}",
+        address.vendor_id, address.product_code, address.revision_number, address.serial_number
+    )
+}
+
+fn create_state_dir(dir: &Path) -> CliResult {
+    std::fs::create_dir_all(dir)
+        .map_err(|err| CliError::output(format!("creating the state directory {}", dir.display()), err))
 }
 
 fn group_name(group: ParameterGroup) -> &'static str {
@@ -233,6 +353,43 @@ mod tests {
             assert_eq!(err.exit_code(), 3);
             assert!(err.to_string().contains(needle), "{err}");
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_stored_lss_configuration_is_read_back_per_lss_address() {
+        let dir = temp_dir("lss-file");
+        let address = LssIdentity {
+            vendor_id: 0xABC,
+            product_code: 0x401,
+            revision_number: 0x10002,
+            serial_number: 7,
+        };
+        let mut file = LssFile::open(&dir, &address).unwrap();
+        assert_eq!(file.node_id(), None, "nothing stored yet");
+        let timing = BitTiming { table: 0, index: 4 };
+        file.store(NodeId::new(12), Some(timing)).unwrap();
+        let path = dir.join("lss-00000ABC-00000401-00010002-00000007.lss");
+        assert_eq!(
+            std::fs::read_to_string(&path)
+                .unwrap()
+                .lines()
+                .skip(1)
+                .collect::<Vec<_>>(),
+            ["node-id 12", "bit-timing 0 4"]
+        );
+        let again = LssFile::open(&dir, &address).unwrap();
+        assert_eq!(again.node_id(), NodeId::new(12));
+        assert_eq!(again.bit_timing, Some(timing));
+        // Storing "unconfigured" (FFh) is kept as such.
+        file.store(None, None).unwrap();
+        assert_eq!(LssFile::open(&dir, &address).unwrap().node_id(), None);
+        // Another serial number is another device.
+        let other = LssIdentity {
+            serial_number: 8,
+            ..address
+        };
+        assert_eq!(LssFile::open(&dir, &other).unwrap().node_id(), None);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -94,7 +94,7 @@ fn sim_keeps_saved_parameters_in_the_state_dir_across_restarts() {
 }
 
 #[test]
-fn sim_refuses_bad_files_and_a_state_dir_without_node_id() {
+fn sim_refuses_bad_files_and_bad_state() {
     let dir = temp_dir("sim-bad");
     let bad = dir.join("broken.eds");
     std::fs::write(&bad, "garbage without sections\n").unwrap();
@@ -102,10 +102,16 @@ fn sim_refuses_bad_files_and_a_state_dir_without_node_id() {
     assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
     assert!(stderr(&output).contains("broken.eds"), "{}", stderr(&output));
 
-    let eds = base_eds();
-    // Saved parameters are kept per node-ID, so an unconfigured start cannot have them.
+    // A stored LSS configuration that does not parse names the file and line.
     let state = dir.join("state");
-    let no_node = run_on(
+    std::fs::create_dir_all(&state).unwrap();
+    std::fs::write(
+        state.join("lss-00000ABC-00000401-00010002-00000000.lss"),
+        "node-id 200\n",
+    )
+    .unwrap();
+    let eds = base_eds();
+    let bad_lss = run_on(
         NO_BUS,
         &[
             "sim",
@@ -114,8 +120,12 @@ fn sim_refuses_bad_files_and_a_state_dir_without_node_id() {
             state.to_str().unwrap(),
         ],
     );
-    assert_eq!(no_node.status.code(), Some(2), "{}", stderr(&no_node));
-    assert!(stderr(&no_node).contains("--node-id"), "{}", stderr(&no_node));
+    assert_eq!(bad_lss.status.code(), Some(3), "{}", stderr(&bad_lss));
+    assert!(
+        stderr(&bad_lss).contains(".lss:1: the node-ID must be 1 to 127"),
+        "{}",
+        stderr(&bad_lss)
+    );
 
     let help = run(&["sim", "--help"]);
     assert!(help.status.success());
@@ -233,4 +243,49 @@ fn a_sim_made_time_producer_sends_the_wall_clock_time() {
     );
     assert!(millis < 86_400_000, "{frame}");
     sim.terminate();
+}
+
+#[test]
+fn an_lss_stored_node_id_survives_a_restart_of_the_simulator() {
+    let hub = HubProc::start();
+    let dir = temp_dir("sim-lss-store");
+    let state = dir.join("state");
+    let eds = base_eds();
+    let args = [
+        eds.to_str().unwrap(),
+        "--serial",
+        "0x200",
+        "--state-dir",
+        state.to_str().unwrap(),
+    ];
+    let mut bus = client(&hub);
+    let mut sim = Background::sim(&hub, &dir, "first", &args);
+    let deadline = Instant::now() + WAIT;
+    while identify_unconfigured(&mut *bus).is_empty() {
+        assert!(
+            Instant::now() < deadline,
+            "the unconfigured device never answered"
+        );
+    }
+    // Switch state global to configuration, node-ID 12, store configuration, back to waiting.
+    let context = || sim.report();
+    send(&mut *bus, "7E5#0401000000000000");
+    send(&mut *bus, "7E5#110C000000000000");
+    assert_eq!(expect_frame(&mut *bus, "7E4#", &context), "7E4#1100000000000000");
+    send(&mut *bus, "7E5#1700000000000000");
+    assert_eq!(expect_frame(&mut *bus, "7E4#", &context), "7E4#1700000000000000");
+    send(&mut *bus, "7E5#0400000000000000");
+    assert_eq!(expect_frame(&mut *bus, "70C#", &context), "70C#00");
+    assert_eq!(sim.terminate().code(), Some(0), "{}", sim.report());
+    let stored = std::fs::read_to_string(state.join("lss-00000ABC-00000401-00010002-00000200.lss"))
+        .expect("the stored LSS configuration");
+    assert!(stored.contains("node-id 12"), "{stored}");
+
+    // Power-on again: the device starts with the stored node-ID, no LSS needed.
+    let mut again = Background::sim(&hub, &dir, "second", &args);
+    let context = || again.report();
+    assert_eq!(expect_frame(&mut *bus, "70C#", &context), "70C#00");
+    send(&mut *bus, "60C#4018100400000000");
+    assert_eq!(expect_frame(&mut *bus, "58C#", &context), "58C#4318100400020000");
+    assert_eq!(again.terminate().code(), Some(0), "{}", again.report());
 }
