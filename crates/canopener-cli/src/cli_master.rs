@@ -409,7 +409,8 @@ pub(crate) struct SyncArgs {
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum HeartbeatCommand {
-    /// Show the NMT state and heartbeat timing of every node, live; lost and resumed heartbeats stand out.
+    /// Show the NMT state, heartbeat timing and EMCYs of every node, live; lost and resumed heartbeats
+    /// stand out.
     #[command(after_help = "Examples:
   canopener heartbeat watch
   canopener heartbeat watch --consumer-time 300ms --duration 10s --format json

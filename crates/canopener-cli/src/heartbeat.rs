@@ -1,5 +1,6 @@
 //! `canopener heartbeat watch`: the NMT state and heartbeat timing of every node, live (CiA 301
-//! §7.2.8.3.2.2 heartbeat, §7.2.8.3.3 boot-up), through `NodeMonitor`.
+//! §7.2.8.3.2.2 heartbeat, §7.2.8.3.3 boot-up), through `NodeMonitor`, with the EMCYs the nodes send
+//! (§7.2.7, `EmcyConsumer`).
 //!
 //! Also home of [`HeartbeatCore`], the monitor with every single heartbeat reported, which `nmt
 //! --confirm` uses too, and of the node-list syntax (`1-10,20`) of `--nodes` and `lss scan --assign`.
@@ -9,6 +10,7 @@ use std::io::Write;
 use std::time::Duration;
 
 use canopener_can::{CanFrame, CanId, Instant};
+use canopener_master::emcy_consumer::{EmcyConsumer, EmcyEvent};
 use canopener_master::error_control::{ConsumerTime, MonitorEvent, NodeMonitor};
 use canopener_wire::{ERROR_CONTROL_BASE, NmtState, NodeId};
 use serde_json::json;
@@ -89,6 +91,7 @@ pub(crate) fn watch(args: HeartbeatWatchArgs) -> CliResult {
 #[derive(Debug)]
 pub(crate) struct HeartbeatCore {
     monitor: NodeMonitor,
+    emcy: EmcyConsumer,
     heard: VecDeque<Heard>,
 }
 
@@ -106,6 +109,9 @@ pub(crate) enum HeardKind {
     /// A heartbeat carrying a known state other than boot-up (reported after the monitor's events
     /// for the same frame).
     Heartbeat { node: NodeId, state: NmtState },
+    /// An emergency message (or a malformed frame on an EMCY CAN-ID): a watcher wants to see why a
+    /// node changed state or stopped, and devices say it with EMCY (CiA 301 §7.2.7).
+    Emcy(EmcyEvent),
 }
 
 impl Heard {
@@ -113,6 +119,7 @@ impl Heard {
         match self.kind {
             HeardKind::Monitor(event) => event.node(),
             HeardKind::Heartbeat { node, .. } => node,
+            HeardKind::Emcy(event) => event.node(),
         }
     }
 }
@@ -121,6 +128,7 @@ impl HeartbeatCore {
     pub(crate) fn new(monitor: NodeMonitor) -> HeartbeatCore {
         HeartbeatCore {
             monitor,
+            emcy: EmcyConsumer::new(),
             heard: VecDeque::new(),
         }
     }
@@ -145,6 +153,13 @@ impl Core for HeartbeatCore {
     fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
         self.monitor.handle_frame(now, frame);
         self.drain_monitor(now);
+        self.emcy.handle_frame(now, frame);
+        while let Some(event) = self.emcy.poll_event() {
+            self.heard.push_back(Heard {
+                at: now,
+                kind: HeardKind::Emcy(event),
+            });
+        }
         if let Some((node, state)) = heartbeat_of(frame) {
             self.heard.push_back(Heard {
                 at: now,
@@ -210,6 +225,7 @@ struct NodeStats {
     periods: Vec<Duration>,
     losses: u64,
     lost_now: bool,
+    emcys: u64,
 }
 
 impl NodeStats {
@@ -220,14 +236,17 @@ impl NodeStats {
             HeardKind::Monitor(MonitorEvent::Interval { period, .. }) => self.periods.push(period),
             HeardKind::Monitor(MonitorEvent::HeartbeatLost { .. }) => self.losses += 1,
             HeardKind::Monitor(_) => {}
+            HeardKind::Emcy(_) => self.emcys += 1,
         }
     }
 }
 
 /// The line for one event, or `None` for what is only counted (single heartbeats and intervals).
 fn event_line(format: OutputFormat, at: Duration, kind: &HeardKind) -> Option<String> {
-    let HeardKind::Monitor(event) = kind else {
-        return None;
+    let event = match kind {
+        HeardKind::Monitor(event) => event,
+        HeardKind::Emcy(emcy) => return Some(emcy_line(format, at, emcy)),
+        HeardKind::Heartbeat { .. } => return None,
     };
     if matches!(event, MonitorEvent::Interval { .. }) {
         return None;
@@ -241,6 +260,34 @@ fn event_line(format: OutputFormat, at: Duration, kind: &HeardKind) -> Option<St
             value.to_string()
         }
     })
+}
+
+fn emcy_line(format: OutputFormat, at: Duration, event: &EmcyEvent) -> String {
+    match format {
+        OutputFormat::Text => format!("{:>9.3} s  {event}", at.as_secs_f64()),
+        OutputFormat::Json => {
+            let mut value = match *event {
+                EmcyEvent::Emcy {
+                    code,
+                    register,
+                    manufacturer,
+                    text,
+                    ..
+                } => json!({
+                    "event": "emcy",
+                    "code": format!("{code:04X}"),
+                    "text": text,
+                    "register": register,
+                    "manufacturer": manufacturer.iter().map(|b| format!("{b:02X}")).collect::<String>(),
+                    "reset": event.is_error_reset(),
+                }),
+                EmcyEvent::Malformed { .. } => json!({"event": "emcy_malformed", "text": event.to_string()}),
+            };
+            value["time_ms"] = json!(millis(at));
+            value["node"] = json!(event.node().get());
+            value.to_string()
+        }
+    }
 }
 
 fn event_json(event: &MonitorEvent) -> serde_json::Value {
@@ -280,6 +327,7 @@ fn print_summary(format: OutputFormat, elapsed: Duration, stats: &BTreeMap<NodeI
                         "boot_ups": stats.boot_ups,
                         "period_ms": spread.map(|spread| spread.json()),
                         "losses": stats.losses,
+                        "emcys": stats.emcys,
                     })
                 })
                 .collect();
@@ -295,13 +343,13 @@ fn print_summary(format: OutputFormat, elapsed: Duration, stats: &BTreeMap<NodeI
 fn summary_table(elapsed: Duration, stats: &BTreeMap<NodeId, NodeStats>) -> String {
     let mut text = format!("\nwatched {:.1} s", elapsed.as_secs_f64());
     if stats.is_empty() {
-        text.push_str(": no node sent a heartbeat or boot-up message\n");
+        text.push_str(": no node sent a heartbeat, boot-up or EMCY message\n");
         return text;
     }
     text.push('\n');
     text.push_str(&format!(
-        "{:>4}  {:<22}  {:>10}  {:>28}  {:>6}\n",
-        "node", "state", "heartbeats", "period min/median/max (ms)", "losses"
+        "{:>4}  {:<22}  {:>10}  {:>28}  {:>6}  {:>5}\n",
+        "node", "state", "heartbeats", "period min/median/max (ms)", "losses", "EMCYs"
     ));
     for (node, stats) in stats {
         let mut state = stats
@@ -322,12 +370,13 @@ fn summary_table(elapsed: Duration, stats: &BTreeMap<NodeId, NodeStats>) -> Stri
             },
         );
         text.push_str(&format!(
-            "{:>4}  {:<22}  {:>10}  {:>28}  {:>6}\n",
+            "{:>4}  {:<22}  {:>10}  {:>28}  {:>6}  {:>5}\n",
             node.get(),
             state,
             stats.heartbeats,
             period,
-            stats.losses
+            stats.losses,
+            stats.emcys
         ));
     }
     text
@@ -446,6 +495,31 @@ mod tests {
     }
 
     #[test]
+    fn emcy_lines_decode_the_code_in_both_formats() {
+        let emcy = EmcyEvent::Emcy {
+            node: node(5),
+            code: 0x8210,
+            register: 0x11,
+            manufacturer: [1, 0, 0, 0, 0],
+            text: "PDO not processed due to length error",
+        };
+        let at = Duration::from_millis(1500);
+        let text = event_line(OutputFormat::Text, at, &HeardKind::Emcy(emcy)).unwrap();
+        assert!(
+            text.contains("node 5: EMCY 8210h PDO not processed due to length error"),
+            "{text}"
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&event_line(OutputFormat::Json, at, &HeardKind::Emcy(emcy)).unwrap())
+                .unwrap();
+        assert_eq!(
+            json,
+            json!({"event": "emcy", "node": 5, "code": "8210", "text": "PDO not processed due to length error",
+                   "register": 17, "manufacturer": "0100000000", "reset": false, "time_ms": 1500.0})
+        );
+    }
+
+    #[test]
     fn the_summary_table_has_a_row_per_node() {
         let mut stats = BTreeMap::new();
         let mut five = NodeStats::default();
@@ -466,6 +540,13 @@ mod tests {
                 node: node(5),
                 after: Duration::from_millis(150),
             }),
+            HeardKind::Emcy(EmcyEvent::Emcy {
+                node: node(5),
+                code: 0x8130,
+                register: 0x11,
+                manufacturer: [0; 5],
+                text: "Life guard error or heartbeat error",
+            }),
         ] {
             five.record(&kind);
         }
@@ -479,7 +560,12 @@ mod tests {
             .unwrap();
         assert!(row.contains("STOPPED (lost)"), "{table}");
         assert!(row.contains("100.0 / 102.0 / 102.0"), "{table}");
-        assert!(row.trim_end().ends_with('1'), "one loss: {table}");
+        let columns: Vec<&str> = row.split_whitespace().collect();
+        assert_eq!(
+            columns[columns.len() - 2..],
+            ["1", "1"],
+            "one loss, one EMCY: {table}"
+        );
         assert!(summary_table(Duration::from_secs(1), &BTreeMap::new()).contains("no node sent"));
     }
 }

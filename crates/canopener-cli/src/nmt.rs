@@ -236,7 +236,7 @@ impl Confirmation {
                 old_heartbeats: old_heartbeats + 1,
                 last_heard: heard.at,
             },
-            HeardKind::Monitor(_) => return,
+            HeardKind::Monitor(_) | HeardKind::Emcy(_) => return,
         };
     }
 

@@ -133,7 +133,7 @@ fn nmt_commands_are_confirmed_by_heartbeats_and_boot_up() {
 }
 
 #[test]
-fn heartbeat_watch_sees_a_stop_and_a_lost_heartbeat() {
+fn heartbeat_watch_sees_an_emcy_a_stop_and_a_lost_heartbeat() {
     let (hub, dir, mut sim) = heartbeat_node_5("master-heartbeat");
     let spec = hub.spec("can0");
     let mut watch = Background::spawn(
@@ -153,6 +153,10 @@ fn heartbeat_watch_sees_a_stop_and_a_lost_heartbeat() {
     );
     // Long enough for the watch to learn the 100 ms period from its heartbeats.
     std::thread::sleep(Duration::from_millis(1000));
+    // An RPDO1 without its one mapped byte: the device answers with EMCY 8210h (CiA 301).
+    run_exiting(&spec, &["nmt", "start", "5"], 0);
+    run_exiting(&spec, &["bus", "send", "205#"], 0);
+    std::thread::sleep(Duration::from_millis(100));
     run_exiting(&spec, &["nmt", "stop", "5"], 0);
     std::thread::sleep(Duration::from_millis(700));
     sim.kill();
@@ -182,6 +186,12 @@ fn heartbeat_watch_sees_a_stop_and_a_lost_heartbeat() {
         .position(|e| e["event"] == "state" && e["to"] == "stopped")
         .unwrap();
     assert!(stopped < lost, "{lines:?}");
+    assert!(
+        lines
+            .iter()
+            .any(|e| e["event"] == "emcy" && e["node"] == 5 && e["code"] == "8210"),
+        "{lines:?}"
+    );
     let summary = lines.last().unwrap();
     assert_eq!(summary["event"], "summary", "{summary}");
     let node = &summary["nodes"][0];
