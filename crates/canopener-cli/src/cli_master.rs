@@ -414,6 +414,7 @@ pub(crate) enum HeartbeatCommand {
     #[command(after_help = "Examples:
   canopener heartbeat watch
   canopener heartbeat watch --consumer-time 300ms --duration 10s --format json
+  canopener heartbeat watch --guard 5 --guard-time 200ms --life-time-factor 3   # node guarding
 Exit status: 0 stopped by Ctrl-C or --duration, 6 a heartbeat was lost (with --fail-on-loss).")]
     Watch(HeartbeatWatchArgs),
 }
@@ -429,7 +430,17 @@ pub(crate) struct HeartbeatWatchArgs {
     /// Stop after this long.
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) duration: Option<Duration>,
-    /// Exit with status 6 when a heartbeat was lost.
+    /// Guard these nodes (node guarding, CiA 301: a remote frame every --guard-time, the answer's
+    /// toggle bit checked), e.g. 5 or 1-4; for devices without a heartbeat producer.
+    #[arg(long, value_name = "LIST")]
+    pub(crate) guard: Option<String>,
+    /// How often a guarded node is asked (100Ch on the device).
+    #[arg(long, default_value = "100ms", value_parser = parse_duration, value_name = "DURATION")]
+    pub(crate) guard_time: Duration,
+    /// A guarded node is lost after this many guard times without a correct answer (100Dh).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(1..), value_name = "N")]
+    pub(crate) life_time_factor: u8,
+    /// Exit with status 6 when a heartbeat (or a guarded node) was lost.
     #[arg(long)]
     pub(crate) fail_on_loss: bool,
     #[command(flatten)]

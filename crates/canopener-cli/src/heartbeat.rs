@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use canopener_can::{CanFrame, CanId, Instant};
 use canopener_master::emcy_consumer::{EmcyConsumer, EmcyEvent};
-use canopener_master::error_control::{ConsumerTime, MonitorEvent, NodeMonitor};
+use canopener_master::error_control::{ConsumerTime, GuardingConfig, MonitorEvent, NodeMonitor};
 use canopener_wire::{ERROR_CONTROL_BASE, NmtState, NodeId};
 use serde_json::json;
 
@@ -40,9 +40,33 @@ pub(crate) fn watch(args: HeartbeatWatchArgs) -> CliResult {
         .map(|text| parse_node_list(text, "--nodes", "canopener heartbeat watch --nodes 1-10,20"))
         .transpose()?
         .map(|nodes| nodes.into_iter().collect());
+    let guarded = args
+        .guard
+        .as_deref()
+        .map(|text| {
+            parse_node_list(
+                text,
+                "--guard",
+                "canopener heartbeat watch --guard 5 --guard-time 200ms",
+            )
+        })
+        .transpose()?
+        .unwrap_or_default();
+    let guarding = GuardingConfig {
+        guard_time: args.guard_time,
+        life_time_factor: args.life_time_factor,
+    };
     let mut link = Link::open(args.master.bus.spec.as_deref(), "heartbeat watch")?;
-    let mut core = HeartbeatCore::new(NodeMonitor::new(consumer));
+    let mut monitor = NodeMonitor::new(consumer);
     let started = link.now();
+    for node in guarded {
+        monitor.start_guarding(started, node, guarding).map_err(|err| {
+            CliError::Usage(format!(
+                "{err}; e.g. `canopener heartbeat watch --guard 5 --guard-time 200ms --life-time-factor 3`"
+            ))
+        })?;
+    }
+    let mut core = HeartbeatCore::new(monitor);
     let deadline = args.duration.map(|duration| started + duration);
     let format = args.master.format;
     let mut stats: BTreeMap<NodeId, NodeStats> = BTreeMap::new();
@@ -78,7 +102,7 @@ pub(crate) fn watch(args: HeartbeatWatchArgs) -> CliResult {
         .collect();
     if args.fail_on_loss && !lost.is_empty() {
         return Err(CliError::CheckFailed(format!(
-            "heartbeat lost: {}",
+            "heartbeat or guarding lost: {}",
             lost.join(", ")
         )));
     }
@@ -234,7 +258,9 @@ impl NodeStats {
             HeardKind::Heartbeat { .. } => self.heartbeats += 1,
             HeardKind::Monitor(MonitorEvent::BootUp { .. }) => self.boot_ups += 1,
             HeardKind::Monitor(MonitorEvent::Interval { period, .. }) => self.periods.push(period),
-            HeardKind::Monitor(MonitorEvent::HeartbeatLost { .. }) => self.losses += 1,
+            HeardKind::Monitor(MonitorEvent::HeartbeatLost { .. } | MonitorEvent::GuardingLost { .. }) => {
+                self.losses += 1;
+            }
             HeardKind::Monitor(_) => {}
             HeardKind::Emcy(_) => self.emcys += 1,
         }

@@ -132,25 +132,76 @@ fn nmt_commands_are_confirmed_by_heartbeats_and_boot_up() {
     assert!(message.contains("1017"), "{message}");
 }
 
+/// `heartbeat watch ARGS --format json --fail-on-loss` on the hub bus `spec`, in the background.
+fn heartbeat_watch(dir: &Path, spec: &str, args: &[&str]) -> Background {
+    let mut all = vec!["heartbeat", "watch"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--format", "json", "--fail-on-loss", "--bus", spec]);
+    Background::spawn(dir, "watch", &all)
+}
+
+#[test]
+fn heartbeat_watch_guards_a_node_without_heartbeat_and_sees_it_lost() {
+    let hub = HubProc::start();
+    let dir = temp_dir("master-guarding");
+    let mut bus = client(&hub);
+    let eds = base_eds();
+    // base.eds produces no heartbeat (1017h = 0): node guarding is how a master watches it.
+    let mut sim = Background::sim(&hub, &dir, "sim", &[eds.to_str().unwrap(), "--node-id", "5"]);
+    assert_eq!(expect_frame(&mut *bus, "705#", &|| sim.report()), "705#00");
+    let spec = hub.spec("can0");
+    let mut watch = heartbeat_watch(
+        &dir,
+        &spec,
+        &[
+            "--guard",
+            "5",
+            "--guard-time",
+            "100ms",
+            "--life-time-factor",
+            "3",
+            "--duration",
+            "2500ms",
+        ],
+    );
+    // The device answers every remote frame on 705h with its state and an alternating toggle bit.
+    // (A guarding request is a remote frame with DLC 1, CiA 301.)
+    assert_eq!(expect_frame(&mut *bus, "705#R", &|| watch.report()), "705#R1");
+    let answer = loop {
+        let frame = expect_frame(&mut *bus, "705#", &|| watch.report());
+        if !frame.starts_with("705#R") {
+            break frame;
+        }
+    };
+    assert!(answer == "705#7F" || answer == "705#FF", "{answer}");
+    std::thread::sleep(Duration::from_millis(1200));
+    sim.kill();
+    assert_eq!(watch.wait(WAIT).code(), Some(6), "{}", watch.report());
+    let lines = json_lines(&watch.stdout());
+    assert!(
+        lines
+            .iter()
+            .any(|e| e["event"] == "guarding_lost" && e["node"] == 5),
+        "{lines:?}"
+    );
+    assert!(
+        !lines.iter().any(|e| e["event"] == "toggle_error"),
+        "a correct device never breaks the toggle: {lines:?}"
+    );
+    let summary = lines.last().expect("summary");
+    assert_eq!(summary["nodes"][0]["losses"], 1, "{summary}");
+    assert!(
+        watch.stderr().contains("heartbeat or guarding lost: node 5"),
+        "{}",
+        watch.report()
+    );
+}
+
 #[test]
 fn heartbeat_watch_sees_an_emcy_a_stop_and_a_lost_heartbeat() {
     let (hub, dir, mut sim) = heartbeat_node_5("master-heartbeat");
     let spec = hub.spec("can0");
-    let mut watch = Background::spawn(
-        &dir,
-        "watch",
-        &[
-            "heartbeat",
-            "watch",
-            "--duration",
-            "4s",
-            "--format",
-            "json",
-            "--fail-on-loss",
-            "--bus",
-            &spec,
-        ],
-    );
+    let mut watch = heartbeat_watch(&dir, &spec, &["--duration", "4s"]);
     // Long enough for the watch to learn the 100 ms period from its heartbeats.
     std::thread::sleep(Duration::from_millis(1000));
     // An RPDO1 without its one mapped byte: the device answers with EMCY 8210h (CiA 301).
@@ -166,7 +217,7 @@ fn heartbeat_watch_sees_an_emcy_a_stop_and_a_lost_heartbeat() {
         "a loss with --fail-on-loss exits 6"
     );
     assert!(
-        watch.stderr().contains("heartbeat lost: node 5"),
+        watch.stderr().contains("heartbeat or guarding lost: node 5"),
         "{}",
         watch.stderr()
     );
