@@ -16,17 +16,18 @@ CANOPENER_CORPUS overrides it. Results: bench-results/eds_load.md and bench-resu
 
 import gc
 import json
-import locale
 import logging
 import math
 import os
-import platform
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import machine  # noqa: E402  (shared with the other bench scripts)
 
 import canopen
 from canopen.objectdictionary import ODArray, ODRecord
@@ -203,20 +204,6 @@ def linearity(rows):
             result[tool] = {"slope": overall, "slope_largest_two": last, "verdict": verdict(overall, last),
                             "ns_per_entry_spread": max(per_entry) / min(per_entry)}
     return result
-
-
-def machine():
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as info:
-            cpu = next((line.split(":", 1)[1].strip() for line in info if line.startswith("model name")), cpu)
-    except OSError:
-        pass
-    rustc = subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip()
-    return {"cpu": cpu, "cores": os.cpu_count(), "load_average_1min": os.getloadavg()[0],
-            "kernel": platform.release(), "python": platform.python_version(),
-            "canopen": canopen.__version__, "python_file_encoding": locale.getpreferredencoding(False),
-            "rustc": rustc, "date": time.strftime("%Y-%m-%d %H:%M")}
 
 
 def fmt_time(micros):

@@ -19,7 +19,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from run import BIN, ROOT, Hub, machine  # noqa: E402  (shared bench plumbing)
+from common import machine  # noqa: E402  (shared bench plumbing)
+from run import BIN, ROOT, Hub  # noqa: E402
 
 EDS = ROOT / "crates/canopener-check/test_data/checks/base.eds"
 QUICK = "--quick" in sys.argv

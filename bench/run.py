@@ -6,13 +6,15 @@ Each figure is the median of RUNS runs unless the table says otherwise. Results:
 
 import json
 import os
-import platform
 import socket
 import statistics
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import machine  # noqa: E402  (shared with the other bench scripts)
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = ROOT / "target/release/canopener"
@@ -143,22 +145,6 @@ def with_hub(kind, fn):
         return fn(hub)
     finally:
         hub.close()
-
-
-def machine():
-    cpu = "unknown"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import can, canopen as co
-    return {"cpu": cpu, "cores": os.cpu_count(), "kernel": platform.release(), "python": platform.python_version(),
-            "python_can": can.__version__, "canopen": co.__version__,
-            "rustc": subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip(),
-            "date": time.strftime("%Y-%m-%d %H:%M")}
 
 
 def main():

@@ -27,7 +27,6 @@ Results: bench-results/sdo_client.json and bench-results/sdo_client.md.
 
 import json
 import os
-import platform
 import statistics
 import struct
 import subprocess
@@ -35,6 +34,9 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import corpus_eds, machine  # noqa: E402  (shared with the other bench scripts)
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = ROOT / "target/release/canopener"
@@ -174,33 +176,6 @@ def python_client(host, port, channel, node_id, eds, kind, rounds, first_round):
 
 
 # --- the driver ---------------------------------------------------------------------------------------------------
-
-def corpus_eds():
-    root = os.environ.get("CANOPENER_CORPUS")
-    path = (Path(root) if root else ROOT.parent / "shared/corpus") / "eds/samsamfire__gocanopen__pkg__od__base.eds"
-    if not path.is_file():
-        sys.exit(f"sdo_client.py: {path} not found; set CANOPENER_CORPUS to the corpus root "
-                 "(the directory holding eds/)")
-    return path
-
-
-def machine():
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as cpuinfo:
-            for line in cpuinfo:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    import can
-    import canopen
-    return {"cpu": cpu, "cores": os.cpu_count(), "kernel": platform.release(), "python": platform.python_version(),
-            "python_can": can.__version__, "canopen": canopen.__version__,
-            "rustc": subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip(),
-            "load_average_before": round(os.getloadavg()[0], 2), "date": time.strftime("%Y-%m-%d %H:%M")}
-
 
 def build_example():
     cmd = ["cargo", "build", "--release", "--locked", "-p", "canopener-master", "--example", "sdo_throughput"]
@@ -480,7 +455,7 @@ def hub_markdown(report):
 def markdown(report):
     m = report["machine"]
     lines = [f"One run of `bench/sdo_client.py` on {m['date']}: {m['cpu']}, {m['cores']} cores, load average "
-             f"{m['load_average_before']} before and {m['load_average_after']} after the run; python {m['python']}, "
+             f"{m['load_average_1min']} before and {m['load_average_after']} after the run; python {m['python']}, "
              f"python-can {m['python_can']}, canopen {m['canopen']}; {m['rustc']}.", ""]
     lines += virtual_markdown(report["virtual"])
     lines += [""] + hub_markdown(report)
@@ -491,7 +466,7 @@ def main():
     if len(sys.argv) > 1 and sys.argv[1] == "client":
         host, port, channel, node_id, eds, kind, rounds, first_round = sys.argv[2:10]
         return python_client(host, int(port), channel, int(node_id, 0), eds, kind, int(rounds), int(first_round))
-    eds = str(corpus_eds())
+    eds = str(corpus_eds("samsamfire__gocanopen__pkg__od__base.eds", "sdo_client.py"))
     if not BIN.is_file():
         sys.exit(f"sdo_client.py: {BIN} is missing; run `cargo build --release -p canopener-cli` (bench/run.sh does)")
     build_example()

@@ -26,7 +26,6 @@ Results: bench-results/sdo_server.json and bench-results/sdo_server.md.
 
 import json
 import os
-import platform
 import re
 import statistics
 import subprocess
@@ -34,6 +33,9 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import corpus_eds, machine  # noqa: E402  (shared with the other bench scripts)
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = ROOT / "target/release/canopener"
@@ -77,33 +79,6 @@ BITRATE = 1_000_000
 
 def log(text):
     print(text, file=sys.stderr, flush=True)
-
-
-def corpus_eds():
-    root = os.environ.get("CANOPENER_CORPUS")
-    path = (Path(root) if root else ROOT.parent / "shared/corpus") / "eds/samsamfire__gocanopen__pkg__od__base.eds"
-    if not path.is_file():
-        sys.exit(f"sdo_server.py: {path} not found; set CANOPENER_CORPUS to the corpus root "
-                 "(the directory holding eds/)")
-    return path
-
-
-def machine():
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as cpuinfo:
-            for line in cpuinfo:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    import can
-    import canopen
-    return {"cpu": cpu, "cores": os.cpu_count(), "kernel": platform.release(), "python": platform.python_version(),
-            "python_can": can.__version__, "canopen": canopen.__version__,
-            "rustc": subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip(),
-            "load_average_before": round(os.getloadavg()[0], 2), "date": time.strftime("%Y-%m-%d %H:%M")}
 
 
 # --- 1. the protocol core under criterion -------------------------------------------------------------------------
@@ -307,7 +282,7 @@ def cell(runs, server, kind, key, digits, unit=""):
 def markdown(report):
     m = report["machine"]
     lines = [f"One run of `bench/sdo_server.py` on {m['date']}: {m['cpu']}, {m['cores']} cores, load average "
-             f"{m['load_average_before']} before and {m['load_average_after']} after the run; python {m['python']}, "
+             f"{m['load_average_1min']} before and {m['load_average_after']} after the run; python {m['python']}, "
              f"python-can {m['python_can']}, canopen {m['canopen']}; {m['rustc']}. EDS: gocanopen's `base.eds` "
              f"(corpus), node {NODE_ID:#04x}."]
     criterion = report.get("criterion", {})
@@ -401,7 +376,7 @@ def markdown(report):
 
 
 def main():
-    eds = str(corpus_eds())
+    eds = str(corpus_eds("samsamfire__gocanopen__pkg__od__base.eds", "sdo_server.py"))
     if not BIN.is_file():
         sys.exit(f"sdo_server.py: {BIN} is missing; run `cargo build --release -p canopener-cli` (bench/run.sh does)")
     report = {"machine": machine(), "runs_per_figure": RUNS, "node_id": NODE_ID, "eds": eds,
