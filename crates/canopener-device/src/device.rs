@@ -340,8 +340,8 @@ impl Device {
         Ok(self)
     }
 
-    /// Uses `storage` for LSS store configuration (CiA 305) instead of the in-memory one, which keeps
-    /// the stored node-ID and bit rate for as long as the `Device` lives ([`Device::lss_stored`]).
+    /// Uses `storage` for LSS store configuration (CiA 305) instead of the in-memory one, which
+    /// accepts the store and keeps the node-ID and bit rate for as long as the `Device` lives.
     pub fn with_lss_storage(mut self, storage: Box<dyn LssStorage>) -> Device {
         self.lss_storage = storage;
         self

@@ -4,11 +4,11 @@
 //! Each [`Fault`] is a small, explicit deviation applied by the `Device` around its cores, never
 //! inside them: the cores stay correct, and a device without faults behaves exactly as before.
 //! A fault acts at one of four places:
-//! - **on received frames**, before any core sees them ([`FaultLayer::inbound`]): a frame is
+//! - **on received frames**, before any core sees them (`FaultLayer::inbound`): a frame is
 //!   dropped (NMT stop, NMT broadcast, LSS, TPDO remote requests) or rewritten (the SDO toggle bit
 //!   is forced to what the server expects);
 //! - **on sent frames**, after the cores made them and before they leave the device
-//!   ([`FaultLayer::outbound`]): a frame is dropped (boot-up, EMCY), rewritten (heartbeat state,
+//!   (`FaultLayer::outbound`): a frame is dropped (boot-up, EMCY), rewritten (heartbeat state,
 //!   abort code, expedited size bit, SYNC counter, block CRC, boot-up CAN-ID) or delayed and
 //!   duplicated on virtual time (slow SDO, heartbeat jitter, extra heartbeats 1 ms apart);
 //! - **in the `Device`'s own checks** on SDO downloads: a download a correct device refuses

@@ -1,7 +1,7 @@
 //! The object dictionary model of an EDS or DCF file (CiA 306 §4–§6).
 //!
 //! Every value is kept as the text written in the file (trimmed), so nothing is lost and the file can
-//! be rewritten faithfully; typed views ([`Attributes::data_type`], [`Object::default_value`], ...)
+//! be rewritten faithfully; typed views ([`Attributes::data_type`], [`Eds::default_value`], ...)
 //! interpret that text on demand. Keys canopener does not know are kept in `extra`, sections it does
 //! not know in [`Eds::other_sections`].
 
