@@ -198,6 +198,7 @@ pub(crate) enum NodeCommand {
     /// Read every readable object an EDS lists from a device into a DCF.
     #[command(after_help = "Examples:
   canopener node dump --node 5 --eds device.eds -o node5.dcf
+  canopener node dump --node 5 --eds device.eds --bitrate 250 -o node5.dcf   # Baudrate=250 in the DCF
   canopener eds diff device.eds node5.dcf              # what the device holds that the EDS does not say")]
     Dump(NodeDumpArgs),
 }
@@ -238,8 +239,24 @@ pub(crate) struct NodeDumpArgs {
     /// Replace an existing output file (a .bak copy is kept).
     #[arg(long)]
     pub(crate) force: bool,
+    /// The bus bit rate in kbit/s, for the DCF's Baudrate (the bus link does not tell it; without this
+    /// option a DCF template's value is kept, else 0 "unknown").
+    #[arg(long, value_name = "KBIT", value_parser = parse_cia_bitrate)]
+    pub(crate) bitrate: Option<u16>,
     #[command(flatten)]
     pub(crate) master: MasterArgs,
+}
+
+/// A CiA 301 bit rate in kbit/s (the rates of the CiA 305 bit timing table).
+fn parse_cia_bitrate(text: &str) -> Result<u16, String> {
+    const RATES: [u16; 8] = [10, 20, 50, 125, 250, 500, 800, 1000];
+    text.trim()
+        .parse()
+        .ok()
+        .filter(|rate| RATES.contains(rate))
+        .ok_or_else(|| {
+            format!("'{text}' is not a CANopen bit rate in kbit/s; use one of {RATES:?}, e.g. --bitrate 250")
+        })
 }
 
 #[derive(Debug, Subcommand)]

@@ -137,7 +137,14 @@ pub(crate) fn run(args: NodeDumpArgs) -> CliResult {
         }
     }
     let node_name = node_name(&readings, &plan, &input.eds, args.target.node);
-    commission(&mut dcf, args.target.node, &node_name, &readings, &plan);
+    commission(
+        &mut dcf,
+        args.target.node,
+        &node_name,
+        args.bitrate,
+        &readings,
+        &plan,
+    );
     describe_file(
         &mut dcf,
         &input.eds,
@@ -568,13 +575,23 @@ fn node_name(readings: &[Reading], plan: &[Planned], eds: &Eds, node: u8) -> Str
         .unwrap_or_else(|| format!("node {node}"))
 }
 
-/// `[DeviceComissioning]` (CiA 306 §5.3.1): NodeID and NodeName; Baudrate kept from a DCF template or
-/// 0 ("not known": the bus link does not tell the bit rate); LSS_SerialNumber from 1018h sub 4.
-fn commission(dcf: &mut Eds, node: u8, name: &str, readings: &[Reading], plan: &[Planned]) {
+/// `[DeviceComissioning]` (CiA 306 §5.3.1): NodeID and NodeName; Baudrate from `--bitrate`, else kept
+/// from a DCF template, else 0 ("not known": the bus link does not tell the bit rate); LSS_SerialNumber
+/// from 1018h sub 4.
+fn commission(
+    dcf: &mut Eds,
+    node: u8,
+    name: &str,
+    bitrate: Option<u16>,
+    readings: &[Reading],
+    plan: &[Planned],
+) {
     let mut commissioning = dcf.commissioning.take().unwrap_or_default();
     commissioning.node_id = Some(node.to_string());
     commissioning.node_name = Some(name.to_owned());
-    if commissioning
+    if let Some(kbit) = bitrate {
+        commissioning.baudrate = Some(kbit.to_string());
+    } else if commissioning
         .baudrate
         .as_deref()
         .is_none_or(|b| b.trim().is_empty())
@@ -901,7 +918,7 @@ mod tests {
         set_value(&mut dcf, &plan[5], "0x9".to_owned());
         let mut readings = vec![Reading::Value(vec![0x91, 0x01, 0x0F, 0])];
         readings.extend((1..plan.len()).map(|_| Reading::Skipped));
-        commission(&mut dcf, 5, "Dev", &readings, &plan);
+        commission(&mut dcf, 5, "Dev", None, &readings, &plan);
         describe_file(&mut dcf, &eds, Path::new("dev.eds"), None, 5, UNIX_EPOCH);
         let loaded = canopener_eds::load(EDS.as_bytes());
         let document = canopener_eds::write::write_lossless(&loaded.document, &dcf);
@@ -960,5 +977,17 @@ mod tests {
             sidecar_path(Path::new("out/node5.dcf"), 0x1F50, 1),
             Path::new("out/node5_1F50sub1.bin")
         );
+    }
+
+    #[test]
+    fn the_bitrate_option_sets_the_dcf_baudrate_else_it_is_unknown() {
+        let mut dcf = canopener_eds::load(EDS.as_bytes()).eds;
+        commission(&mut dcf, 5, "Dev", Some(250), &[], &[]);
+        let baudrate = dcf.commissioning.as_ref().and_then(|c| c.baudrate.clone());
+        assert_eq!(baudrate.as_deref(), Some("250"));
+        let mut dcf = canopener_eds::load(EDS.as_bytes()).eds;
+        commission(&mut dcf, 5, "Dev", None, &[], &[]);
+        let baudrate = dcf.commissioning.as_ref().and_then(|c| c.baudrate.clone());
+        assert_eq!(baudrate.as_deref(), Some("0"));
     }
 }
