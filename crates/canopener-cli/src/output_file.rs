@@ -8,10 +8,21 @@ use std::path::{Path, PathBuf};
 use crate::error::{CliError, CliResult};
 
 /// Writes `bytes` to `path` atomically. With `backup`, an existing `path` is first copied to `path.bak`.
+///
+/// A `path` that exists and is no regular file (`/dev/null`, `/dev/stdout`, a FIFO) is written in place:
+/// renaming a temporary file over it would replace the device with a plain file, and nothing of it can be
+/// lost or half-written the way a regular file can.
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8], backup: bool) -> CliResult {
     let trouble = |what: &str, target: &Path, e: std::io::Error| {
         CliError::EdsTrouble(format!("cannot {what} {}: {e}", target.display()))
     };
+    if fs::metadata(path).is_ok_and(|meta| !meta.is_file() && !meta.is_dir()) {
+        let mut file = fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| trouble("open", path, e))?;
+        return file.write_all(bytes).map_err(|e| trouble("write", path, e));
+    }
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
@@ -55,6 +66,16 @@ pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[cfg(unix)]
+    #[test]
+    fn a_device_file_is_written_in_place_not_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        write_atomic(Path::new("/dev/null"), b"discarded", false).unwrap();
+        let meta = fs::metadata("/dev/null").unwrap();
+        assert!(meta.file_type().is_char_device(), "/dev/null must stay a device");
+        assert_eq!(meta.len(), 0);
+    }
 
     #[test]
     fn writes_atomically_and_keeps_a_backup() {
