@@ -3,6 +3,7 @@
 import locale
 import os
 import platform
+import statistics
 import subprocess
 import sys
 import time
@@ -35,3 +36,21 @@ def corpus_eds(name, script):
     if not path.is_file():
         sys.exit(f"{script}: {path} not found; set CANOPENER_CORPUS to the corpus root (the directory holding eds/)")
     return path
+
+
+def transfer_stats(raw, expedited, large_bytes):
+    """Median, p99 and fastest time of one kind of SDO transfer, plus transfers/s (expedited) or kB/s (the
+    `large_bytes` of a segmented or block transfer over its median time). `raw` holds ok, failed, error and
+    the verified transfers' `times_s`."""
+    times = sorted(raw["times_s"])
+    entry = {"ok": raw["ok"], "failed": raw["failed"], "error": raw["error"]}
+    if times:
+        median = statistics.median(times)
+        entry["median_ms"] = median * 1e3
+        entry["p99_ms"] = times[int(0.99 * (len(times) - 1))] * 1e3
+        entry["min_ms"] = times[0] * 1e3
+        if expedited:
+            entry["transfers_per_s"] = len(times) / sum(times)
+        else:
+            entry["kB_per_s"] = large_bytes / median / 1e3
+    return entry

@@ -36,7 +36,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import corpus_eds, machine  # noqa: E402  (shared with the other bench scripts)
+from common import corpus_eds, machine, transfer_stats  # noqa: E402  (shared with the other bench scripts)
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = ROOT / "target/release/canopener"
@@ -295,18 +295,7 @@ def merge(results, kind, chunk):
 
 
 def summarize(kind, raw):
-    times = sorted(raw["times_s"])
-    entry = {"ok": raw["ok"], "failed": raw["failed"], "error": raw["error"]}
-    if times:
-        median = statistics.median(times)
-        entry["median_ms"] = median * 1e3
-        entry["p99_ms"] = times[int(0.99 * (len(times) - 1))] * 1e3
-        entry["min_ms"] = times[0] * 1e3
-        if kind in EXPEDITED:
-            entry["transfers_per_s"] = len(times) / sum(times)
-        else:
-            entry["kB_per_s"] = LARGE / median / 1e3
-    return entry
+    return transfer_stats(raw, kind in EXPEDITED, LARGE)
 
 
 def spread(runs, client, kind, key):

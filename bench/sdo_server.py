@@ -35,7 +35,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import corpus_eds, machine  # noqa: E402  (shared with the other bench scripts)
+from common import corpus_eds, machine, transfer_stats  # noqa: E402  (shared with the other bench scripts)
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = ROOT / "target/release/canopener"
@@ -196,21 +196,7 @@ def one_run(eds, order, socket_mode="tune"):
 
 
 def summarize(results):
-    out = {}
-    for kind, result in results.items():
-        times = sorted(result["times_s"])
-        entry = {"ok": result["ok"], "failed": result["failed"], "error": result["error"]}
-        if times:
-            median = statistics.median(times)
-            entry["median_ms"] = median * 1e3
-            entry["p99_ms"] = times[int(0.99 * (len(times) - 1))] * 1e3
-            entry["min_ms"] = times[0] * 1e3
-            if kind in EXPEDITED:
-                entry["transfers_per_s"] = len(times) / sum(times)
-            else:
-                entry["kB_per_s"] = LARGE / median / 1e3
-        out[kind] = entry
-    return out
+    return {kind: transfer_stats(result, kind in EXPEDITED, LARGE) for kind, result in results.items()}
 
 
 def spread(runs, server, kind, key):
