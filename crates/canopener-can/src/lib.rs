@@ -21,6 +21,8 @@ mod id;
 #[cfg(any(test, feature = "_proptest"))]
 pub mod strategy;
 mod time;
+#[cfg(any(test, feature = "_trace"))]
+pub mod trace;
 
 pub use bitrate::{Bitrate, BitrateError};
 pub use frame::{CanFrame, FrameError, MAX_CLASSIC_DATA_LEN};

@@ -295,21 +295,9 @@ impl NmtSlave {
 /// Virtual-time frame traces shared by the tests of this crate's error-control and EMCY cores.
 #[cfg(test)]
 pub(crate) mod trace {
-    use std::fmt::Debug;
-    use std::time::Duration;
+    pub(crate) use canopener_can::trace::{Core, Trace, frame, ms};
 
-    use canopener_can::candump::parse_compact_frame;
-    use canopener_can::{CanFrame, Instant};
-
-    /// The sans-IO surface every core offers.
-    pub(crate) trait Core {
-        type Event: Debug;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame);
-        fn handle_timeout(&mut self, now: Instant);
-        fn poll_transmit(&mut self) -> Option<CanFrame>;
-        fn poll_event(&mut self) -> Option<Self::Event>;
-        fn poll_timeout(&self) -> Option<Instant>;
-    }
+    use canopener_can::CanFrame;
 
     /// Any classical frame with an 11-bit identifier, weighted towards the CANopen services.
     pub(crate) fn any_frame() -> impl proptest::strategy::Strategy<Value = CanFrame> {
@@ -323,102 +311,6 @@ pub(crate) mod trace {
                 CanFrame::new(id, &data).expect("<= 8 bytes")
             }
         })
-    }
-
-    /// A frame from compact candump text, e.g. `"000#0105"` or `"705#R"`.
-    pub(crate) fn frame(text: &str) -> CanFrame {
-        parse_compact_frame(text).expect("test frame")
-    }
-
-    /// `ms` milliseconds after the virtual epoch.
-    pub(crate) fn ms(ms: u64) -> Instant {
-        Instant::from_millis(ms)
-    }
-
-    /// Drives a core on virtual time and records what it sends as `"<ms>.<µs> <frame>"` lines.
-    pub(crate) struct Trace<C: Core> {
-        pub(crate) core: C,
-        pub(crate) now: Instant,
-        out: Vec<String>,
-        events: Vec<String>,
-    }
-
-    fn stamp(now: Instant, frame: &CanFrame) -> String {
-        let micros = now.as_micros();
-        format!("{}.{:03} {frame}", micros / 1000, micros % 1000)
-    }
-
-    impl<C: Core> Trace<C> {
-        pub(crate) fn new(core: C) -> Self {
-            Trace {
-                core,
-                now: Instant::ZERO,
-                out: Vec::new(),
-                events: Vec::new(),
-            }
-        }
-
-        fn drain(&mut self) {
-            while let Some(frame) = self.core.poll_transmit() {
-                self.out.push(stamp(self.now, &frame));
-            }
-            while let Some(event) = self.core.poll_event() {
-                let micros = self.now.as_micros();
-                self.events
-                    .push(format!("{}.{:03} {event:?}", micros / 1000, micros % 1000));
-            }
-        }
-
-        /// Runs the next timer `late` after it was due, as a driver woken by a coarse OS timer
-        /// would, and returns when that was.
-        pub(crate) fn wake_late(&mut self, late: Duration) -> Instant {
-            self.drain();
-            let due = self.core.poll_timeout().expect("a timer is armed");
-            self.now = due + late;
-            self.core.handle_timeout(self.now);
-            self.drain();
-            self.now
-        }
-
-        /// Runs every timer due up to and including `until`, then sets the clock to `until`.
-        pub(crate) fn advance(&mut self, until: Instant) {
-            self.drain();
-            while let Some(due) = self.core.poll_timeout() {
-                if due > until {
-                    break;
-                }
-                assert!(due >= self.now, "timer in the past: {due:?} < {:?}", self.now);
-                self.now = due;
-                self.core.handle_timeout(due);
-                self.drain();
-            }
-            self.now = until;
-        }
-
-        /// Advances to `at`, then feeds `text` as a received frame.
-        pub(crate) fn rx(&mut self, at: Instant, text: &str) {
-            self.advance(at);
-            self.core.handle_frame(at, &frame(text));
-            self.drain();
-        }
-
-        /// Advances by `delta` from the current time.
-        pub(crate) fn wait(&mut self, delta: Duration) {
-            let until = self.now + delta;
-            self.advance(until);
-        }
-
-        /// Takes the frames sent so far.
-        pub(crate) fn sent(&mut self) -> Vec<String> {
-            self.drain();
-            std::mem::take(&mut self.out)
-        }
-
-        /// Takes the events reported so far.
-        pub(crate) fn events(&mut self) -> Vec<String> {
-            self.drain();
-            std::mem::take(&mut self.events)
-        }
     }
 }
 

@@ -234,103 +234,10 @@ impl NmtMaster {
     }
 }
 
-/// A small virtual-time driver for the unit tests of the cores of this crate: it records sent
-/// frames as `"<ms>.<µs> <frame>"` and events as `"<ms>.<µs> <event:?>"`.
+/// The virtual-time trace harness of this crate's unit tests (`canopener_can::trace`).
 #[cfg(test)]
 pub(crate) mod trace {
-    use std::time::Duration;
-
-    use canopener_can::candump::parse_compact_frame;
-    use canopener_can::{CanFrame, Instant};
-
-    /// The sans-IO surface every core shares.
-    pub(crate) trait Core {
-        type Event: std::fmt::Debug;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame);
-        fn handle_timeout(&mut self, now: Instant);
-        fn poll_transmit(&mut self) -> Option<CanFrame>;
-        fn poll_event(&mut self) -> Option<Self::Event>;
-        fn poll_timeout(&self) -> Option<Instant>;
-    }
-
-    /// `ms` milliseconds after the virtual epoch.
-    pub(crate) fn ms(ms: u64) -> Instant {
-        Instant::from_millis(ms)
-    }
-
-    fn stamp(now: Instant) -> String {
-        let micros = now.as_micros();
-        format!("{}.{:03}", micros / 1000, micros % 1000)
-    }
-
-    /// Drives one core on virtual time.
-    pub(crate) struct Trace<C: Core> {
-        pub(crate) core: C,
-        pub(crate) now: Instant,
-        out: Vec<String>,
-        events: Vec<String>,
-    }
-
-    impl<C: Core> Trace<C> {
-        pub(crate) fn new(core: C) -> Self {
-            Trace {
-                core,
-                now: Instant::ZERO,
-                out: Vec::new(),
-                events: Vec::new(),
-            }
-        }
-
-        fn drain(&mut self) {
-            while let Some(frame) = self.core.poll_transmit() {
-                self.out.push(format!("{} {frame}", stamp(self.now)));
-            }
-            while let Some(event) = self.core.poll_event() {
-                self.events.push(format!("{} {event:?}", stamp(self.now)));
-            }
-        }
-
-        /// Runs every timer due up to and including `until`, then sets the clock to `until`.
-        pub(crate) fn advance(&mut self, until: Instant) {
-            self.drain();
-            while let Some(due) = self.core.poll_timeout() {
-                if due > until {
-                    break;
-                }
-                assert!(due >= self.now, "timer in the past: {due:?} < {:?}", self.now);
-                self.now = due;
-                self.core.handle_timeout(due);
-                self.drain();
-            }
-            self.now = until;
-        }
-
-        /// Advances by `delta`.
-        pub(crate) fn wait(&mut self, delta: Duration) {
-            let until = self.now + delta;
-            self.advance(until);
-        }
-
-        /// Advances to `at`, then feeds `text` (compact candump, e.g. `705#05` or `705#R1`).
-        pub(crate) fn rx(&mut self, at: Instant, text: &str) {
-            self.advance(at);
-            let frame = parse_compact_frame(text).expect("test frame");
-            self.core.handle_frame(at, &frame);
-            self.drain();
-        }
-
-        /// Takes the frames sent so far.
-        pub(crate) fn sent(&mut self) -> Vec<String> {
-            self.drain();
-            std::mem::take(&mut self.out)
-        }
-
-        /// Takes the events reported so far.
-        pub(crate) fn events(&mut self) -> Vec<String> {
-            self.drain();
-            std::mem::take(&mut self.events)
-        }
-    }
+    pub(crate) use canopener_can::trace::{Core, Trace, ms};
 }
 
 #[cfg(test)]
