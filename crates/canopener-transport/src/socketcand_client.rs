@@ -289,6 +289,37 @@ impl SocketcandBus {
     }
 }
 
+/// How long closing waits for the server to close its side after ours (our hub answers a
+/// half-close at once; a server that does not is waited for no longer than this).
+const CLOSE_LINGER: Duration = Duration::from_millis(200);
+
+impl Drop for SocketcandBus {
+    /// Closes gracefully. A socket closed while the server's traffic still sits unread in its
+    /// receive buffer makes the kernel reset the connection and throw away what was not delivered
+    /// yet: the last frames a one-shot command sent (an NMT command, `bus send`) could be lost.
+    /// So: half-close (the server gets everything we sent, then end of stream), and read until the
+    /// server closes too, for at most [`CLOSE_LINGER`].
+    fn drop(&mut self) {
+        if self.write_out().is_err() || self.stream.shutdown(std::net::Shutdown::Write).is_err() {
+            return;
+        }
+        let _ = self.stream.set_nonblocking(false);
+        let deadline = std::time::Instant::now() + CLOSE_LINGER;
+        let mut sink = [0u8; 4096];
+        while let Some(left) = deadline.checked_duration_since(std::time::Instant::now()) {
+            if left.is_zero() || self.stream.set_read_timeout(Some(left)).is_err() {
+                break;
+            }
+            match self.stream.read(&mut sink) {
+                Ok(0) => break,
+                Ok(_) => {}
+                Err(err) if err.kind() == io::ErrorKind::Interrupted => {}
+                Err(_) => break,
+            }
+        }
+    }
+}
+
 impl CanBus for SocketcandBus {
     fn send(&mut self, frame: &CanFrame) -> Result<(), TransportError> {
         self.out.clear();

@@ -123,3 +123,43 @@ fn hub_shutdown_is_reported_not_a_hang() {
         "{err}"
     );
 }
+
+#[test]
+fn frames_sent_just_before_closing_arrive_although_traffic_was_left_unread() {
+    // A small queue and a long stall timeout: while the watcher does not read, the hub holds the
+    // sender back, so the one-shot client's last frames are still in its socket when it closes.
+    let mut config = HubConfig::new("127.0.0.1:0".parse().unwrap());
+    config.client_queue = 64;
+    config.stall_timeout = Duration::from_secs(30);
+    let hub = canopener_hub::spawn(config).unwrap();
+    let mut watcher = connect(&hub, "can0");
+    let mut one_shot = connect(&hub, "can0");
+    let mut chatter = connect(&hub, "can0");
+    // Traffic the one-shot client never reads sits in its receive buffer when it closes.
+    for _ in 0..50 {
+        chatter
+            .send(&CanFrame::new(sid(0x700), &[0x05]).unwrap())
+            .unwrap();
+    }
+    thread::sleep(Duration::from_millis(100));
+    const COUNT: u16 = 2000;
+    let sender = thread::spawn(move || {
+        for n in 0..COUNT {
+            one_shot
+                .send(&CanFrame::new(sid(0x100), &n.to_le_bytes()).unwrap())
+                .unwrap();
+        }
+        // Closing must still deliver every frame it sent.
+        drop(one_shot);
+    });
+    thread::sleep(Duration::from_millis(300));
+    let mut next = 0u16;
+    while next < COUNT {
+        let frame = recv_frame(&mut *watcher);
+        if frame.id() == sid(0x100) {
+            assert_eq!(frame.data(), next.to_le_bytes(), "frames in order, none lost");
+            next += 1;
+        }
+    }
+    sender.join().unwrap();
+}
