@@ -167,13 +167,22 @@ fn good_clients_get_every_frame_in_order_while_others_misbehave() {
     let mut b = TestClient::connect(addr, "can0");
     let mut a_out = a.sender();
     let mut b_out = b.sender();
-    let a_sending = thread::spawn(move || send_all(&mut a_out, (0..COUNT).map(|i| numbered(GOOD_A, i))));
-    let b_sending = thread::spawn(move || send_all(&mut b_out, (0..COUNT).map(|i| numbered(GOOD_B, i))));
-    let a_reading = thread::spawn(move || read_from(&mut a, GOOD_B, COUNT as usize));
+    // Every handle on A's socket is handed back and kept open until B has read all of A's frames:
+    // closing a socket whose receive buffer still holds unread flood traffic makes the kernel send a
+    // reset and discard what A had not sent yet, which is the test losing frames, not the hub.
+    let a_sending = thread::spawn(move || {
+        send_all(&mut a_out, (0..COUNT).map(|i| numbered(GOOD_A, i)));
+        a_out
+    });
+    let b_sending = thread::spawn(move || {
+        send_all(&mut b_out, (0..COUNT).map(|i| numbered(GOOD_B, i)));
+        b_out
+    });
+    let a_reading = thread::spawn(move || (read_from(&mut a, GOOD_B, COUNT as usize), a));
     let b_got = read_from(&mut b, GOOD_A, COUNT as usize);
-    let a_got = a_reading.join().unwrap();
-    a_sending.join().unwrap();
-    b_sending.join().unwrap();
+    let (a_got, _a) = a_reading.join().unwrap();
+    let _a_out = a_sending.join().unwrap();
+    let _b_out = b_sending.join().unwrap();
     assert_eq!(
         a_got,
         (0..COUNT).collect::<Vec<_>>(),
