@@ -298,7 +298,7 @@ impl Drop for SocketcandBus {
     /// receive buffer makes the kernel reset the connection and throw away what was not delivered
     /// yet: the last frames a one-shot command sent (an NMT command, `bus send`) could be lost.
     /// So: half-close (the server gets everything we sent, then end of stream), and read until the
-    /// server closes too, for at most [`CLOSE_LINGER`].
+    /// server closes too, for at most 200 ms (`CLOSE_LINGER`).
     fn drop(&mut self) {
         if self.write_out().is_err() || self.stream.shutdown(std::net::Shutdown::Write).is_err() {
             return;
