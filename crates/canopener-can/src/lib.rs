@@ -8,6 +8,8 @@
 //!   the bus arbitration order (the smaller value wins arbitration).
 //! - [`CanFrame`]: a classical CAN data or remote frame with DLC 0–8.
 //! - [`Instant`]: a point in time in nanoseconds since an epoch chosen by whoever drives the code.
+//! - [`Core`]: the sans-IO surface of every protocol core (frames and time in, frames, events and a
+//!   deadline out).
 //! - [`Bitrate`] and [`bits`]: the exact on-wire bit sequence and duration of a frame (CRC-15, bit
 //!   stuffing), which the bus simulator and the bus-load figures are built on.
 
@@ -18,13 +20,13 @@ pub mod bits;
 pub mod candump;
 mod frame;
 mod id;
+mod sans_io;
 #[cfg(any(test, feature = "_proptest"))]
 pub mod strategy;
 mod time;
-#[cfg(any(test, feature = "_trace"))]
-pub mod trace;
 
 pub use bitrate::{Bitrate, BitrateError};
 pub use frame::{CanFrame, FrameError, MAX_CLASSIC_DATA_LEN};
 pub use id::{CanId, ExtendedId, IdError, StandardId};
+pub use sans_io::Core;
 pub use time::Instant;

@@ -5,6 +5,7 @@
 //! Also home of [`HeartbeatCore`], the monitor with every single heartbeat reported, which `nmt
 //! --confirm` uses too, and of the node-list syntax (`1-10,20`) of `--nodes` and `lss scan --assign`.
 
+use canopener_can::Core;
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::io::Write;
 use std::time::Duration;
@@ -18,7 +19,7 @@ use serde_json::json;
 use crate::cli::OutputFormat;
 use crate::cli_master::HeartbeatWatchArgs;
 use crate::error::{CliError, CliResult, stdout_error};
-use crate::master_io::{Core, Ended, Flow, Link};
+use crate::master_io::{Ended, Flow, Link};
 use crate::node_list::parse_node_list;
 use crate::sync::Spread;
 

@@ -8,7 +8,7 @@
 
 use std::time::Duration;
 
-use canopener_can::{CanFrame, Instant};
+use canopener_can::{CanFrame, Core, Instant};
 use canopener_transport::{BusSpec, CanBus, TransportError, WallClock};
 
 use crate::bus_open::open_bus;
@@ -19,17 +19,6 @@ use crate::stop::StopFlag;
 const HUB_RAW_GRACE: Duration = Duration::from_millis(60);
 /// The longest one receive waits, so that Ctrl-C is noticed quickly.
 const MAX_WAIT: Duration = Duration::from_millis(50);
-
-/// A sans-IO core as the driver sees it: the method set every core of `canopener-master` has.
-pub(crate) trait Core {
-    /// What the core reports.
-    type Event;
-    fn handle_frame(&mut self, now: Instant, frame: &CanFrame);
-    fn handle_timeout(&mut self, now: Instant);
-    fn poll_transmit(&mut self) -> Option<CanFrame>;
-    fn poll_event(&mut self) -> Option<Self::Event>;
-    fn poll_timeout(&self) -> Option<Instant>;
-}
 
 /// What a command's event handler tells the driver.
 #[derive(Debug)]
@@ -171,61 +160,5 @@ impl Link {
             }
             Err(err) => Err(CliError::from(err)),
         }
-    }
-}
-
-/// `Core` for a core whose inherent methods already have the five names (`handle_frame` may return
-/// whether the frame was its own; the driver does not need to know).
-macro_rules! inherent_core {
-    ($core:ty, $event:ty) => {
-        impl Core for $core {
-            type Event = $event;
-            fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-                <$core>::handle_frame(self, now, frame);
-            }
-            fn handle_timeout(&mut self, now: Instant) {
-                <$core>::handle_timeout(self, now);
-            }
-            fn poll_transmit(&mut self) -> Option<CanFrame> {
-                <$core>::poll_transmit(self)
-            }
-            fn poll_event(&mut self) -> Option<Self::Event> {
-                <$core>::poll_event(self)
-            }
-            fn poll_timeout(&self) -> Option<Instant> {
-                <$core>::poll_timeout(self)
-            }
-        }
-    };
-}
-
-inherent_core!(
-    canopener_master::error_control::NodeMonitor,
-    canopener_master::error_control::MonitorEvent
-);
-inherent_core!(
-    canopener_master::lss_master::LssMaster,
-    canopener_master::lss_master::LssEvent
-);
-inherent_core!(
-    canopener_master::sdo_client::SdoClient,
-    canopener_master::sdo_client::SdoClientEvent
-);
-
-impl Core for canopener_master::sync_producer::SyncProducer {
-    type Event = canopener_master::sync_producer::SyncEvent;
-    /// A SYNC producer takes no frames.
-    fn handle_frame(&mut self, _now: Instant, _frame: &CanFrame) {}
-    fn handle_timeout(&mut self, now: Instant) {
-        self.handle_timeout(now);
-    }
-    fn poll_transmit(&mut self) -> Option<CanFrame> {
-        self.poll_transmit()
-    }
-    fn poll_event(&mut self) -> Option<Self::Event> {
-        self.poll_event()
-    }
-    fn poll_timeout(&self) -> Option<Instant> {
-        self.poll_timeout()
     }
 }

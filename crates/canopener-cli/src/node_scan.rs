@@ -6,6 +6,7 @@
 //! has), then, if anything answered it, the follow-ups (1018h sub 1..4). Only the node-IDs with a
 //! running transfer count against the limit of requests in flight.
 
+use canopener_can::Core;
 use std::collections::{HashMap, VecDeque};
 use std::time::Duration;
 
@@ -13,7 +14,6 @@ use canopener_can::{CanFrame, CanId, Instant};
 use canopener_master::sdo_client::{SdoClient, SdoClientEvent, SdoTransferError, UploadMode};
 
 use crate::error::{CliError, CliResult};
-use crate::master_io::Core;
 
 /// The result of one upload of one node.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -173,7 +173,7 @@ impl Core for Fleet {
     fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
         if let Some(&slot) = self.by_response.get(&frame.id())
             && let Some(jobs) = self.nodes.get_mut(slot)
-            && jobs.client.handle_frame(now, frame)
+            && jobs.client.accept_frame(now, frame)
         {
             self.collect(slot, now);
         }

@@ -9,6 +9,7 @@
 //! Refusals of the planner (too many bits, restricted CAN-IDs, ...) come before the bus is opened
 //! whenever they do not depend on the device, so a typo never leaves a PDO half-configured.
 
+use canopener_can::Core;
 use std::time::Duration;
 
 use canopener_master::pdo_config::{

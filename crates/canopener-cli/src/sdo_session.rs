@@ -6,6 +6,7 @@
 //! cannot keep a command waiting: every drive of the core ends after at most twice the SDO timeout
 //! plus [`WATCHDOG_SLACK`] without progress.
 
+use canopener_can::Core;
 use std::io::IsTerminal;
 use std::time::Duration;
 

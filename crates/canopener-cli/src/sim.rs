@@ -10,6 +10,7 @@
 //! State changes and notable events (boot-up, NMT states, SDO writes and aborts, EMCY, LSS, heartbeat
 //! consumer, store/restore) are logged to stderr, or as JSON lines on stdout with `--format json`.
 
+use canopener_can::Core;
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -5,6 +5,7 @@
 //! It does not go through `master_io::Link::drive`, which waits in timed receives: the producer
 //! takes no frames, and a sleep keeps the period far better (see [`drain`]).
 
+use canopener_can::Core;
 use std::io::{IsTerminal, Write};
 use std::time::Duration;
 

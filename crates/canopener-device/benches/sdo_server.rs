@@ -12,6 +12,7 @@
 //! wire length of its frames (`canopener_can::bits`), which `bench/sdo_server.py` turns into the
 //! physical limit at 1 Mbit/s.
 
+use canopener_can::Core;
 use std::hint::black_box;
 
 use canopener_can::bits::frame_bits;

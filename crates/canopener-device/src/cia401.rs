@@ -710,8 +710,10 @@ mod tests {
 
     use super::*;
     use crate::nmt_slave::NmtSlaveState;
-    use crate::nmt_slave::trace::{Core, Trace, any_frame, ms};
     use crate::pdo::{PdoEngine, PdoEvent};
+    use canopener_can::Core;
+    use canopener_testkit::frames::any_frame;
+    use canopener_testkit::trace::{Trace, ms};
 
     const T0: Instant = Instant::ZERO;
     const AI1: ObjectKey = ObjectKey::new(READ_ANALOG_INPUT, 1);

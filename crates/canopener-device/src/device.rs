@@ -60,7 +60,7 @@
 
 use std::collections::{BTreeSet, VecDeque};
 
-use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
 use canopener_eds::model::Eds;
 use canopener_od::{DynamicOd, ObjectKey, OdError};
 use canopener_wire::TimeOfDay;
@@ -420,97 +420,6 @@ impl Device {
         self.pump(now);
     }
 
-    /// Feeds a received frame to every core whose COB-ID it matches, in the NMT states where CiA
-    /// 301 runs that service.
-    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-        if !self.configured {
-            // CiA 305: a node without a node-ID takes part in LSS only.
-            if let Some(lss) = &mut self.lss {
-                lss.handle_frame_with(now, frame, &mut *self.lss_storage);
-            }
-            self.pump(now);
-            return;
-        }
-        let sdo_request = self.sdo.iter().any(|(_, server)| server.rx_id() == frame.id());
-        let Some(frame) = self.faults.inbound(frame, self.node, sdo_request) else {
-            return;
-        };
-        let frame = &frame;
-        let state = self.nmt.state();
-        if sdo_request && state.is_active(CommService::Sdo) && self.fault_accepts(now, frame) {
-            self.pump(now);
-            return;
-        }
-        if state.is_active(CommService::ErrorControl) {
-            self.fault_guarding(now, frame);
-        }
-        self.nmt.handle_frame(now, frame);
-        if let Some(lss) = &mut self.lss {
-            lss.handle_frame_with(now, frame, &mut *self.lss_storage);
-        }
-        if state.is_active(CommService::ErrorControl) {
-            self.error_control.handle_frame(now, frame);
-            self.consumer.handle_frame(now, frame);
-        }
-        if state.is_active(CommService::Sdo) {
-            let mut hooks = Hooks {
-                pdo: &self.pdo,
-                sync: &self.sync,
-                time: &self.time,
-                emcy: &self.emcy,
-                consumer: &self.consumer,
-                store: &mut self.store,
-                params: &mut *self.params,
-                store_ignored: self.faults.has(Fault::StoreIgnored),
-            };
-            for (_, server) in &mut self.sdo {
-                server.handle_frame_with(now, frame, &mut self.od, &mut hooks);
-            }
-        }
-        if state.is_active(CommService::Sync) {
-            self.sync.handle_frame(now, frame);
-        }
-        if state.is_active(CommService::Time) {
-            self.time.handle_frame(now, frame);
-        }
-        if state.is_active(CommService::Pdo) {
-            self.pdo.handle_frame(now, frame, &mut self.od);
-        }
-        self.pump(now);
-    }
-
-    /// Runs every timer due at `now`, in every core and the application.
-    pub fn handle_timeout(&mut self, now: Instant) {
-        if !self.configured {
-            if let Some(lss) = &mut self.lss {
-                lss.handle_timeout(now);
-            }
-            self.pump(now);
-            return;
-        }
-        let mut released = Vec::new();
-        self.faults.release(now, &mut released);
-        self.transmit.extend(released);
-        self.error_control.handle_timeout(now);
-        self.consumer.handle_timeout(now);
-        for (_, server) in &mut self.sdo {
-            server.handle_timeout(now);
-        }
-        self.emcy.handle_timeout(now);
-        self.sync.handle_timeout(now);
-        self.time.handle_timeout(now);
-        if let Some(lss) = &mut self.lss {
-            lss.handle_timeout(now);
-        }
-        self.pump(now);
-        self.pdo.handle_timeout(now, &self.od);
-        if self.app.poll_timeout().is_some_and(|due| due <= now) {
-            let changes = self.app.handle_timeout(now, &mut self.od);
-            self.apply_changes(now, &changes);
-        }
-        self.pump(now);
-    }
-
     /// Whether 1012h makes this device a TIME producer (bit 30).
     pub fn is_time_producer(&self) -> bool {
         self.configured && self.time.is_producer()
@@ -526,40 +435,6 @@ impl Device {
         self.time.produce(now, time)?;
         self.pump(now);
         Ok(())
-    }
-
-    /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
-        self.transmit.pop_front()
-    }
-
-    /// The next event.
-    pub fn poll_event(&mut self) -> Option<DeviceEvent> {
-        self.events.pop_front()
-    }
-
-    /// When [`Device::handle_timeout`] must next be called: the earliest deadline of every core
-    /// and the application.
-    pub fn poll_timeout(&self) -> Option<Instant> {
-        let lss = self.lss.as_ref().and_then(LssSlave::poll_timeout);
-        if !self.configured {
-            return lss;
-        }
-        [
-            self.error_control.poll_timeout(),
-            self.consumer.poll_timeout(),
-            self.emcy.poll_timeout(),
-            self.pdo.poll_timeout(),
-            self.sync.poll_timeout(),
-            self.time.poll_timeout(),
-            self.app.poll_timeout(),
-            lss,
-        ]
-        .into_iter()
-        .chain(self.sdo.iter().map(|(_, server)| server.poll_timeout()))
-        .chain([self.faults.poll_timeout()])
-        .flatten()
-        .min()
     }
 
     /// Handles every event the cores reported until none is left, then collects their frames.
@@ -1138,6 +1013,135 @@ impl Device {
     }
 }
 
+impl Core for Device {
+    type Event = DeviceEvent;
+
+    /// Feeds a received frame to every core whose COB-ID it matches, in the NMT states where CiA
+    /// 301 runs that service.
+    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+        if !self.configured {
+            // CiA 305: a node without a node-ID takes part in LSS only.
+            if let Some(lss) = &mut self.lss {
+                lss.handle_frame_with(now, frame, &mut *self.lss_storage);
+            }
+            self.pump(now);
+            return;
+        }
+        let sdo_request = self.sdo.iter().any(|(_, server)| server.rx_id() == frame.id());
+        let Some(frame) = self.faults.inbound(frame, self.node, sdo_request) else {
+            return;
+        };
+        let frame = &frame;
+        let state = self.nmt.state();
+        if sdo_request && state.is_active(CommService::Sdo) && self.fault_accepts(now, frame) {
+            self.pump(now);
+            return;
+        }
+        if state.is_active(CommService::ErrorControl) {
+            self.fault_guarding(now, frame);
+        }
+        self.nmt.handle_frame(now, frame);
+        if let Some(lss) = &mut self.lss {
+            lss.handle_frame_with(now, frame, &mut *self.lss_storage);
+        }
+        if state.is_active(CommService::ErrorControl) {
+            self.error_control.handle_frame(now, frame);
+            self.consumer.handle_frame(now, frame);
+        }
+        if state.is_active(CommService::Sdo) {
+            let mut hooks = Hooks {
+                pdo: &self.pdo,
+                sync: &self.sync,
+                time: &self.time,
+                emcy: &self.emcy,
+                consumer: &self.consumer,
+                store: &mut self.store,
+                params: &mut *self.params,
+                store_ignored: self.faults.has(Fault::StoreIgnored),
+            };
+            for (_, server) in &mut self.sdo {
+                server.handle_frame_with(now, frame, &mut self.od, &mut hooks);
+            }
+        }
+        if state.is_active(CommService::Sync) {
+            self.sync.handle_frame(now, frame);
+        }
+        if state.is_active(CommService::Time) {
+            self.time.handle_frame(now, frame);
+        }
+        if state.is_active(CommService::Pdo) {
+            self.pdo.handle_frame(now, frame, &mut self.od);
+        }
+        self.pump(now);
+    }
+
+    /// Runs every timer due at `now`, in every core and the application.
+    fn handle_timeout(&mut self, now: Instant) {
+        if !self.configured {
+            if let Some(lss) = &mut self.lss {
+                lss.handle_timeout(now);
+            }
+            self.pump(now);
+            return;
+        }
+        let mut released = Vec::new();
+        self.faults.release(now, &mut released);
+        self.transmit.extend(released);
+        self.error_control.handle_timeout(now);
+        self.consumer.handle_timeout(now);
+        for (_, server) in &mut self.sdo {
+            server.handle_timeout(now);
+        }
+        self.emcy.handle_timeout(now);
+        self.sync.handle_timeout(now);
+        self.time.handle_timeout(now);
+        if let Some(lss) = &mut self.lss {
+            lss.handle_timeout(now);
+        }
+        self.pump(now);
+        self.pdo.handle_timeout(now, &self.od);
+        if self.app.poll_timeout().is_some_and(|due| due <= now) {
+            let changes = self.app.handle_timeout(now, &mut self.od);
+            self.apply_changes(now, &changes);
+        }
+        self.pump(now);
+    }
+
+    /// The next frame to send.
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
+        self.transmit.pop_front()
+    }
+
+    /// The next event.
+    fn poll_event(&mut self) -> Option<Self::Event> {
+        self.events.pop_front()
+    }
+
+    /// When [`Device::handle_timeout`] must next be called: the earliest deadline of every core
+    /// and the application.
+    fn poll_timeout(&self) -> Option<Instant> {
+        let lss = self.lss.as_ref().and_then(LssSlave::poll_timeout);
+        if !self.configured {
+            return lss;
+        }
+        [
+            self.error_control.poll_timeout(),
+            self.consumer.poll_timeout(),
+            self.emcy.poll_timeout(),
+            self.pdo.poll_timeout(),
+            self.sync.poll_timeout(),
+            self.time.poll_timeout(),
+            self.app.poll_timeout(),
+            lss,
+        ]
+        .into_iter()
+        .chain(self.sdo.iter().map(|(_, server)| server.poll_timeout()))
+        .chain([self.faults.poll_timeout()])
+        .flatten()
+        .min()
+    }
+}
+
 /// The dummy types the EDS `[DummyUsage]` section enables (`DummyXXXX=1`).
 fn dummy_usage(eds: &Eds) -> DummyUsage {
     let mut dummies = DummyUsage::NONE;
@@ -1231,28 +1235,11 @@ impl LssStorage for StoredLss {
 mod tests {
     use super::*;
     use crate::application::NoApplication;
-    use crate::nmt_slave::trace::{Core, Trace, any_frame, ms};
+    use canopener_can::Core;
     use canopener_od::{Access, DataType, Entry};
+    use canopener_testkit::frames::any_frame;
+    use canopener_testkit::trace::{Trace, ms};
     use proptest::prelude::*;
-
-    impl Core for Device {
-        type Event = DeviceEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            Device::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, now: Instant) {
-            Device::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            Device::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<DeviceEvent> {
-            Device::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            Device::poll_timeout(self)
-        }
-    }
 
     /// A minimal dictionary: 1001h, 1003h with 2 entries, 1014h, 1017h = 50 ms, 1018h:01, and an
     /// additional SDO server 1201h on 641h/5C1h.

@@ -25,7 +25,7 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, Instant, StandardId};
+use canopener_can::{CanFrame, Core, Instant, StandardId};
 use canopener_od::{DynamicOd, ObjectKey};
 use canopener_wire::{
     EMCY_BASE, ERROR_REGISTER_GENERIC, ERROR_REGISTER_RESERVED, EmcyMessage, NodeId, abort,
@@ -358,27 +358,6 @@ impl EmcyProducer {
         }
     }
 
-    /// Sends the queued EMCY whose inhibit time has expired.
-    pub fn handle_timeout(&mut self, now: Instant) {
-        self.flush(now);
-    }
-
-    /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
-        self.transmit.pop_front()
-    }
-
-    /// The next event for the `Device`.
-    pub fn poll_event(&mut self) -> Option<EmcyEvent> {
-        self.events.pop_front()
-    }
-
-    /// When a queued EMCY may go out: the end of the inhibit period, if EMCYs wait and the state
-    /// allows sending.
-    pub fn poll_timeout(&self) -> Option<Instant> {
-        (!self.pending.is_empty() && self.can_send()).then_some(self.inhibit_until)
-    }
-
     fn can_send(&self) -> bool {
         self.state.is_active(CommService::Emcy) && self.cob_id & COB_ID_INVALID == 0
     }
@@ -421,28 +400,40 @@ impl EmcyProducer {
     }
 }
 
+impl Core for EmcyProducer {
+    type Event = EmcyEvent;
+
+    /// EmcyProducer takes no frames.
+    fn handle_frame(&mut self, _now: Instant, _frame: &CanFrame) {}
+
+    /// Sends the queued EMCY whose inhibit time has expired.
+    fn handle_timeout(&mut self, now: Instant) {
+        self.flush(now);
+    }
+
+    /// The next frame to send.
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
+        self.transmit.pop_front()
+    }
+
+    /// The next event for the `Device`.
+    fn poll_event(&mut self) -> Option<Self::Event> {
+        self.events.pop_front()
+    }
+
+    /// When a queued EMCY may go out: the end of the inhibit period, if EMCYs wait and the state
+    /// allows sending.
+    fn poll_timeout(&self) -> Option<Instant> {
+        (!self.pending.is_empty() && self.can_send()).then_some(self.inhibit_until)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_slave::trace::{Core, Trace, ms};
+    use canopener_can::Core;
     use canopener_od::{Access, DataType, Entry};
-
-    impl Core for EmcyProducer {
-        type Event = EmcyEvent;
-        fn handle_frame(&mut self, _now: Instant, _frame: &CanFrame) {}
-        fn handle_timeout(&mut self, now: Instant) {
-            EmcyProducer::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            EmcyProducer::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<EmcyEvent> {
-            EmcyProducer::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            EmcyProducer::poll_timeout(self)
-        }
-    }
+    use canopener_testkit::trace::{Trace, ms};
 
     fn producer() -> Trace<EmcyProducer> {
         let mut trace = Trace::new(EmcyProducer::new(NodeId::new(5).unwrap()));

@@ -18,7 +18,7 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
 use canopener_wire::{ERROR_CONTROL_BASE, NmtState, NodeId, abort, encode_guard_response};
 
 use crate::nmt_slave::NmtSlaveState;
@@ -148,10 +148,30 @@ impl ErrorControl {
         self.next_heartbeat = Some(now + millis(self.producer_ms));
     }
 
+    fn retime_life_guarding(&mut self, now: Instant) {
+        if self.life_deadline.is_some() {
+            self.life_deadline = self.life_time().map(|life| now + life);
+        }
+    }
+
+    fn own_id(&self) -> StandardId {
+        StandardId::new(ERROR_CONTROL_BASE + u16::from(self.node.get())).unwrap_or(StandardId::MAX)
+    }
+
+    fn send(&mut self, byte: u8) {
+        if let Ok(frame) = CanFrame::new(self.own_id(), &[byte]) {
+            self.transmit.push_back(frame);
+        }
+    }
+}
+
+impl Core for ErrorControl {
+    type Event = ErrorControlEvent;
+
     /// Feeds a received frame. Only a remote frame on 700h + node-ID (a node guarding request)
     /// concerns this core; any DLC is accepted. It is answered with one byte, the state with the
     /// toggle bit, unless the node is in Initialisation or heartbeat production is on.
-    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
         if !frame.is_remote() || frame.id() != CanId::Standard(self.own_id()) {
             return;
         }
@@ -171,7 +191,7 @@ impl ErrorControl {
     }
 
     /// Runs the timers due at `now`: the heartbeat and the life guarding deadline.
-    pub fn handle_timeout(&mut self, now: Instant) {
+    fn handle_timeout(&mut self, now: Instant) {
         if let Some(due) = self.next_heartbeat
             && due <= now
         {
@@ -192,34 +212,18 @@ impl ErrorControl {
     }
 
     /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
         self.transmit.pop_front()
     }
 
     /// The next event for the `Device`.
-    pub fn poll_event(&mut self) -> Option<ErrorControlEvent> {
+    fn poll_event(&mut self) -> Option<Self::Event> {
         self.events.pop_front()
     }
 
     /// When [`ErrorControl::handle_timeout`] must next be called.
-    pub fn poll_timeout(&self) -> Option<Instant> {
+    fn poll_timeout(&self) -> Option<Instant> {
         earliest(self.next_heartbeat, self.life_deadline)
-    }
-
-    fn retime_life_guarding(&mut self, now: Instant) {
-        if self.life_deadline.is_some() {
-            self.life_deadline = self.life_time().map(|life| now + life);
-        }
-    }
-
-    fn own_id(&self) -> StandardId {
-        StandardId::new(ERROR_CONTROL_BASE + u16::from(self.node.get())).unwrap_or(StandardId::MAX)
-    }
-
-    fn send(&mut self, byte: u8) {
-        if let Ok(frame) = CanFrame::new(self.own_id(), &[byte]) {
-            self.transmit.push_back(frame);
-        }
     }
 }
 
@@ -400,10 +404,14 @@ impl HeartbeatConsumer {
             entry.last_state = None;
         }
     }
+}
+
+impl Core for HeartbeatConsumer {
+    type Event = ConsumerEvent;
 
     /// Feeds a received frame. Data frames on 701h–77Fh from monitored nodes are heartbeats;
     /// frames with bit 7 set are node guarding answers, not heartbeats, and are ignored.
-    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
         let CanId::Standard(id) = frame.id() else { return };
         if frame.is_remote() {
             return;
@@ -442,7 +450,7 @@ impl HeartbeatConsumer {
     }
 
     /// Declares lost every entry whose deadline is at or before `now`.
-    pub fn handle_timeout(&mut self, now: Instant) {
+    fn handle_timeout(&mut self, now: Instant) {
         for entry in &mut self.entries {
             if let Watch::Active(deadline) = entry.watch
                 && deadline <= now
@@ -455,17 +463,17 @@ impl HeartbeatConsumer {
     }
 
     /// Always `None`: the consumer sends nothing (present for the uniform sans-IO shape).
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
         None
     }
 
     /// The next event for the `Device`.
-    pub fn poll_event(&mut self) -> Option<ConsumerEvent> {
+    fn poll_event(&mut self) -> Option<Self::Event> {
         self.events.pop_front()
     }
 
     /// The earliest heartbeat deadline of an active entry.
-    pub fn poll_timeout(&self) -> Option<Instant> {
+    fn poll_timeout(&self) -> Option<Instant> {
         self.entries
             .iter()
             .filter_map(|e| match e.watch {
@@ -479,46 +487,10 @@ impl HeartbeatConsumer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_slave::trace::{Core, Trace, any_frame, ms};
     use NmtSlaveState::{Initialisation as Init, Operational as Op, PreOperational as PreOp, Stopped};
-
-    impl Core for ErrorControl {
-        type Event = ErrorControlEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            ErrorControl::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, now: Instant) {
-            ErrorControl::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            ErrorControl::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<ErrorControlEvent> {
-            ErrorControl::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            ErrorControl::poll_timeout(self)
-        }
-    }
-
-    impl Core for HeartbeatConsumer {
-        type Event = ConsumerEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            HeartbeatConsumer::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, now: Instant) {
-            HeartbeatConsumer::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            HeartbeatConsumer::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<ConsumerEvent> {
-            HeartbeatConsumer::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            HeartbeatConsumer::poll_timeout(self)
-        }
-    }
+    use canopener_can::Core;
+    use canopener_testkit::frames::any_frame;
+    use canopener_testkit::trace::{Trace, ms};
 
     /// Error control of node 5, booted (pre-operational) at t = 0.
     fn booted() -> Trace<ErrorControl> {
@@ -848,7 +820,7 @@ mod tests {
             consumer.set_entry(128, 0x0009_0064).unwrap_err().abort_code(),
             0x0609_0011
         );
-        consumer.handle_frame(ms(0), &crate::nmt_slave::trace::frame("707#05"));
+        consumer.handle_frame(ms(0), &canopener_testkit::trace::frame("707#05"));
         assert_eq!(consumer.poll_timeout(), Some(ms(200)));
         // Clearing the entry stops monitoring.
         assert_eq!(consumer.set_entry(1, 0), Ok(()));

@@ -44,7 +44,7 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, Instant, StandardId};
+use canopener_can::{CanFrame, Core, Instant, StandardId};
 use canopener_od::{DynamicOd, ObjectKey};
 use canopener_wire::lss::{FASTSCAN_RESET, UNCONFIGURED_NODE_ID};
 use canopener_wire::{
@@ -406,7 +406,7 @@ impl LssSlave {
     /// Feeds a received frame with no storage for store configuration (it answers "storing not
     /// supported"). Only frames on CAN-ID 7E5h (11-bit) concern the LSS slave; returns whether the
     /// frame was one.
-    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) -> bool {
+    pub fn accept_frame(&mut self, now: Instant, frame: &CanFrame) -> bool {
         self.handle_frame_with(now, frame, &mut ())
     }
 
@@ -443,46 +443,6 @@ impl LssSlave {
         }
         self.request(now, specifier, request, storage);
         true
-    }
-
-    /// Lets time pass: runs the two switch delays of activate bit timing.
-    pub fn handle_timeout(&mut self, now: Instant) {
-        match self.switching {
-            Some(Switching::BeforeSwitch { at, timing, delay }) if now >= at => {
-                self.active_timing = Some(timing);
-                self.events.push_back(LssEvent::SwitchBitRate {
-                    table: timing.table,
-                    index: timing.index,
-                });
-                self.switching = Some(Switching::AfterSwitch { at: at + delay });
-                if now >= at + delay {
-                    self.handle_timeout(now);
-                }
-            }
-            Some(Switching::AfterSwitch { at }) if now >= at => {
-                self.switching = None;
-                self.events.push_back(LssEvent::BitTimingSilenceEnded);
-            }
-            _ => {}
-        }
-    }
-
-    /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
-        self.transmit.pop_front()
-    }
-
-    /// The next event for the `Device`.
-    pub fn poll_event(&mut self) -> Option<LssEvent> {
-        self.events.pop_front()
-    }
-
-    /// When [`handle_timeout`](LssSlave::handle_timeout) wants to be called next: the end of a
-    /// switch delay.
-    pub fn poll_timeout(&self) -> Option<Instant> {
-        match self.switching? {
-            Switching::BeforeSwitch { at, .. } | Switching::AfterSwitch { at } => Some(at),
-        }
     }
 
     fn request(&mut self, now: Instant, specifier: u8, request: LssRequest, storage: &mut dyn LssStorage) {
@@ -732,30 +692,60 @@ impl LssSlave {
     }
 }
 
+impl Core for LssSlave {
+    type Event = LssEvent;
+
+    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+        self.accept_frame(now, frame);
+    }
+
+    /// Lets time pass: runs the two switch delays of activate bit timing.
+    fn handle_timeout(&mut self, now: Instant) {
+        match self.switching {
+            Some(Switching::BeforeSwitch { at, timing, delay }) if now >= at => {
+                self.active_timing = Some(timing);
+                self.events.push_back(LssEvent::SwitchBitRate {
+                    table: timing.table,
+                    index: timing.index,
+                });
+                self.switching = Some(Switching::AfterSwitch { at: at + delay });
+                if now >= at + delay {
+                    self.handle_timeout(now);
+                }
+            }
+            Some(Switching::AfterSwitch { at }) if now >= at => {
+                self.switching = None;
+                self.events.push_back(LssEvent::BitTimingSilenceEnded);
+            }
+            _ => {}
+        }
+    }
+
+    /// The next frame to send.
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
+        self.transmit.pop_front()
+    }
+
+    /// The next event for the `Device`.
+    fn poll_event(&mut self) -> Option<Self::Event> {
+        self.events.pop_front()
+    }
+
+    /// When [`handle_timeout`](LssSlave::handle_timeout) wants to be called next: the end of a
+    /// switch delay.
+    fn poll_timeout(&self) -> Option<Instant> {
+        match self.switching? {
+            Switching::BeforeSwitch { at, .. } | Switching::AfterSwitch { at } => Some(at),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_slave::trace::{Core, Trace, frame, ms};
+    use canopener_can::Core;
     use canopener_od::{Access, DataType, Entry};
-
-    impl Core for LssSlave {
-        type Event = LssEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            LssSlave::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, now: Instant) {
-            LssSlave::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            LssSlave::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<LssEvent> {
-            LssSlave::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            LssSlave::poll_timeout(self)
-        }
-    }
+    use canopener_testkit::trace::{Trace, frame, ms};
 
     /// A storage that records what it stored, or fails as told.
     #[derive(Debug, Default)]
@@ -1367,7 +1357,7 @@ mod tests {
             .unwrap();
             let mut answers = Vec::new();
             for (n, slave) in self.slaves.iter_mut().enumerate() {
-                assert!(slave.handle_frame(self.now, &frame));
+                assert!(slave.accept_frame(self.now, &frame));
                 while let Some(answer) = slave.poll_transmit() {
                     assert_eq!(answer.id().as_raw(), u32::from(LSS_SLAVE_TO_MASTER_ID));
                     let data = <[u8; 8]>::try_from(answer.data()).unwrap();
@@ -1570,9 +1560,9 @@ mod tests {
             "000007E5#0401000000000000",
             "7E6#0401000000000000",
         ] {
-            assert!(!lss.handle_frame(Instant::ZERO, &frame(text)), "{text}");
+            assert!(!lss.accept_frame(Instant::ZERO, &frame(text)), "{text}");
         }
-        assert!(lss.handle_frame(Instant::ZERO, &frame("7E5#0401000000000000")));
+        assert!(lss.accept_frame(Instant::ZERO, &frame("7E5#0401000000000000")));
         assert_eq!(lss.state(), Config);
     }
 
@@ -1642,7 +1632,7 @@ mod tests {
             data.extend(rest);
             CanFrame::new(StandardId::new(LSS_MASTER_TO_SLAVE_ID).unwrap(), &data).unwrap()
         });
-        prop_oneof![4 => lss, 1 => crate::nmt_slave::trace::any_frame()]
+        prop_oneof![4 => lss, 1 => canopener_testkit::frames::any_frame()]
     }
 
     proptest::proptest! {

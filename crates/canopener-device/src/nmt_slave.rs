@@ -26,7 +26,7 @@
 
 use std::collections::VecDeque;
 
-use canopener_can::{CanFrame, Instant, StandardId};
+use canopener_can::{CanFrame, Core, Instant, StandardId};
 use canopener_wire::{ERROR_CONTROL_BASE, NMT_ID, NmtCommand, NmtState, NodeId};
 
 /// The NMT state of the local node (CiA 301, NMT state machine).
@@ -212,52 +212,6 @@ impl NmtSlave {
         }
     }
 
-    /// Feeds a received frame. Only data frames on CAN-ID 000h (11-bit) concern the NMT slave;
-    /// everything else is ignored. Commands are ignored while in Initialisation: the node has not
-    /// booted yet.
-    pub fn handle_frame(&mut self, _now: Instant, frame: &CanFrame) {
-        if frame.id().is_extended() || frame.id().as_raw() != u32::from(NMT_ID) {
-            return;
-        }
-        if frame.is_remote() {
-            self.events.push_back(NmtEvent::Malformed(MalformedNmt::Remote));
-            return;
-        }
-        let &[specifier, target] = frame.data() else {
-            self.events
-                .push_back(NmtEvent::Malformed(MalformedNmt::WrongDlc(frame.dlc())));
-            return;
-        };
-        if target != 0 && target != self.node.get() {
-            return;
-        }
-        if self.state == NmtSlaveState::Initialisation {
-            return;
-        }
-        match NmtCommand::from_raw(specifier) {
-            Some(command) => self.command(command),
-            None => self.events.push_back(NmtEvent::UnknownCommand { specifier }),
-        }
-    }
-
-    /// The NMT slave has no timers; present for the uniform sans-IO shape.
-    pub fn handle_timeout(&mut self, _now: Instant) {}
-
-    /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
-        self.transmit.pop_front()
-    }
-
-    /// The next event for the `Device`.
-    pub fn poll_event(&mut self) -> Option<NmtEvent> {
-        self.events.pop_front()
-    }
-
-    /// Always `None`: the NMT slave has no timers.
-    pub fn poll_timeout(&self) -> Option<Instant> {
-        None
-    }
-
     fn command(&mut self, command: NmtCommand) {
         match command {
             NmtCommand::StartRemoteNode => self.enter(NmtSlaveState::Operational),
@@ -292,51 +246,62 @@ impl NmtSlave {
     }
 }
 
-/// Virtual-time frame traces shared by the tests of this crate's error-control and EMCY cores.
-#[cfg(test)]
-pub(crate) mod trace {
-    pub(crate) use canopener_can::trace::{Core, Trace, frame, ms};
+impl Core for NmtSlave {
+    type Event = NmtEvent;
 
-    use canopener_can::CanFrame;
+    /// Feeds a received frame. Only data frames on CAN-ID 000h (11-bit) concern the NMT slave;
+    /// everything else is ignored. Commands are ignored while in Initialisation: the node has not
+    /// booted yet.
+    fn handle_frame(&mut self, _now: Instant, frame: &CanFrame) {
+        if frame.id().is_extended() || frame.id().as_raw() != u32::from(NMT_ID) {
+            return;
+        }
+        if frame.is_remote() {
+            self.events.push_back(NmtEvent::Malformed(MalformedNmt::Remote));
+            return;
+        }
+        let &[specifier, target] = frame.data() else {
+            self.events
+                .push_back(NmtEvent::Malformed(MalformedNmt::WrongDlc(frame.dlc())));
+            return;
+        };
+        if target != 0 && target != self.node.get() {
+            return;
+        }
+        if self.state == NmtSlaveState::Initialisation {
+            return;
+        }
+        match NmtCommand::from_raw(specifier) {
+            Some(command) => self.command(command),
+            None => self.events.push_back(NmtEvent::UnknownCommand { specifier }),
+        }
+    }
 
-    /// Any classical frame with an 11-bit identifier, weighted towards the CANopen services.
-    pub(crate) fn any_frame() -> impl proptest::strategy::Strategy<Value = CanFrame> {
-        use proptest::prelude::*;
-        let id = prop_oneof![0u16..0x800, Just(0), 0x700u16..0x780, 0x80u16..0x100];
-        (id, any::<bool>(), proptest::collection::vec(any::<u8>(), 0..=8)).prop_map(|(id, remote, data)| {
-            let id = canopener_can::StandardId::new(id).expect("11-bit id");
-            if remote {
-                CanFrame::remote(id, data.len() as u8).expect("dlc <= 8")
-            } else {
-                CanFrame::new(id, &data).expect("<= 8 bytes")
-            }
-        })
+    /// The NMT slave has no timers; present for the uniform sans-IO shape.
+    fn handle_timeout(&mut self, _now: Instant) {}
+
+    /// The next frame to send.
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
+        self.transmit.pop_front()
+    }
+
+    /// The next event for the `Device`.
+    fn poll_event(&mut self) -> Option<Self::Event> {
+        self.events.pop_front()
+    }
+
+    /// Always `None`: the NMT slave has no timers.
+    fn poll_timeout(&self) -> Option<Instant> {
+        None
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::trace::{Core, Trace, any_frame, ms};
     use super::*;
-
-    impl Core for NmtSlave {
-        type Event = NmtEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            NmtSlave::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, now: Instant) {
-            NmtSlave::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            NmtSlave::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<NmtEvent> {
-            NmtSlave::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            NmtSlave::poll_timeout(self)
-        }
-    }
+    use canopener_can::Core;
+    use canopener_testkit::frames::any_frame;
+    use canopener_testkit::trace::{Trace, ms};
 
     use NmtSlaveState::{Initialisation as Init, Operational as Op, PreOperational as PreOp, Stopped};
 

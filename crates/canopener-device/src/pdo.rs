@@ -1339,8 +1339,10 @@ fn write_mapped(od: &mut DynamicOd, map: &[Mapped], data: [u8; 8]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_slave::trace::{Core, Trace, any_frame, ms};
+    use canopener_can::Core;
     use canopener_od::{Access, DataType, Entry};
+    use canopener_testkit::frames::any_frame;
+    use canopener_testkit::trace::{Trace, ms};
 
     /// The engine with the dictionary it works on, as a `Device` holds them.
     struct Bench {

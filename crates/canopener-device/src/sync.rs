@@ -34,7 +34,7 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, Instant, StandardId};
+use canopener_can::{CanFrame, Core, Instant, StandardId};
 use canopener_od::{DynamicOd, ObjectKey};
 use canopener_wire::{SYNC_ID, abort};
 
@@ -329,9 +329,35 @@ impl SyncService {
         self.reschedule(now, !was);
     }
 
+    fn synchronise(&mut self, now: Instant, counter: Option<u8>) {
+        self.events.push_back(SyncEvent::Sync { counter });
+        self.window_end =
+            (self.window_us != 0).then(|| now + Duration::from_micros(u64::from(self.window_us)));
+    }
+
+    /// Starts, stops or retimes production after a configuration or state change. `restart_timing`
+    /// asks for a new period from `now` even if production was already running.
+    fn reschedule(&mut self, now: Instant, restart_timing: bool) {
+        let should = self.is_producer() && self.period_us != 0 && self.state.is_active(CommService::Sync);
+        if !should {
+            self.next_sync = None;
+            return;
+        }
+        if self.next_sync.is_none() {
+            self.next_counter = 1;
+        } else if !restart_timing {
+            return;
+        }
+        self.next_sync = Some(now + Duration::from_micros(u64::from(self.period_us)));
+    }
+}
+
+impl Core for SyncService {
+    type Event = SyncEvent;
+
     /// Feeds a received frame: a data frame on the SYNC CAN-ID (11-bit) is a SYNC to consume,
     /// unless this node is the producer or the NMT state does not allow SYNC.
-    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
         if frame.id().is_extended()
             || frame.id().as_raw() != self.cob_id & 0x7FF
             || frame.is_remote()
@@ -352,7 +378,7 @@ impl SyncService {
     }
 
     /// Produces the SYNC that is due and closes the window that has ended.
-    pub fn handle_timeout(&mut self, now: Instant) {
+    fn handle_timeout(&mut self, now: Instant) {
         if self.window_end.is_some_and(|end| end <= now) {
             self.window_end = None;
             self.events.push_back(SyncEvent::WindowClosed);
@@ -383,71 +409,32 @@ impl SyncService {
     }
 
     /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
         self.transmit.pop_front()
     }
 
     /// The next event for the `Device`.
-    pub fn poll_event(&mut self) -> Option<SyncEvent> {
+    fn poll_event(&mut self) -> Option<Self::Event> {
         self.events.pop_front()
     }
 
     /// When the next SYNC is produced or the synchronous window closes, whichever is first.
-    pub fn poll_timeout(&self) -> Option<Instant> {
+    fn poll_timeout(&self) -> Option<Instant> {
         match (self.next_sync, self.window_end) {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
         }
-    }
-
-    fn synchronise(&mut self, now: Instant, counter: Option<u8>) {
-        self.events.push_back(SyncEvent::Sync { counter });
-        self.window_end =
-            (self.window_us != 0).then(|| now + Duration::from_micros(u64::from(self.window_us)));
-    }
-
-    /// Starts, stops or retimes production after a configuration or state change. `restart_timing`
-    /// asks for a new period from `now` even if production was already running.
-    fn reschedule(&mut self, now: Instant, restart_timing: bool) {
-        let should = self.is_producer() && self.period_us != 0 && self.state.is_active(CommService::Sync);
-        if !should {
-            self.next_sync = None;
-            return;
-        }
-        if self.next_sync.is_none() {
-            self.next_counter = 1;
-        } else if !restart_timing {
-            return;
-        }
-        self.next_sync = Some(now + Duration::from_micros(u64::from(self.period_us)));
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_slave::trace::{Core, Trace, any_frame, ms};
     use NmtSlaveState::{Initialisation as Init, Operational as Op, PreOperational as PreOp, Stopped};
+    use canopener_can::Core;
     use canopener_od::{Access, DataType, Entry};
-
-    impl Core for SyncService {
-        type Event = SyncEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            SyncService::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, now: Instant) {
-            SyncService::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            SyncService::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<SyncEvent> {
-            SyncService::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            SyncService::poll_timeout(self)
-        }
-    }
+    use canopener_testkit::frames::any_frame;
+    use canopener_testkit::trace::{Trace, ms};
 
     fn us(micros: u64) -> Instant {
         Instant::from_micros(micros)

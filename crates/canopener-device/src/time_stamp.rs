@@ -18,7 +18,7 @@
 
 use std::collections::VecDeque;
 
-use canopener_can::{CanFrame, Instant, StandardId};
+use canopener_can::{CanFrame, Core, Instant, StandardId};
 use canopener_od::{DynamicOd, ObjectKey};
 use canopener_wire::{TIME_ID, TimeOfDay, abort};
 
@@ -196,10 +196,14 @@ impl TimeService {
         }
         Ok(())
     }
+}
+
+impl Core for TimeService {
+    type Event = TimeEvent;
 
     /// Feeds a received frame: a data frame on the TIME CAN-ID (11-bit) is consumed when 1012h bit
     /// 31 is set and the NMT state allows TIME.
-    pub fn handle_frame(&mut self, _now: Instant, frame: &CanFrame) {
+    fn handle_frame(&mut self, _now: Instant, frame: &CanFrame) {
         if frame.id().is_extended()
             || frame.id().as_raw() != self.cob_id & 0x7FF
             || frame.is_remote()
@@ -219,20 +223,20 @@ impl TimeService {
     }
 
     /// TIME has no timers; present for the uniform sans-IO shape.
-    pub fn handle_timeout(&mut self, _now: Instant) {}
+    fn handle_timeout(&mut self, _now: Instant) {}
 
     /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
         self.transmit.pop_front()
     }
 
     /// The next event for the `Device`.
-    pub fn poll_event(&mut self) -> Option<TimeEvent> {
+    fn poll_event(&mut self) -> Option<Self::Event> {
         self.events.pop_front()
     }
 
     /// Always `None`: TIME has no timers.
-    pub fn poll_timeout(&self) -> Option<Instant> {
+    fn poll_timeout(&self) -> Option<Instant> {
         None
     }
 }
@@ -240,28 +244,11 @@ impl TimeService {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_slave::trace::{Core, Trace, any_frame, ms};
     use NmtSlaveState::{Initialisation as Init, Operational as Op, PreOperational as PreOp, Stopped};
+    use canopener_can::Core;
     use canopener_od::{Access, DataType, Entry};
-
-    impl Core for TimeService {
-        type Event = TimeEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            TimeService::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, now: Instant) {
-            TimeService::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            TimeService::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<TimeEvent> {
-            TimeService::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            TimeService::poll_timeout(self)
-        }
-    }
+    use canopener_testkit::frames::any_frame;
+    use canopener_testkit::trace::{Trace, ms};
 
     /// 2024-01-01 12:00:00.000, the reference's worked example: `00 2E 93 02 12 39`.
     const NOON: TimeOfDay = TimeOfDay {

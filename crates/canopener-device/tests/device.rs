@@ -2,6 +2,7 @@
 //! EDS of the checker (`base.eds`, node 5) and a real EDS of the corpus (CANopenNode's
 //! `DS301_profile.eds`, node 10).
 
+use canopener_can::Core;
 use std::cell::RefCell;
 use std::rc::Rc;
 

@@ -4,6 +4,7 @@
 //! `DS301_profile.eds` (node 10) where a fault needs objects `base.eds` lacks (SYNC producer,
 //! store/restore).
 
+use canopener_can::Core;
 use std::time::Duration;
 
 use canopener_can::{CanFrame, Instant};

@@ -26,6 +26,7 @@
 //! untimed: uploads against bytes written beforehand, downloads by reading them back. Prints one
 //! JSON object: `{"kind", "ok", "failed", "error", "times_s"}`.
 
+use canopener_can::Core;
 use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;

@@ -16,7 +16,7 @@
 use std::collections::{BTreeMap, VecDeque};
 use std::fmt;
 
-use canopener_can::{CanFrame, CanId, ExtendedId, Instant, StandardId};
+use canopener_can::{CanFrame, CanId, Core, ExtendedId, Instant, StandardId};
 use canopener_wire::{EMCY_BASE, EmcyMessage, NodeId, emcy_code_text, error_register_text};
 
 /// The length of a correct EMCY frame.
@@ -200,8 +200,32 @@ impl EmcyConsumer {
         self.registers.get(&node).copied()
     }
 
+    fn node_of(&self, id: CanId) -> Option<NodeId> {
+        if let Some((node, _)) = self
+            .configured
+            .iter()
+            .find(|(_, configured)| **configured == Some(id))
+        {
+            return Some(*node);
+        }
+        let CanId::Standard(standard) = id else {
+            return None;
+        };
+        let node = standard
+            .as_raw()
+            .checked_sub(EMCY_BASE)
+            .and_then(|raw| u8::try_from(raw).ok())
+            .and_then(NodeId::new)?;
+        // A node with its own 1014h no longer sends on its predefined CAN-ID.
+        (!self.configured.contains_key(&node)).then_some(node)
+    }
+}
+
+impl Core for EmcyConsumer {
+    type Event = EmcyEvent;
+
     /// Feeds a received frame.
-    pub fn handle_frame(&mut self, _now: Instant, frame: &CanFrame) {
+    fn handle_frame(&mut self, _now: Instant, frame: &CanFrame) {
         let Some(node) = self.node_of(frame.id()) else {
             return;
         };
@@ -235,53 +259,30 @@ impl EmcyConsumer {
         self.events.push_back(event);
     }
 
+    /// EmcyConsumer has no timers.
+    fn handle_timeout(&mut self, _now: Instant) {}
+
+    /// EmcyConsumer sends nothing.
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
+        None
+    }
+
     /// The next event.
-    pub fn poll_event(&mut self) -> Option<EmcyEvent> {
+    fn poll_event(&mut self) -> Option<Self::Event> {
         self.events.pop_front()
     }
 
-    fn node_of(&self, id: CanId) -> Option<NodeId> {
-        if let Some((node, _)) = self
-            .configured
-            .iter()
-            .find(|(_, configured)| **configured == Some(id))
-        {
-            return Some(*node);
-        }
-        let CanId::Standard(standard) = id else {
-            return None;
-        };
-        let node = standard
-            .as_raw()
-            .checked_sub(EMCY_BASE)
-            .and_then(|raw| u8::try_from(raw).ok())
-            .and_then(NodeId::new)?;
-        // A node with its own 1014h no longer sends on its predefined CAN-ID.
-        (!self.configured.contains_key(&node)).then_some(node)
+    /// EmcyConsumer has no timers.
+    fn poll_timeout(&self) -> Option<Instant> {
+        None
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_master::trace::{Core, Trace, ms};
-
-    impl Core for EmcyConsumer {
-        type Event = EmcyEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            EmcyConsumer::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, _now: Instant) {}
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            None
-        }
-        fn poll_event(&mut self) -> Option<EmcyEvent> {
-            EmcyConsumer::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            None
-        }
-    }
+    use canopener_can::Core;
+    use canopener_testkit::trace::{Trace, ms};
 
     fn node(raw: u8) -> NodeId {
         NodeId::new(raw).unwrap()

@@ -48,7 +48,7 @@ use std::collections::{BTreeMap, VecDeque};
 use std::fmt;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
 use canopener_wire::{ERROR_CONTROL_BASE, GUARD_TOGGLE_BIT, NmtState, NodeId};
 
 /// How many recent heartbeat intervals [`ConsumerTime::Learn`] looks at.
@@ -316,10 +316,14 @@ impl NodeMonitor {
             .iter()
             .map(|(node, entry)| (*node, entry.status(self.default_consumer)))
     }
+}
+
+impl Core for NodeMonitor {
+    type Event = MonitorEvent;
 
     /// Feeds a received frame. Data frames on 701h to 77Fh are boot-up, heartbeat or guarding
     /// answers; everything else is ignored.
-    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
         let CanId::Standard(id) = frame.id() else { return };
         let Some(node) = id
             .as_raw()
@@ -354,7 +358,7 @@ impl NodeMonitor {
 
     /// Sends the guarding requests that are due and reports the heartbeats and guarding lost by
     /// `now`.
-    pub fn handle_timeout(&mut self, now: Instant) {
+    fn handle_timeout(&mut self, now: Instant) {
         for (node, entry) in &mut self.nodes {
             if let Watch::Active { deadline } = entry.heartbeat.watch
                 && deadline <= now
@@ -389,17 +393,17 @@ impl NodeMonitor {
     }
 
     /// The next guarding request to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
         self.transmit.pop_front()
     }
 
     /// The next event.
-    pub fn poll_event(&mut self) -> Option<MonitorEvent> {
+    fn poll_event(&mut self) -> Option<Self::Event> {
         self.events.pop_front()
     }
 
     /// When [`NodeMonitor::handle_timeout`] must next be called.
-    pub fn poll_timeout(&self) -> Option<Instant> {
+    fn poll_timeout(&self) -> Option<Instant> {
         self.nodes
             .values()
             .flat_map(|entry| {
@@ -628,26 +632,8 @@ impl NodeEntry {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_master::trace::{Core, Trace, ms};
-
-    impl Core for NodeMonitor {
-        type Event = MonitorEvent;
-        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-            NodeMonitor::handle_frame(self, now, frame);
-        }
-        fn handle_timeout(&mut self, now: Instant) {
-            NodeMonitor::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            NodeMonitor::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<MonitorEvent> {
-            NodeMonitor::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            NodeMonitor::poll_timeout(self)
-        }
-    }
+    use canopener_can::Core;
+    use canopener_testkit::trace::{Trace, ms};
 
     fn node(raw: u8) -> NodeId {
         NodeId::new(raw).unwrap()

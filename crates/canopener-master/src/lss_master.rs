@@ -59,7 +59,7 @@ use std::fmt;
 use std::ops::RangeInclusive;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
 use canopener_wire::lss::{FASTSCAN_RESET, UNCONFIGURED_NODE_ID};
 use canopener_wire::{
     IdentifyField, LSS_MASTER_TO_SLAVE_ID, LSS_SLAVE_TO_MASTER_ID, LssAddressPart, LssRequest, LssResponse,
@@ -785,7 +785,7 @@ impl LssMaster {
 
     /// Feeds a received frame. Only frames on CAN-ID 7E4h (11-bit) concern the LSS master;
     /// returns whether the frame was one.
-    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) -> bool {
+    pub fn accept_frame(&mut self, now: Instant, frame: &CanFrame) -> bool {
         if frame.id() != slave_id() {
             return false;
         }
@@ -817,57 +817,6 @@ impl LssMaster {
             _ => self.ignore(frame, IgnoredReason::NotAwaited),
         }
         true
-    }
-
-    /// Lets time pass: ends the waits and switch delays due at `now`.
-    pub fn handle_timeout(&mut self, now: Instant) {
-        if let Job::Activate {
-            switch_at,
-            done_at,
-            switched,
-        } = &mut self.job
-        {
-            if !*switched && now >= *switch_at {
-                *switched = true;
-                self.events.push_back(LssEvent::SwitchBitRate);
-            }
-            if now >= *done_at {
-                self.job = Job::Idle;
-                self.events.push_back(LssEvent::Done {
-                    service: LssService::ActivateBitTiming,
-                });
-            }
-        }
-        if let Some(wait) = self.wait.take_if(|wait| wait.deadline <= now) {
-            self.settled(now, wait);
-        }
-    }
-
-    /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
-        self.transmit.pop_front()
-    }
-
-    /// The next event.
-    pub fn poll_event(&mut self) -> Option<LssEvent> {
-        self.events.pop_front()
-    }
-
-    /// When [`LssMaster::handle_timeout`] wants to be called next.
-    pub fn poll_timeout(&self) -> Option<Instant> {
-        let activate = match self.job {
-            Job::Activate {
-                switch_at,
-                switched: false,
-                ..
-            } => Some(switch_at),
-            Job::Activate { done_at, .. } => Some(done_at),
-            _ => None,
-        };
-        [activate, self.wait.as_ref().map(|wait| wait.deadline)]
-            .into_iter()
-            .flatten()
-            .min()
     }
 
     fn ensure_idle(&self) -> Result<(), LssCommandError> {
@@ -1159,6 +1108,65 @@ impl LssMaster {
     }
 }
 
+impl Core for LssMaster {
+    type Event = LssEvent;
+
+    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+        self.accept_frame(now, frame);
+    }
+
+    /// Lets time pass: ends the waits and switch delays due at `now`.
+    fn handle_timeout(&mut self, now: Instant) {
+        if let Job::Activate {
+            switch_at,
+            done_at,
+            switched,
+        } = &mut self.job
+        {
+            if !*switched && now >= *switch_at {
+                *switched = true;
+                self.events.push_back(LssEvent::SwitchBitRate);
+            }
+            if now >= *done_at {
+                self.job = Job::Idle;
+                self.events.push_back(LssEvent::Done {
+                    service: LssService::ActivateBitTiming,
+                });
+            }
+        }
+        if let Some(wait) = self.wait.take_if(|wait| wait.deadline <= now) {
+            self.settled(now, wait);
+        }
+    }
+
+    /// The next frame to send.
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
+        self.transmit.pop_front()
+    }
+
+    /// The next event.
+    fn poll_event(&mut self) -> Option<Self::Event> {
+        self.events.pop_front()
+    }
+
+    /// When [`LssMaster::handle_timeout`] wants to be called next.
+    fn poll_timeout(&self) -> Option<Instant> {
+        let activate = match self.job {
+            Job::Activate {
+                switch_at,
+                switched: false,
+                ..
+            } => Some(switch_at),
+            Job::Activate { done_at, .. } => Some(done_at),
+            _ => None,
+        };
+        [activate, self.wait.as_ref().map(|wait| wait.deadline)]
+            .into_iter()
+            .flatten()
+            .min()
+    }
+}
+
 /// The address parts in fastscan order (LSSSub 0 to 3).
 const PARTS: [LssAddressPart; 4] = [
     LssAddressPart::VendorId,
@@ -1421,7 +1429,7 @@ mod tests {
                     .collect();
                 for answer in answers {
                     self.log.push(format!("{} rx {answer}", stamp(now)));
-                    assert!(self.master.handle_frame(now, &answer));
+                    assert!(self.master.accept_frame(now, &answer));
                 }
             }
             while let Some(event) = self.master.poll_event() {
@@ -1844,7 +1852,7 @@ mod tests {
         // Not LSS answers at all: another identifier, the extended 7E4h, the master's own CAN-ID.
         for text in ["000007E4#5E05000000000000", &m("5E05"), "7E3#5E05000000000000"] {
             let frame = parse_compact_frame(text).unwrap();
-            assert!(!t.master.handle_frame(t.now, &frame), "{text}");
+            assert!(!t.master.accept_frame(t.now, &frame), "{text}");
         }
         t.rx(6, &s("5E07"));
         t.advance(100);
@@ -2322,7 +2330,7 @@ mod tests {
                 for _ in 0..2_000 {
                     while master.poll_transmit().is_some() {
                         for frame in batches.next().into_iter().flatten().flatten() {
-                            prop_assert!(master.handle_frame(now, frame));
+                            prop_assert!(master.accept_frame(now, frame));
                         }
                     }
                     while master.poll_event().is_some() {}

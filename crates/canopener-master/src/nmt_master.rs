@@ -234,12 +234,6 @@ impl NmtMaster {
     }
 }
 
-/// The virtual-time trace harness of this crate's unit tests (`canopener_can::trace`).
-#[cfg(test)]
-pub(crate) mod trace {
-    pub(crate) use canopener_can::trace::{Core, Trace, ms};
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

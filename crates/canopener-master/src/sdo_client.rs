@@ -34,7 +34,7 @@ use std::collections::VecDeque;
 use std::fmt;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
 use canopener_wire::abort::{self, abort_code_text};
 use canopener_wire::sdo::{
     BlockSegment, InitiateData, MAX_BLOCK_SIZE, Multiplexer, SEGMENT_DATA_LEN, SdoRequest, SdoResponse,
@@ -229,7 +229,7 @@ impl SdoTransferError {
 /// A sans-IO SDO client for one SDO channel (CiA 301 §7.2.4.3, "SDO protocols").
 ///
 /// ```
-/// use canopener_can::{CanFrame, Instant, StandardId};
+/// use canopener_can::{CanFrame, Core, Instant, StandardId};
 /// use canopener_master::sdo_client::{Protocol, SdoClient, SdoClientEvent, UploadMode};
 ///
 /// let mut client = SdoClient::new(5)?;
@@ -239,7 +239,7 @@ impl SdoTransferError {
 ///
 /// let id = StandardId::new(0x585).ok_or("id")?;
 /// let reply = CanFrame::new(id, &[0x43, 0x18, 0x10, 0x01, 0x78, 0x56, 0x34, 0x12])?;
-/// assert!(client.handle_frame(Instant::from_millis(1), &reply));
+/// assert!(client.accept_frame(Instant::from_millis(1), &reply));
 /// assert_eq!(
 ///     client.poll_event(),
 ///     Some(SdoClientEvent::Uploaded {
@@ -451,7 +451,7 @@ impl SdoClient {
 
     /// Handles `frame` if it arrived on the response CAN-ID (a data frame); returns whether it did.
     /// Frames on that CAN-ID while no transfer runs are ignored.
-    pub fn handle_frame(&mut self, now: Instant, frame: &CanFrame) -> bool {
+    pub fn accept_frame(&mut self, now: Instant, frame: &CanFrame) -> bool {
         if frame.id() != self.response || frame.is_remote() {
             return false;
         }
@@ -475,58 +475,6 @@ impl SdoClient {
             self.stall_deadline = None;
         }
         true
-    }
-
-    /// Lets time pass: without an answer within the timeout the transfer is aborted with
-    /// 0504 0000h "SDO protocol timed out" (§7.2.4.3.17); a stalled block upload sub-block is
-    /// acknowledged first (see [`SdoClient::poll_timeout`]).
-    pub fn handle_timeout(&mut self, now: Instant) {
-        if self.deadline.is_some_and(|deadline| now >= deadline) {
-            let state = std::mem::take(&mut self.state);
-            if let Some(mux) = state.mux() {
-                let waiting_for = state.waiting_for();
-                self.end_with_abort(mux, abort::PROTOCOL_TIMED_OUT);
-                self.fail(
-                    mux,
-                    SdoTransferError::TimedOut {
-                        waiting_for,
-                        after: self.timeout,
-                    },
-                );
-            }
-            self.deadline = None;
-            self.stall_deadline = None;
-            return;
-        }
-        if self.stall_deadline.is_some_and(|deadline| now >= deadline) {
-            self.stall_deadline = None;
-            if let State::BlockUploadSegments(mut upload) = std::mem::take(&mut self.state) {
-                // Segments stopped before the sub-block was complete (the last ones were lost):
-                // acknowledge what arrived, so the server repeats the rest in a new sub-block.
-                self.ack_gap(&mut upload);
-                self.state = State::BlockUploadSegments(upload);
-            }
-        }
-    }
-
-    /// The next frame to send on the request CAN-ID.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
-        self.transmit.pop_front()
-    }
-
-    /// The next event.
-    pub fn poll_event(&mut self) -> Option<SdoClientEvent> {
-        self.events.pop_front()
-    }
-
-    /// When [`handle_timeout`](SdoClient::handle_timeout) wants to be called next: the timeout of
-    /// the running transfer, or earlier in a block upload whose segments stopped arriving (after
-    /// 70 % of the timeout, as CANopenNode's server does for block downloads).
-    pub fn poll_timeout(&self) -> Option<Instant> {
-        match (self.deadline, self.stall_deadline) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
     }
 
     fn check_start(&self, index: u16, sub: u8) -> Result<Multiplexer, SdoClientError> {
@@ -1126,6 +1074,66 @@ impl SdoClient {
     }
 }
 
+impl Core for SdoClient {
+    type Event = SdoClientEvent;
+
+    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+        self.accept_frame(now, frame);
+    }
+
+    /// Lets time pass: without an answer within the timeout the transfer is aborted with
+    /// 0504 0000h "SDO protocol timed out" (§7.2.4.3.17); a stalled block upload sub-block is
+    /// acknowledged first (see [`SdoClient::poll_timeout`]).
+    fn handle_timeout(&mut self, now: Instant) {
+        if self.deadline.is_some_and(|deadline| now >= deadline) {
+            let state = std::mem::take(&mut self.state);
+            if let Some(mux) = state.mux() {
+                let waiting_for = state.waiting_for();
+                self.end_with_abort(mux, abort::PROTOCOL_TIMED_OUT);
+                self.fail(
+                    mux,
+                    SdoTransferError::TimedOut {
+                        waiting_for,
+                        after: self.timeout,
+                    },
+                );
+            }
+            self.deadline = None;
+            self.stall_deadline = None;
+            return;
+        }
+        if self.stall_deadline.is_some_and(|deadline| now >= deadline) {
+            self.stall_deadline = None;
+            if let State::BlockUploadSegments(mut upload) = std::mem::take(&mut self.state) {
+                // Segments stopped before the sub-block was complete (the last ones were lost):
+                // acknowledge what arrived, so the server repeats the rest in a new sub-block.
+                self.ack_gap(&mut upload);
+                self.state = State::BlockUploadSegments(upload);
+            }
+        }
+    }
+
+    /// The next frame to send on the request CAN-ID.
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
+        self.transmit.pop_front()
+    }
+
+    /// The next event.
+    fn poll_event(&mut self) -> Option<Self::Event> {
+        self.events.pop_front()
+    }
+
+    /// When [`handle_timeout`](SdoClient::handle_timeout) wants to be called next: the timeout of
+    /// the running transfer, or earlier in a block upload whose segments stopped arriving (after
+    /// 70 % of the timeout, as CANopenNode's server does for block downloads).
+    fn poll_timeout(&self) -> Option<Instant> {
+        match (self.deadline, self.stall_deadline) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+}
+
 /// Where the client is in a transfer; every state but `Idle` waits for a frame of the server.
 #[derive(Debug, Clone, Default)]
 enum State {
@@ -1372,7 +1380,7 @@ mod tests {
         fn rx(&mut self, ms: u64, frame: &str, out: &[&str]) {
             let parsed = parse_compact_frame(frame).expect("test frame");
             assert!(
-                self.client.handle_frame(Instant::from_millis(ms), &parsed),
+                self.client.accept_frame(Instant::from_millis(ms), &parsed),
                 "{frame}"
             );
             self.expect(ms, frame, out);
@@ -1508,9 +1516,9 @@ mod tests {
     fn frames_of_other_channels_and_frames_while_idle() {
         let mut trace = Trace::new();
         let other = parse_compact_frame("586#4318100100000000").expect("frame");
-        assert!(!trace.client.handle_frame(Instant::ZERO, &other));
+        assert!(!trace.client.accept_frame(Instant::ZERO, &other));
         let remote = parse_compact_frame("585#R8").expect("frame");
-        assert!(!trace.client.handle_frame(Instant::ZERO, &remote));
+        assert!(!trace.client.accept_frame(Instant::ZERO, &remote));
         // On our channel but no transfer runs: taken and ignored.
         trace.rx(0, "585#4318100100000000", &[]);
         trace.rx(0, "585#E0", &[]);
@@ -2401,7 +2409,7 @@ mod tests {
             &["605#C602200014000000"],
         );
         let parsed = parse_compact_frame("585#A40220007F000000").expect("frame");
-        assert!(trace.client.handle_frame(Instant::from_millis(1), &parsed));
+        assert!(trace.client.accept_frame(Instant::from_millis(1), &parsed));
         // The driver has sent one segment of the sub-block when the server aborts.
         assert_eq!(
             trace.client.poll_transmit().map(|frame| frame.to_string()),
@@ -2443,7 +2451,7 @@ mod tests {
             &["605#C602200014000000"],
         );
         let parsed = parse_compact_frame("585#A40220007F000000").expect("frame");
-        assert!(trace.client.handle_frame(Instant::from_millis(1), &parsed));
+        assert!(trace.client.accept_frame(Instant::from_millis(1), &parsed));
         trace
             .client
             .abort(Instant::from_millis(1), abort::CANNOT_TRANSFER_LOCAL_CONTROL);

@@ -22,7 +22,7 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
 use canopener_wire::SYNC_ID;
 
 /// The largest counter overflow value CiA 301 allows (1019h); 241 to 255 are reserved.
@@ -137,9 +137,16 @@ impl SyncProducer {
     pub fn is_running(&self) -> bool {
         self.next.is_some()
     }
+}
+
+impl Core for SyncProducer {
+    type Event = SyncEvent;
+
+    /// SyncProducer takes no frames.
+    fn handle_frame(&mut self, _now: Instant, _frame: &CanFrame) {}
 
     /// Sends the SYNC that is due at `now`.
-    pub fn handle_timeout(&mut self, now: Instant) {
+    fn handle_timeout(&mut self, now: Instant) {
         let Some(due) = self.next else { return };
         if due > now {
             return;
@@ -166,17 +173,17 @@ impl SyncProducer {
     }
 
     /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
         self.transmit.pop_front()
     }
 
     /// The next event.
-    pub fn poll_event(&mut self) -> Option<SyncEvent> {
+    fn poll_event(&mut self) -> Option<Self::Event> {
         self.events.pop_front()
     }
 
     /// When the next SYNC is due, while running.
-    pub fn poll_timeout(&self) -> Option<Instant> {
+    fn poll_timeout(&self) -> Option<Instant> {
         self.next
     }
 }
@@ -184,24 +191,8 @@ impl SyncProducer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_master::trace::{Core, Trace, ms};
-
-    impl Core for SyncProducer {
-        type Event = SyncEvent;
-        fn handle_frame(&mut self, _now: Instant, _frame: &CanFrame) {}
-        fn handle_timeout(&mut self, now: Instant) {
-            SyncProducer::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            SyncProducer::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<SyncEvent> {
-            SyncProducer::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            SyncProducer::poll_timeout(self)
-        }
-    }
+    use canopener_can::Core;
+    use canopener_testkit::trace::{Trace, ms};
 
     fn producer(period: Duration, overflow: Option<u8>) -> Trace<SyncProducer> {
         let config = SyncConfig {

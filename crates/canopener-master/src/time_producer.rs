@@ -14,7 +14,7 @@
 use std::collections::VecDeque;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
 use canopener_wire::{MILLIS_PER_DAY, TIME_ID, TimeOfDay};
 
 /// 1984-01-01T00:00:00Z in milliseconds since the Unix epoch.
@@ -153,8 +153,22 @@ impl TimeProducer {
         self.next = None;
     }
 
+    fn queue(&mut self, time: TimeOfDay) {
+        if let Ok(frame) = CanFrame::new(self.cob_id, &time.encode()) {
+            self.transmit.push_back(frame);
+        }
+        self.events.push_back(TimeEvent::Sent { time });
+    }
+}
+
+impl Core for TimeProducer {
+    type Event = TimeEvent;
+
+    /// TimeProducer takes no frames.
+    fn handle_frame(&mut self, _now: Instant, _frame: &CanFrame) {}
+
     /// Sends the periodic TIME that is due at `now`.
-    pub fn handle_timeout(&mut self, now: Instant) {
+    fn handle_timeout(&mut self, now: Instant) {
         let (Some(due), Some(period)) = (self.next, self.period) else {
             return;
         };
@@ -170,49 +184,26 @@ impl TimeProducer {
     }
 
     /// The next frame to send.
-    pub fn poll_transmit(&mut self) -> Option<CanFrame> {
+    fn poll_transmit(&mut self) -> Option<CanFrame> {
         self.transmit.pop_front()
     }
 
     /// The next event.
-    pub fn poll_event(&mut self) -> Option<TimeEvent> {
+    fn poll_event(&mut self) -> Option<Self::Event> {
         self.events.pop_front()
     }
 
     /// When the next periodic TIME is due.
-    pub fn poll_timeout(&self) -> Option<Instant> {
+    fn poll_timeout(&self) -> Option<Instant> {
         self.next
-    }
-
-    fn queue(&mut self, time: TimeOfDay) {
-        if let Ok(frame) = CanFrame::new(self.cob_id, &time.encode()) {
-            self.transmit.push_back(frame);
-        }
-        self.events.push_back(TimeEvent::Sent { time });
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nmt_master::trace::{Core, Trace, ms};
-
-    impl Core for TimeProducer {
-        type Event = TimeEvent;
-        fn handle_frame(&mut self, _now: Instant, _frame: &CanFrame) {}
-        fn handle_timeout(&mut self, now: Instant) {
-            TimeProducer::handle_timeout(self, now);
-        }
-        fn poll_transmit(&mut self) -> Option<CanFrame> {
-            TimeProducer::poll_transmit(self)
-        }
-        fn poll_event(&mut self) -> Option<TimeEvent> {
-            TimeProducer::poll_event(self)
-        }
-        fn poll_timeout(&self) -> Option<Instant> {
-            TimeProducer::poll_timeout(self)
-        }
-    }
+    use canopener_can::Core;
+    use canopener_testkit::trace::{Trace, ms};
 
     /// 2024-01-01 12:00:00.000 UTC, the worked example of the reference.
     const NOON_2024: u64 = 14_610 * 86_400_000 + 43_200_000;

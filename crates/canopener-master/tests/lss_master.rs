@@ -1,6 +1,7 @@
 //! The LSS master against LSS-unconfigured `Device`s on one virtual bus: fastscan finds every
 //! device, gives it a node-ID, and the devices boot with it (CiA 305 with CiA 301 boot-up).
 
+use canopener_can::Core;
 use std::collections::VecDeque;
 use std::time::Duration;
 

@@ -2,6 +2,7 @@
 //! or receives decoded with a `PdoLayout`: the master's view of CiA 301 §7.2.2 checked against the
 //! device side's, on virtual time.
 
+use canopener_can::Core;
 use canopener_can::{CanFrame, CanId, Instant};
 use canopener_device::application::NoApplication;
 use canopener_device::device::Device;

@@ -3,6 +3,7 @@
 //! block transfers, both on virtual time. Frames may be dropped on the way to show that block
 //! transfers recover, and every round trip must give back exactly what was written.
 
+use canopener_can::Core;
 use std::time::Duration;
 
 use canopener_can::{CanFrame, Instant};

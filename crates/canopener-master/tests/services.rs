@@ -5,6 +5,7 @@
 //! `DS301_profile.eds` (node 10; SYNC, TIME, 1019h) and CANopenSocket's `CANopenSocket.eds`
 //! (node 4; the only one with 100Ch/100Dh for node guarding).
 
+use canopener_can::Core;
 use std::time::Duration;
 
 use canopener_can::candump::parse_compact_frame;

@@ -1,6 +1,7 @@
 //! The virtual-time harness shared by the device and fault tests: a device on its own, time advanced
 //! by its deadlines, what it sends recorded as `"<ms>.<µs> <frame>"`.
 
+use canopener_can::Core;
 use canopener_can::candump::parse_compact_frame;
 use canopener_can::{CanFrame, Instant};
 use canopener_device::device::{Device, DeviceEvent};

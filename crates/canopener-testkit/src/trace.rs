@@ -1,5 +1,5 @@
-//! A virtual-time test harness for sans-IO protocol cores, shared by the device and master crates'
-//! unit tests (behind the private `_trace` feature; never part of the public API).
+//! A virtual-time test harness for one sans-IO protocol core, shared by the device and master crates'
+//! unit tests.
 //!
 //! A [`Trace`] drives one core: it runs every timer at exactly its deadline, feeds frames written in
 //! compact candump form, and records what the core sends as `"<ms>.<µs> <frame>"` lines and what it
@@ -8,24 +8,8 @@
 use std::fmt::{self, Debug};
 use std::time::Duration;
 
-use crate::candump::parse_compact_frame;
-use crate::{CanFrame, Instant};
-
-/// The sans-IO surface every core offers.
-pub trait Core {
-    /// What the core reports.
-    type Event: Debug;
-    /// A received frame.
-    fn handle_frame(&mut self, now: Instant, frame: &CanFrame);
-    /// Timers due at `now`.
-    fn handle_timeout(&mut self, now: Instant);
-    /// The next frame to send.
-    fn poll_transmit(&mut self) -> Option<CanFrame>;
-    /// The next event.
-    fn poll_event(&mut self) -> Option<Self::Event>;
-    /// When `handle_timeout` is next due.
-    fn poll_timeout(&self) -> Option<Instant>;
-}
+use canopener_can::candump::parse_compact_frame;
+use canopener_can::{CanFrame, Core, Instant};
 
 /// A frame from compact candump text, e.g. `"000#0105"` or `"705#R"`; panics on a typo in a test.
 pub fn frame(text: &str) -> CanFrame {
@@ -62,7 +46,10 @@ fn stamp(now: Instant) -> String {
     format!("{}.{:03}", micros / 1000, micros % 1000)
 }
 
-impl<C: Core> Trace<C> {
+impl<C: Core> Trace<C>
+where
+    C::Event: Debug,
+{
     /// A trace at virtual time zero.
     pub fn new(core: C) -> Self {
         Trace {
