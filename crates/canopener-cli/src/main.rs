@@ -3,54 +3,25 @@
 //! This crate is the edge of the system: it owns the terminal (progress bars, colours, JSON output), signal
 //! handling and process exit codes. Library crates below it never print or exit.
 
-mod bus_decode;
-mod bus_dump;
-mod bus_gen;
+mod args;
+mod bus;
 mod bus_open;
-mod bus_replay;
-mod bus_send;
-mod bus_serve;
 mod cli;
-mod cli_master;
-mod demo;
-mod eds_check;
-mod eds_check_inputs;
-mod eds_convert;
-mod eds_diff;
-mod eds_explain;
-mod eds_fix;
-mod eds_fmt;
-mod eds_input;
-mod eds_input_xdd;
-mod eds_rules;
-mod eds_show;
+mod eds;
 mod error;
-mod heartbeat;
-mod lss;
-mod master_io;
-mod monitor;
-mod nmt;
-mod node;
-mod node_dump;
-mod node_list;
-mod node_scan;
+mod master;
 mod output_file;
-mod pdo;
-mod pdo_watch;
-mod sdo;
-mod sdo_session;
-mod sdo_typing;
 mod sim;
-mod sim_store;
 mod stop;
-mod sync;
 
 use std::process::ExitCode;
 
 use clap::Parser;
 
-use crate::cli::{BusCommand, Cli, Command, EdsCommand, EdsRulesCommand};
-use crate::cli_master::{HeartbeatCommand, LssCommand, NodeCommand, PdoCommand, SdoCommand};
+use crate::bus::args::BusCommand;
+use crate::cli::{Cli, Command};
+use crate::eds::args::{EdsCommand, EdsRulesCommand};
+use crate::master::args::{HeartbeatCommand, LssCommand, NodeCommand, PdoCommand, SdoCommand};
 
 use crate::error::{CliError, exit_code};
 
@@ -81,37 +52,37 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
-        Command::Demo(args) => demo::run(args),
-        Command::Bus(BusCommand::Serve(args)) => bus_serve::run(args),
-        Command::Bus(BusCommand::Dump(args)) => bus_dump::run(args),
-        Command::Bus(BusCommand::Send(args)) => bus_send::run(args),
-        Command::Bus(BusCommand::Replay(args)) => bus_replay::run(args),
-        Command::Bus(BusCommand::Gen(args)) => bus_gen::run(args),
-        Command::Bus(BusCommand::Decode(args)) => bus_decode::run(args),
-        Command::Eds(EdsCommand::Show(args)) => eds_show::run(args),
-        Command::Eds(EdsCommand::Convert(args)) => eds_convert::run(args),
-        Command::Eds(EdsCommand::Fmt(args)) => eds_fmt::run(args),
-        Command::Eds(EdsCommand::Diff(args)) => eds_diff::run(args),
-        Command::Eds(EdsCommand::Check(args)) => eds_check::run(args),
-        Command::Eds(EdsCommand::Explain(args)) => eds_explain::run(args),
-        Command::Eds(EdsCommand::Rules(EdsRulesCommand::List(args))) => eds_rules::list(args),
-        Command::Eds(EdsCommand::Fix(args)) => eds_fix::run(args),
-        Command::Sim(args) => sim::run(args),
-        Command::Sdo(SdoCommand::Read(args)) => sdo::read(args),
-        Command::Sdo(SdoCommand::Write(args)) => sdo::write(args),
-        Command::Sdo(SdoCommand::Upload(args)) => sdo::upload(args),
-        Command::Sdo(SdoCommand::Download(args)) => sdo::download(args),
-        Command::Nmt(args) => nmt::run(args),
-        Command::Node(NodeCommand::Info(args)) => node::info(args),
-        Command::Node(NodeCommand::Scan(args)) => node::scan(args),
-        Command::Node(NodeCommand::Dump(args)) => node::dump(args),
-        Command::Lss(LssCommand::Scan(args)) => lss::scan(args),
-        Command::Lss(LssCommand::Configure(args)) => lss::configure(args),
-        Command::Lss(LssCommand::Inquire(args)) => lss::inquire(args),
-        Command::Pdo(PdoCommand::Map(args)) => pdo::map(args),
-        Command::Pdo(PdoCommand::Watch(args)) => pdo::watch(args),
-        Command::Sync(args) => sync::run(args),
-        Command::Heartbeat(HeartbeatCommand::Watch(args)) => heartbeat::watch(args),
+        Command::Demo(args) => bus::demo::run(args),
+        Command::Bus(BusCommand::Serve(args)) => bus::serve::run(args),
+        Command::Bus(BusCommand::Dump(args)) => bus::dump::run(args),
+        Command::Bus(BusCommand::Send(args)) => bus::send::run(args),
+        Command::Bus(BusCommand::Replay(args)) => bus::replay::run(args),
+        Command::Bus(BusCommand::Gen(args)) => bus::generate::run(args),
+        Command::Bus(BusCommand::Decode(args)) => bus::decode::run(args),
+        Command::Eds(EdsCommand::Show(args)) => eds::show::run(args),
+        Command::Eds(EdsCommand::Convert(args)) => eds::convert::run(args),
+        Command::Eds(EdsCommand::Fmt(args)) => eds::fmt::run(args),
+        Command::Eds(EdsCommand::Diff(args)) => eds::diff::run(args),
+        Command::Eds(EdsCommand::Check(args)) => eds::check::run(args),
+        Command::Eds(EdsCommand::Explain(args)) => eds::explain::run(args),
+        Command::Eds(EdsCommand::Rules(EdsRulesCommand::List(args))) => eds::rules::list(args),
+        Command::Eds(EdsCommand::Fix(args)) => eds::fix::run(args),
+        Command::Sim(args) => sim::command::run(args),
+        Command::Sdo(SdoCommand::Read(args)) => master::sdo::read(args),
+        Command::Sdo(SdoCommand::Write(args)) => master::sdo::write(args),
+        Command::Sdo(SdoCommand::Upload(args)) => master::sdo::upload(args),
+        Command::Sdo(SdoCommand::Download(args)) => master::sdo::download(args),
+        Command::Nmt(args) => master::nmt::run(args),
+        Command::Node(NodeCommand::Info(args)) => master::node::info(args),
+        Command::Node(NodeCommand::Scan(args)) => master::node::scan(args),
+        Command::Node(NodeCommand::Dump(args)) => master::node::dump(args),
+        Command::Lss(LssCommand::Scan(args)) => master::lss::scan(args),
+        Command::Lss(LssCommand::Configure(args)) => master::lss::configure(args),
+        Command::Lss(LssCommand::Inquire(args)) => master::lss::inquire(args),
+        Command::Pdo(PdoCommand::Map(args)) => master::pdo::map(args),
+        Command::Pdo(PdoCommand::Watch(args)) => master::pdo::watch(args),
+        Command::Sync(args) => master::sync::run(args),
+        Command::Heartbeat(HeartbeatCommand::Watch(args)) => master::heartbeat::watch(args),
     }
 }
 

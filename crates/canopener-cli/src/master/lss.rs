@@ -1,0 +1,941 @@
+//! `canopener lss scan|configure|inquire`: layer setting services (CiA 305) through `LssMaster`.
+//!
+//! Timing: `--timeout` is the LSS response timeout. LSS commands do not take the 1 s SDO default of
+//! the other master commands: fastscan pays a whole timeout on every step no device answers (about
+//! 65 per device), so without `--timeout` they use `LssConfig::DEFAULT` (100 ms, the reasoning is in
+//! `canopener_master::lss_master`). The settle time after a first answer stays 20 ms, or the timeout
+//! when that is shorter.
+//!
+//! `lss scan` without `--assign` lists the unconfigured devices without giving them node-IDs: each
+//! device fastscan finds stays in LSS configuration state, where CiA 305 slaves take no part in
+//! fastscan, so the next fastscan finds the next device; at the end one switch state global sends
+//! all back to waiting. A device found twice (one that answers fastscan in configuration state
+//! against CiA 305) ends the listing with a warning instead of looping.
+
+use std::collections::BTreeSet;
+use std::io::{IsTerminal, Write};
+use std::time::Duration;
+
+use canopener_can::{CanFrame, Instant, StandardId};
+use canopener_master::lss_master::{
+    KnownParts, LssAddress, LssCommandError, LssConfig, LssEvent, LssMaster, LssMode, LssService, ScanError,
+    ScanPlan,
+};
+use canopener_wire::lss::UNCONFIGURED_NODE_ID;
+use canopener_wire::{LSS_MASTER_TO_SLAVE_ID, LssAddressPart, LssRequest, NodeId};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::json;
+
+use crate::args::OutputFormat;
+use crate::error::{CliError, CliResult, stdout_error};
+use crate::master::args::{LssAddressArgs, LssConfigureArgs, LssInquireArgs, LssScanArgs, MasterArgs};
+use crate::master::heartbeat::millis;
+use crate::master::link::{Ended, Flow, Link};
+use crate::master::node_list::parse_node_list;
+
+/// More devices than this in one listing means something answers that is no CiA 305 slave.
+const MAX_LISTED: usize = 1024;
+
+const CONFIGURE_EXAMPLE: &str =
+    "canopener lss configure --vendor 0x2F7 --product 0x1 --revision 0x10 --serial 0x12345 --node-id 5";
+const INQUIRE_EXAMPLE: &str =
+    "canopener lss inquire --vendor 0x2F7 --product 0x1 --revision 0x10 --serial 0x12345";
+
+pub(crate) fn scan(args: LssScanArgs) -> CliResult {
+    let node_ids = args.assign.as_deref().map(parse_assign).transpose()?;
+    let mut session = Session::open(&args.master, "lss scan")?;
+    let started = session.link.now();
+    let progress = spinner();
+    let mut printer = Printer::new(args.master.format);
+    let result = match node_ids {
+        Some(node_ids) => scan_all(&mut session, &progress, &mut printer, node_ids, args.store),
+        None => list_all(&mut session, &progress, &mut printer),
+    };
+    progress.finish_and_clear();
+    let elapsed = session.link.now() - started;
+    let (found, outcome) = result?;
+    let stats = session.master.stats();
+    let timeout = session.master.config().timeout;
+    let assigned = args.assign.is_some();
+    match args.master.format {
+        OutputFormat::Json => {
+            let devices: Vec<serde_json::Value> = found
+                .iter()
+                .map(|device| {
+                    let mut value = address_json(&device.address);
+                    value["node_id"] = json!(device.node_id.map(NodeId::get));
+                    if assigned {
+                        value["stored"] = json!(args.store && device.store_problem.is_none());
+                    }
+                    if let Some(problem) = &device.store_problem {
+                        value["store_problem"] = json!(problem);
+                    }
+                    value
+                })
+                .collect();
+            let value = json!({
+                "devices": devices,
+                "found": found.len(),
+                "complete": matches!(outcome, ScanOutcome::Complete),
+                "error": match &outcome {
+                    ScanOutcome::Failed(error) => Some(error.to_string()),
+                    _ => None,
+                },
+                "elapsed_ms": millis(elapsed),
+                "frames_sent": stats.sent,
+                "frames_received": stats.received,
+                "timeouts": stats.timeouts,
+                "timeout_ms": millis(timeout),
+                "ignored_frames": session.ignored,
+            });
+            print(&format!("{value}\n"))?;
+        }
+        OutputFormat::Text => {
+            let mut text = format!(
+                "{} device(s) found in {:.2} s: {} LSS frames sent, {} received, {} timeouts of {} ms\n",
+                found.len(),
+                elapsed.as_secs_f64(),
+                stats.sent,
+                stats.received,
+                stats.timeouts,
+                timeout.as_millis()
+            );
+            if !assigned && !found.is_empty() {
+                text.push_str(
+                    "They are unconfigured and back in LSS waiting state; give them node-IDs with e.g. \
+                     `canopener lss scan --assign 10-20` or `canopener lss configure`.\n",
+                );
+            }
+            print(&text)?;
+        }
+    }
+    if session.ignored > 0 {
+        eprintln!(
+            "warning: {} frames on 7E4h answered nothing the LSS master asked and were ignored",
+            session.ignored
+        );
+    }
+    match outcome {
+        ScanOutcome::Complete => Ok(()),
+        ScanOutcome::Interrupted => {
+            eprintln!("interrupted: the scan is incomplete");
+            Err(CliError::Exit(crate::error::exit_code::INTERRUPTED))
+        }
+        ScanOutcome::Repeated(address) => {
+            eprintln!(
+                "warning: the device with {address} was found twice: it takes part in fastscan in LSS \
+                 configuration state, against CiA 305, so the list may be incomplete; use --assign to give \
+                 node-IDs as devices are found"
+            );
+            Ok(())
+        }
+        ScanOutcome::TooMany => Err(CliError::Device(format!(
+            "more than {MAX_LISTED} devices answered fastscan; the answers cannot come from CiA 305 slaves"
+        ))),
+        ScanOutcome::Failed(error) => {
+            let advice = match error {
+                ScanError::NoNodeIdLeft => "; give a longer --assign list, e.g. --assign 10-40",
+                ScanError::ConfirmationFailed { .. } => {
+                    "; answers may come later than --timeout: try e.g. --timeout 200ms"
+                }
+                _ => "",
+            };
+            Err(CliError::Device(format!(
+                "the LSS scan stopped after {} device(s): {error}{advice}",
+                found.len()
+            )))
+        }
+    }
+}
+
+pub(crate) fn configure(args: LssConfigureArgs) -> CliResult {
+    let address = parse_address(&args.address, CONFIGURE_EXAMPLE)?.ok_or_else(|| {
+        CliError::Usage(format!(
+            "lss configure needs the device's LSS address, all four parts: --vendor, --product, --revision \
+             and --serial, e.g. `{CONFIGURE_EXAMPLE}`; `canopener lss inquire` shows the address of a single \
+             device, `canopener lss scan` those of all unconfigured devices"
+        ))
+    })?;
+    let node_id = match args.node_id {
+        UNCONFIGURED_NODE_ID => None,
+        raw => Some(NodeId::new(raw).ok_or_else(|| {
+            CliError::Usage(format!(
+                "--node-id {raw} is no node-ID: give 1 to 127, or 255 to make the device unconfigured, \
+                 e.g. `{CONFIGURE_EXAMPLE}`"
+            ))
+        })?),
+    };
+    let bit_timing = args.bitrate.map(bit_timing_index).transpose()?;
+    let mut session = Session::open(&args.master, "lss configure")?;
+    let timeout_ms = session.master.config().timeout.as_millis();
+    select(&mut session, address)?;
+    let steps = configure_selected(&mut session, &address, node_id, bit_timing, args.store);
+    session.back_to_waiting()?;
+    let previous = steps?;
+    session.warn_extra_answers();
+    let new_raw = node_id.map_or(UNCONFIGURED_NODE_ID, NodeId::get);
+    let effect = match previous {
+        Some(UNCONFIGURED_NODE_ID) if node_id.is_some() => {
+            format!("the device was unconfigured and now runs as node {new_raw}")
+        }
+        Some(old) if old == new_raw => "the node-ID is unchanged".to_owned(),
+        Some(old) => format!(
+            "node-ID {} becomes active at the device's next reset communication, e.g. \
+             `canopener nmt reset-comm {old}`",
+            node_id_text(new_raw)
+        ),
+        None => "the device did not say its previous node-ID; the new one is active after its next \
+                 reset communication, or at once if it was unconfigured"
+            .to_owned(),
+    };
+    match args.master.format {
+        OutputFormat::Json => {
+            let value = json!({
+                "address": address_json(&address),
+                "previous_node_id": previous,
+                "node_id": new_raw,
+                "bitrate_kbit": args.bitrate,
+                "stored": args.store,
+                "effect": effect,
+                "timeout_ms": timeout_ms,
+            });
+            print(&format!("{value}\n"))
+        }
+        OutputFormat::Text => {
+            let mut text = format!("configured the device with {address}\n");
+            text.push_str(&format!("  node-ID {}\n", node_id_text(new_raw)));
+            if let Some(kbit) = args.bitrate {
+                // CiA 305: a configured bit rate is pending until activate bit timing, which would
+                // leave this link on the old rate, or until a restart after store configuration.
+                let when = if args.store {
+                    "stored: active when the device restarts"
+                } else {
+                    "pending and not stored: add --store to keep it over a restart"
+                };
+                text.push_str(&format!("  bit rate {kbit} kbit/s ({when})\n"));
+            }
+            if args.store {
+                text.push_str("  stored in the device\n");
+            }
+            text.push_str(&format!("{effect}\n"));
+            print(&text)
+        }
+    }
+}
+
+pub(crate) fn inquire(args: LssInquireArgs) -> CliResult {
+    let address = parse_address(&args.address, INQUIRE_EXAMPLE)?;
+    let mut session = Session::open(&args.master, "lss inquire")?;
+    let timeout_ms = session.master.config().timeout.as_millis();
+    match address {
+        Some(address) => select(&mut session, address)?,
+        None => {
+            session.service(|master, _| master.switch_state_global(LssMode::Configuration))?;
+        }
+    }
+    let answers = inquire_selected(&mut session, address.is_none());
+    session.back_to_waiting()?;
+    let (found, node_id) = answers?;
+    let several = session.extra_answers > 0;
+    if several {
+        eprintln!(
+            "warning: several devices are in LSS configuration state and answered together ({} extra answers); \
+             the values shown are the first answers and may mix devices. List them with `canopener lss scan`, \
+             or ask one by its address: `{INQUIRE_EXAMPLE}`",
+            session.extra_answers
+        );
+    }
+    match args.master.format {
+        OutputFormat::Json => {
+            let mut value = address_json(&found);
+            value["node_id"] = json!(node_id);
+            value["selected"] = json!(if address.is_some() { "address" } else { "global" });
+            value["several_answered"] = json!(several);
+            value["timeout_ms"] = json!(timeout_ms);
+            print(&format!("{value}\n"))
+        }
+        OutputFormat::Text => {
+            let mut text = String::new();
+            for part in PARTS {
+                text.push_str(&format!("{:<16} 0x{:08X}\n", part.to_string(), found.part(part)));
+            }
+            let node = node_id.map_or_else(|| "no answer".to_owned(), node_id_text);
+            text.push_str(&format!("{:<16} {node}\n", "node-ID"));
+            print(&text)
+        }
+    }
+}
+
+/// The address parts in CiA 305 order (1018h sub 1 to 4).
+const PARTS: [LssAddressPart; 4] = [
+    LssAddressPart::VendorId,
+    LssAddressPart::ProductCode,
+    LssAddressPart::RevisionNumber,
+    LssAddressPart::SerialNumber,
+];
+
+/// One LSS master on one bus, and what it saw besides the answers it waited for.
+#[derive(Debug)]
+struct Session {
+    link: Link,
+    master: LssMaster,
+    /// Answers from a second device where one was expected (several in configuration state).
+    extra_answers: u64,
+    /// Frames on 7E4h that answered nothing pending (late answers, garbage).
+    ignored: u64,
+}
+
+impl Session {
+    fn open(master_args: &MasterArgs, command: &str) -> CliResult<Session> {
+        let config = lss_config(master_args.timeout, timeout_given())?;
+        let link = Link::open(master_args.bus.spec.as_deref(), command)?;
+        Ok(Session {
+            link,
+            master: LssMaster::new(config),
+            extra_answers: 0,
+            ignored: 0,
+        })
+    }
+
+    /// Starts one service and drives it to its end event. The core ends every service within its
+    /// timeout and settle time; the deadline here only guards against a core that would not.
+    fn service(
+        &mut self,
+        start: impl FnOnce(&mut LssMaster, Instant) -> Result<(), LssCommandError>,
+    ) -> CliResult<LssEvent> {
+        let now = self.link.now();
+        start(&mut self.master, now)
+            .map_err(|err| CliError::Internal(anyhow::anyhow!("LSS master: {err}")))?;
+        let config = self.master.config();
+        let deadline = now + config.timeout * 2 + config.settle + Duration::from_secs(1);
+        let (extra, ignored) = (&mut self.extra_answers, &mut self.ignored);
+        let ended = self.link.drive(&mut self.master, Some(deadline), |_, event| {
+            Ok(match event {
+                LssEvent::ExtraAnswer { .. } => {
+                    *extra += 1;
+                    Flow::Continue
+                }
+                LssEvent::Ignored { .. } => {
+                    *ignored += 1;
+                    Flow::Continue
+                }
+                LssEvent::Found { .. } | LssEvent::SwitchBitRate => Flow::Continue,
+                end => Flow::Done(end),
+            })
+        })?;
+        match ended {
+            Ok(event) => Ok(event),
+            Err(Ended::Interrupted) => {
+                self.abandon();
+                eprintln!("interrupted");
+                Err(CliError::Exit(crate::error::exit_code::INTERRUPTED))
+            }
+            Err(Ended::Deadline) => Err(CliError::Internal(anyhow::anyhow!(
+                "the LSS master did not end {:?} within {} ms",
+                self.master.running(),
+                (deadline - now).as_millis()
+            ))),
+        }
+    }
+
+    /// Switch state global to waiting (CiA 305): every device leaves configuration state, and one
+    /// that was unconfigured makes a node-ID it was given active.
+    fn back_to_waiting(&mut self) -> CliResult {
+        self.service(|master, _| master.switch_state_global(LssMode::Waiting))
+            .map(|_| ())
+    }
+
+    /// Sends switch state global to waiting whatever the master is doing: the command ends, and no
+    /// device may be left in configuration state.
+    fn abandon(&mut self) {
+        let request = LssRequest::SwitchStateGlobal { mode: 0 };
+        if let Some(id) = StandardId::new(LSS_MASTER_TO_SLAVE_ID)
+            && let Ok(frame) = CanFrame::new(id, &request.encode())
+        {
+            let _ = self.link.send(&frame);
+        }
+    }
+
+    fn warn_extra_answers(&self) {
+        if self.extra_answers > 0 {
+            eprintln!(
+                "warning: {} answers came from a second device: more than one device is in LSS configuration \
+                 state, for example two with the same LSS address",
+                self.extra_answers
+            );
+        }
+    }
+}
+
+/// The LSS timing: [`LssConfig::DEFAULT`] unless the user gave `--timeout` (see the module docs).
+fn lss_config(timeout: Duration, given: bool) -> CliResult<LssConfig> {
+    if !given {
+        return Ok(LssConfig::DEFAULT);
+    }
+    if timeout.is_zero() {
+        return Err(CliError::Usage(
+            "--timeout 0 leaves no time for an LSS answer; give e.g. `canopener lss scan --timeout 20ms`"
+                .to_owned(),
+        ));
+    }
+    Ok(LssConfig {
+        timeout,
+        settle: LssConfig::DEFAULT.settle.min(timeout),
+    })
+}
+
+/// Whether `--timeout` is on the command line: clap fills in the SDO default otherwise, which is
+/// not the LSS default.
+fn timeout_given() -> bool {
+    std::env::args_os()
+        .skip(1)
+        .any(|arg| arg == "--timeout" || arg.to_string_lossy().starts_with("--timeout="))
+}
+
+/// Switch state selective: the device with `address` enters configuration state.
+fn select(session: &mut Session, address: LssAddress) -> CliResult {
+    match session.service(|master, now| master.switch_state_selective(now, address))? {
+        LssEvent::Done { .. } => Ok(()),
+        LssEvent::TimedOut { after, .. } => Err(CliError::Device(format!(
+            "no device with {address} answered switch state selective within {} ms; `canopener lss inquire` \
+             shows the address of a single device, `canopener lss scan` those of all unconfigured devices",
+            after.as_millis()
+        ))),
+        other => Err(unexpected(&other)),
+    }
+}
+
+/// Inquires the previous node-ID, then configures the selected device; returns the previous
+/// node-ID when the device told it.
+fn configure_selected(
+    session: &mut Session,
+    address: &LssAddress,
+    node_id: Option<NodeId>,
+    bit_timing: Option<u8>,
+    store: bool,
+) -> CliResult<Option<u8>> {
+    let previous = match session.service(|master, now| master.inquire_node_id(now))? {
+        LssEvent::NodeIdInquired { node_id } => Some(node_id),
+        _ => None,
+    };
+    let what = format!(
+        "node-ID {}",
+        node_id_text(node_id.map_or(UNCONFIGURED_NODE_ID, NodeId::get))
+    );
+    let event = session.service(|master, now| master.configure_node_id(now, node_id))?;
+    confirmed(address, &what, &event)?;
+    if let Some(index) = bit_timing {
+        let what = format!(
+            "bit timing {}",
+            canopener_wire::bit_timing_text(index).unwrap_or("?")
+        );
+        let event = session.service(|master, now| master.configure_bit_timing(now, index))?;
+        confirmed(address, &what, &event)?;
+    }
+    if store {
+        let event = session.service(|master, now| master.store_configuration(now))?;
+        confirmed(address, "the configuration", &event)?;
+    }
+    Ok(previous)
+}
+
+/// The answer to configure node-ID, bit timing or store configuration as a result.
+fn confirmed(address: &LssAddress, what: &str, event: &LssEvent) -> CliResult {
+    match event {
+        LssEvent::Configured { result: Ok(()), .. } => Ok(()),
+        LssEvent::Configured {
+            service,
+            result: Err(err),
+        } => Err(CliError::Device(format!(
+            "the device with {address} refused {service} ({what}): {err}"
+        ))),
+        LssEvent::TimedOut { service, after } => Err(CliError::Device(format!(
+            "the device with {address} did not answer {service} ({what}) within {} ms",
+            after.as_millis()
+        ))),
+        other => Err(unexpected(other)),
+    }
+}
+
+/// Inquires the four address parts and the node-ID of the device in configuration state.
+fn inquire_selected(session: &mut Session, global: bool) -> CliResult<(LssAddress, Option<u8>)> {
+    let mut values = [0u32; 4];
+    for (idx, part) in PARTS.into_iter().enumerate() {
+        match session.service(|master, now| master.inquire_address(now, part))? {
+            LssEvent::Inquired { value, .. } => values[idx] = value,
+            LssEvent::TimedOut { service, after } if idx == 0 && global => {
+                return Err(CliError::Device(format!(
+                    "no device answered {service} within {} ms after switch state global: no LSS device is \
+                     on the bus, or it serves LSS slower (try e.g. --timeout 500ms)",
+                    after.as_millis()
+                )));
+            }
+            LssEvent::TimedOut { service, after } => {
+                return Err(CliError::Device(format!(
+                    "the device in LSS configuration state did not answer {service} within {} ms",
+                    after.as_millis()
+                )));
+            }
+            other => return Err(unexpected(&other)),
+        }
+    }
+    let [vendor_id, product_code, revision_number, serial_number] = values;
+    let address = LssAddress {
+        vendor_id,
+        product_code,
+        revision_number,
+        serial_number,
+    };
+    let node_id = match session.service(|master, now| master.inquire_node_id(now))? {
+        LssEvent::NodeIdInquired { node_id } => Some(node_id),
+        LssEvent::TimedOut { after, .. } => {
+            eprintln!(
+                "warning: the device did not answer inquire node-ID within {} ms",
+                after.as_millis()
+            );
+            None
+        }
+        other => return Err(unexpected(&other)),
+    };
+    Ok((address, node_id))
+}
+
+fn unexpected(event: &LssEvent) -> CliError {
+    CliError::Internal(anyhow::anyhow!("unexpected LSS master event: {event}"))
+}
+
+/// A device a scan found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Found {
+    address: LssAddress,
+    node_id: Option<NodeId>,
+    /// Why storing its node-ID failed, with `--store`.
+    store_problem: Option<String>,
+}
+
+/// How a scan ended.
+#[derive(Debug)]
+enum ScanOutcome {
+    Complete,
+    Interrupted,
+    Failed(ScanError),
+    /// Listing without assigning found a device a second time.
+    Repeated(LssAddress),
+    TooMany,
+}
+
+/// `lss scan --assign`: [`LssMaster::scan_all`].
+fn scan_all(
+    session: &mut Session,
+    progress: &ProgressBar,
+    printer: &mut Printer,
+    node_ids: Vec<NodeId>,
+    store: bool,
+) -> CliResult<(Vec<Found>, ScanOutcome)> {
+    let now = session.link.now();
+    let plan = ScanPlan {
+        node_ids,
+        store,
+        known: KnownParts::NONE,
+    };
+    session
+        .master
+        .scan_all(now, plan)
+        .map_err(|err| CliError::Usage(format!("{err}; e.g. `canopener lss scan --assign 10-20`")))?;
+    let mut found = Vec::new();
+    let mut store_problem = None;
+    let (extra, ignored) = (&mut session.extra_answers, &mut session.ignored);
+    let ended = session.link.drive(&mut session.master, None, |_, event| {
+        match event {
+            LssEvent::Found { address, node_id } => {
+                let device = Found {
+                    address,
+                    node_id,
+                    store_problem: store_problem.take(),
+                };
+                printer.found(&device)?;
+                found.push(device);
+                progress.set_message(format!("{} found", found.len()));
+            }
+            LssEvent::Configured {
+                service: LssService::StoreConfiguration,
+                result: Err(err),
+            } => store_problem = Some(format!("store configuration: {err}")),
+            LssEvent::TimedOut {
+                service: LssService::StoreConfiguration,
+                after,
+            } => {
+                store_problem = Some(format!(
+                    "store configuration: no answer within {} ms",
+                    after.as_millis()
+                ));
+            }
+            LssEvent::ExtraAnswer { .. } => *extra += 1,
+            LssEvent::Ignored { .. } => *ignored += 1,
+            LssEvent::ScanFinished { .. } => return Ok(Flow::Done(ScanOutcome::Complete)),
+            LssEvent::ScanFailed { error, .. } => return Ok(Flow::Done(ScanOutcome::Failed(error))),
+            _ => {}
+        }
+        Ok(Flow::Continue)
+    })?;
+    let outcome = match ended {
+        Ok(outcome) => outcome,
+        // Without a deadline only Ctrl-C ends the drive.
+        Err(_) => {
+            session.abandon();
+            ScanOutcome::Interrupted
+        }
+    };
+    Ok((found, outcome))
+}
+
+/// `lss scan` without `--assign`: fastscan again and again, leaving each device found in
+/// configuration state (see the module docs), then all back to waiting.
+fn list_all(
+    session: &mut Session,
+    progress: &ProgressBar,
+    printer: &mut Printer,
+) -> CliResult<(Vec<Found>, ScanOutcome)> {
+    let mut found: Vec<Found> = Vec::new();
+    let mut seen = BTreeSet::new();
+    let outcome = loop {
+        if found.len() >= MAX_LISTED {
+            break ScanOutcome::TooMany;
+        }
+        let now = session.link.now();
+        session
+            .master
+            .fastscan(now, KnownParts::NONE)
+            .map_err(|err| CliError::Internal(anyhow::anyhow!("LSS master: {err}")))?;
+        let (extra, ignored) = (&mut session.extra_answers, &mut session.ignored);
+        let mut this = None;
+        let ended = session.link.drive(&mut session.master, None, |_, event| {
+            match event {
+                LssEvent::Found { address, .. } => this = Some(address),
+                LssEvent::ExtraAnswer { .. } => *extra += 1,
+                LssEvent::Ignored { .. } => *ignored += 1,
+                LssEvent::ScanFinished { .. } => return Ok(Flow::Done(Ok(()))),
+                LssEvent::ScanFailed { error, .. } => return Ok(Flow::Done(Err(error))),
+                _ => {}
+            }
+            Ok(Flow::Continue)
+        })?;
+        match ended {
+            Err(_) => {
+                session.abandon();
+                break ScanOutcome::Interrupted;
+            }
+            Ok(Err(error)) => break ScanOutcome::Failed(error),
+            Ok(Ok(())) => {}
+        }
+        let Some(address) = this else {
+            break ScanOutcome::Complete;
+        };
+        if !seen.insert(address) {
+            break ScanOutcome::Repeated(address);
+        }
+        let device = Found {
+            address,
+            node_id: None,
+            store_problem: None,
+        };
+        printer.found(&device)?;
+        found.push(device);
+        progress.set_message(format!("{} found", found.len()));
+    };
+    if !matches!(outcome, ScanOutcome::Interrupted) {
+        session.back_to_waiting()?;
+    }
+    Ok((found, outcome))
+}
+
+/// Prints each device as it is found (text), so that a long scan shows its progress on stdout too.
+#[derive(Debug)]
+struct Printer {
+    format: OutputFormat,
+}
+
+impl Printer {
+    fn new(format: OutputFormat) -> Printer {
+        Printer { format }
+    }
+
+    fn found(&mut self, device: &Found) -> CliResult {
+        if self.format != OutputFormat::Text {
+            return Ok(());
+        }
+        let mut line = format!("found {}", device.address);
+        if let Some(node) = device.node_id {
+            line.push_str(&format!(" -> node-ID {node}"));
+        }
+        if let Some(problem) = &device.store_problem {
+            line.push_str(&format!(" (not stored: {problem})"));
+        }
+        line.push('\n');
+        print(&line)
+    }
+}
+
+/// `--assign`: node-IDs in the order they are given, each once.
+fn parse_assign(text: &str) -> CliResult<Vec<NodeId>> {
+    let example = "canopener lss scan --assign 10-20";
+    let node_ids = parse_node_list(text, "--assign", example)?;
+    let mut seen = BTreeSet::new();
+    if let Some(twice) = node_ids.iter().find(|node| !seen.insert(**node)) {
+        return Err(CliError::Usage(format!(
+            "--assign {text:?} gives node-ID {twice} twice; each device needs its own, e.g. `{example}`"
+        )));
+    }
+    Ok(node_ids)
+}
+
+/// The LSS address from `--vendor --product --revision --serial`: all four, or none (`Ok(None)`).
+fn parse_address(args: &LssAddressArgs, example: &str) -> CliResult<Option<LssAddress>> {
+    let given = [
+        ("--vendor", &args.vendor),
+        ("--product", &args.product),
+        ("--revision", &args.revision),
+        ("--serial", &args.serial),
+    ];
+    let missing: Vec<&str> = given
+        .iter()
+        .filter(|(_, value)| value.is_none())
+        .map(|(option, _)| *option)
+        .collect();
+    if missing.len() == given.len() {
+        return Ok(None);
+    }
+    if !missing.is_empty() {
+        return Err(CliError::Usage(format!(
+            "an LSS address needs all four parts, but {} {} missing: a device is selected by vendor-ID, \
+             product code, revision and serial number together, e.g. `{example}`",
+            missing.join(", "),
+            if missing.len() == 1 { "is" } else { "are" }
+        )));
+    }
+    let mut values = [0u32; 4];
+    for (slot, (option, value)) in values.iter_mut().zip(given) {
+        *slot = parse_u32(value.as_deref().unwrap_or_default(), option, example)?;
+    }
+    let [vendor_id, product_code, revision_number, serial_number] = values;
+    Ok(Some(LssAddress {
+        vendor_id,
+        product_code,
+        revision_number,
+        serial_number,
+    }))
+}
+
+/// A 32-bit number, decimal or 0x-hex (or hex with a trailing h, as CANopen documents write it).
+fn parse_u32(text: &str, option: &str, example: &str) -> CliResult<u32> {
+    let trimmed = text.trim();
+    let parsed = if let Some(hex) = trimmed.strip_prefix("0x").or_else(|| trimmed.strip_prefix("0X")) {
+        u32::from_str_radix(hex, 16).ok()
+    } else if let Some(hex) = trimmed.strip_suffix(['h', 'H']) {
+        u32::from_str_radix(hex, 16).ok()
+    } else {
+        trimmed.parse().ok()
+    };
+    parsed.ok_or_else(|| {
+        CliError::Usage(format!(
+            "{option} {text:?} is not a 32-bit number: write it decimal or 0x hex, e.g. `{example}`"
+        ))
+    })
+}
+
+/// The CiA 305 bit timing table index (table selector 0) of a bit rate in kbit/s.
+fn bit_timing_index(kbit: u16) -> CliResult<u8> {
+    const TABLE: [(u16, u8); 8] = [
+        (1000, 0),
+        (800, 1),
+        (500, 2),
+        (250, 3),
+        (125, 4),
+        (50, 6),
+        (20, 7),
+        (10, 8),
+    ];
+    TABLE
+        .iter()
+        .find(|(rate, _)| *rate == kbit)
+        .map(|(_, index)| *index)
+        .ok_or_else(|| {
+            CliError::Usage(format!(
+                "--bitrate {kbit} is not in the CiA 305 bit timing table: use 1000, 800, 500, 250, 125, 50, 20 \
+                 or 10 (kbit/s; 100 is reserved), e.g. `{CONFIGURE_EXAMPLE} --bitrate 250`"
+            ))
+        })
+}
+
+fn node_id_text(raw: u8) -> String {
+    if raw == UNCONFIGURED_NODE_ID {
+        "unconfigured (FFh)".to_owned()
+    } else {
+        raw.to_string()
+    }
+}
+
+fn address_json(address: &LssAddress) -> serde_json::Value {
+    json!({
+        "vendor_id": address.vendor_id,
+        "product_code": address.product_code,
+        "revision_number": address.revision_number,
+        "serial_number": address.serial_number,
+    })
+}
+
+/// A spinner on stderr while fastscan runs, drawn only on a terminal.
+fn spinner() -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    if let Ok(style) = ProgressStyle::with_template("{spinner} LSS fastscan {elapsed}: {msg}") {
+        bar.set_style(style);
+    }
+    bar.set_message("0 found");
+    bar.enable_steady_tick(Duration::from_millis(100));
+    bar
+}
+
+fn print(text: &str) -> CliResult {
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(stdout_error)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn address_args(parts: [Option<&str>; 4]) -> LssAddressArgs {
+        let [vendor, product, revision, serial] = parts.map(|part| part.map(str::to_owned));
+        LssAddressArgs {
+            vendor,
+            product,
+            revision,
+            serial,
+        }
+    }
+
+    #[test]
+    fn an_address_needs_all_four_parts_or_none() {
+        assert_eq!(parse_address(&address_args([None; 4]), "x").unwrap(), None);
+        let full = parse_address(
+            &address_args([Some("0xABC"), Some("1025"), Some("10002h"), Some("0x55")]),
+            "x",
+        )
+        .unwrap()
+        .unwrap();
+        assert_eq!(
+            full,
+            LssAddress {
+                vendor_id: 0xABC,
+                product_code: 1025,
+                revision_number: 0x10002,
+                serial_number: 0x55,
+            }
+        );
+        let err = parse_address(&address_args([None, None, None, Some("1")]), CONFIGURE_EXAMPLE).unwrap_err();
+        assert!(matches!(err, CliError::Usage(_)));
+        let text = err.to_string();
+        assert!(
+            text.contains("--vendor, --product, --revision are missing"),
+            "{text}"
+        );
+        assert!(text.contains(CONFIGURE_EXAMPLE), "{text}");
+        let err = parse_address(
+            &address_args([Some("1"), Some("2"), Some("3"), Some("0xZZ")]),
+            INQUIRE_EXAMPLE,
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("--serial \"0xZZ\" is not a 32-bit number"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn bit_rates_map_to_the_cia_305_table_and_100_is_refused() {
+        assert_eq!(bit_timing_index(1000).unwrap(), 0);
+        assert_eq!(bit_timing_index(250).unwrap(), 3);
+        assert_eq!(bit_timing_index(50).unwrap(), 6);
+        assert_eq!(bit_timing_index(10).unwrap(), 8);
+        for bad in [100, 0, 333] {
+            let err = bit_timing_index(bad).unwrap_err();
+            assert!(err.to_string().contains("--bitrate 250"), "{err}");
+        }
+    }
+
+    #[test]
+    fn lss_timing_is_the_lss_default_unless_the_user_gave_a_timeout() {
+        let sdo_default = Duration::from_secs(1);
+        assert_eq!(lss_config(sdo_default, false).unwrap(), LssConfig::DEFAULT);
+        let fast = lss_config(Duration::from_millis(10), true).unwrap();
+        assert_eq!(fast.timeout, Duration::from_millis(10));
+        assert_eq!(
+            fast.settle,
+            Duration::from_millis(10),
+            "settle never exceeds the timeout"
+        );
+        let slow = lss_config(Duration::from_millis(500), true).unwrap();
+        assert_eq!(slow.settle, LssConfig::DEFAULT.settle);
+        assert!(matches!(
+            lss_config(Duration::ZERO, true),
+            Err(CliError::Usage(_))
+        ));
+    }
+
+    #[test]
+    fn assign_lists_keep_their_order_and_refuse_duplicates() {
+        let raw: Vec<u8> = parse_assign("12,10-11")
+            .unwrap()
+            .iter()
+            .map(|n| n.get())
+            .collect();
+        assert_eq!(raw, [12, 10, 11]);
+        let err = parse_assign("10-12,11").unwrap_err();
+        assert!(err.to_string().contains("node-ID 11 twice"), "{err}");
+        assert!(err.to_string().contains("--assign 10-20"), "{err}");
+    }
+
+    #[test]
+    fn refusals_and_silence_become_device_errors_naming_the_address() {
+        let address = LssAddress {
+            vendor_id: 0xABC,
+            product_code: 1,
+            revision_number: 2,
+            serial_number: 3,
+        };
+        let refused = LssEvent::Configured {
+            service: LssService::ConfigureNodeId,
+            result: Err(canopener_master::lss_master::LssServiceError::NodeIdOutOfRange),
+        };
+        let err = confirmed(&address, "node-ID 5", &refused).unwrap_err();
+        assert_eq!(err.exit_code(), crate::error::exit_code::DEVICE);
+        let text = err.to_string();
+        assert!(text.contains("vendor-id 0x00000ABC"), "{text}");
+        assert!(
+            text.contains("refused configure node-ID (node-ID 5): node-ID out of range"),
+            "{text}"
+        );
+        let silent = LssEvent::TimedOut {
+            service: LssService::StoreConfiguration,
+            after: Duration::from_millis(100),
+        };
+        let text = confirmed(&address, "the configuration", &silent)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            text.contains("did not answer store configuration (the configuration) within 100 ms"),
+            "{text}"
+        );
+        let ok = LssEvent::Configured {
+            service: LssService::StoreConfiguration,
+            result: Ok(()),
+        };
+        assert!(confirmed(&address, "x", &ok).is_ok());
+    }
+}

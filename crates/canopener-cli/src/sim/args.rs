@@ -1,0 +1,64 @@
+//! Options of `canopener sim`.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use crate::args::{BusArg, parse_u32_number};
+
+#[derive(Debug, Args)]
+pub(crate) struct SimArgs {
+    /// EDS or DCF files: one simulated device each.
+    #[arg(required_unless_present = "list_faults", value_name = "FILE")]
+    pub(crate) files: Vec<PathBuf>,
+    /// Give every simulated device this defect (repeatable); `--list-faults` names them.
+    #[arg(long = "fault", value_name = "NAME", value_parser = parse_fault)]
+    pub(crate) faults: Vec<canopener_device::faults::Fault>,
+    /// Describe every fault `--fault` accepts and exit.
+    #[arg(long)]
+    pub(crate) list_faults: bool,
+    #[command(flatten)]
+    pub(crate) bus: BusArg,
+    /// Node-ID of devices whose file is not a DCF with a node-ID (several files: N, N+1, ... in order).
+    /// Without it such devices start LSS-unconfigured (node-ID FFh) and wait for an LSS master.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=127), value_name = "N")]
+    pub(crate) node_id: Option<u8>,
+    /// Serial number 1018h:04 of the devices (several files: S, S+1, ... in order), so that devices from
+    /// one EDS have distinct LSS addresses. Decimal or 0x-hex.
+    #[arg(long, value_parser = parse_u32_number, value_name = "S")]
+    pub(crate) serial: Option<u32>,
+    /// Keep what devices store in this directory, so it survives restarts: saved parameters (1010h
+    /// "save", 1011h "load") and the LSS configuration (store configuration: the node-ID to start with).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) state_dir: Option<PathBuf>,
+    /// The application behind each device's object dictionary.
+    #[arg(long, value_enum, default_value_t = SimApp::None)]
+    pub(crate) app: SimApp,
+    #[arg(long, value_enum, default_value_t = SimFormat::Human)]
+    pub(crate) format: SimFormat,
+}
+
+/// What runs behind a simulated device's object dictionary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum SimApp {
+    /// Nothing: the device only holds its object dictionary.
+    None,
+    /// CiA 401 generic I/O (6000h/6200h/6401h, factory test registers 2000h-2002h); objects the file lacks
+    /// are added.
+    Cia401,
+}
+
+/// How `sim` logs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum SimFormat {
+    /// One line per event on stderr.
+    Human,
+    /// One JSON object per event on stdout.
+    Json,
+}
+
+/// Reads a fault name of the device fault catalogue; the error lists every name.
+fn parse_fault(text: &str) -> Result<canopener_device::faults::Fault, String> {
+    text.parse()
+        .map_err(|e: canopener_device::faults::UnknownFault| e.to_string())
+}
