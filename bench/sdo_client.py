@@ -5,7 +5,7 @@ Usage (via bench/run.sh, i.e. cargo xtask bench): bench/sdo_client.py [--quick]
         bench/sdo_client.py client HOST PORT CHANNEL NODE_ID EDS KIND ROUNDS FIRST_ROUND   (the python client)
 
 1. `sdo_throughput virtual` (crates/canopener-master/examples): canopener_master's SdoClient and a canopener_device
-   Device on a 1 Mbit/s canopener_sim BusSim, on virtual time with zero processing time, so every figure is protocol
+   Device on a 1 Mbit/s canopener_bus_engine BusEngine, on virtual time with zero processing time, so every figure is protocol
    efficiency against the wire: frames per transfer, exact stuffed bits, wire utilisation, and the rate as a share of
    the interop notes' §4 limits (1 Mbit/s, zero turnaround). The virtual figures are the same in every run (the run is
    deterministic; the script checks that); the wall-clock speed of the simulation is the median over the runs.
@@ -327,7 +327,7 @@ def virtual_markdown(virtual):
         return ["**SdoClient on the bit-accurate virtual bus**: FAILED: " + virtual["error"]]
     lines = ["**SdoClient on the bit-accurate virtual bus** (`cargo run --release -p canopener-master --example "
              "sdo_throughput -- virtual`): canopener_master's `SdoClient` and a canopener_device `Device` (checker "
-             "fixture `base.eds` at node 22h plus a DOMAIN and an UNSIGNED32) on a 1 Mbit/s `canopener_sim::BusSim`, "
+             "fixture `base.eds` at node 22h plus a DOMAIN and an UNSIGNED32) on a 1 Mbit/s `canopener_bus_engine::BusEngine`, "
              "virtual time, zero processing time on both sides, blksize 127 with CRC. Every frame is arbitrated and "
              "lasts its exact stuffed length. Reference limits: interop notes §4 at 1 Mbit/s, zero turnaround, "
              "typical (best–worst) = 125 (111–135)-bit frames; the segmented and block references are "

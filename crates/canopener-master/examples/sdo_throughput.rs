@@ -6,7 +6,7 @@
 //! sdo_throughput hub SPEC NODE_ID EDS KIND ROUNDS [FIRST_ROUND]
 //! ```
 //!
-//! `virtual` puts the client on one port of a bit-accurate 1 Mbit/s [`BusSim`] and a
+//! `virtual` puts the client on one port of a bit-accurate 1 Mbit/s [`BusEngine`] and a
 //! `canopener_device` [`Device`] (the checker's `base.eds`, node 22h, plus a 10 000-byte DOMAIN and
 //! an UNSIGNED32) on another, on virtual time with zero processing time on both sides: every frame is
 //! arbitrated and lasts its exact stuffed length, each side gets the other's frame at the end of
@@ -31,6 +31,7 @@ use std::error::Error;
 use std::process::ExitCode;
 use std::time::Duration;
 
+use canopener_bus_engine::{BusConfig, BusEngine, BusStats, Port};
 use canopener_can::bits::INTERMISSION_BITS;
 use canopener_can::{Bitrate, Instant};
 use canopener_device::application::NoApplication;
@@ -40,7 +41,6 @@ use canopener_master::sdo_client::{
     DownloadMode, Protocol, SdoClient, SdoClientError, SdoClientEvent, UploadMode,
 };
 use canopener_od::{Access, DataType, DynamicOd, Entry, ObjectKey};
-use canopener_sim::{BusConfig, BusSim, BusStats, Port};
 use canopener_transport::{BusSpec, CanBus, WallClock};
 use serde_json::{Value, json};
 
@@ -200,7 +200,7 @@ const LARGE: [(usize, usize); 2] = [(889, 100), (10_000, 20)];
 
 /// The client and the device on one bit-accurate bus, on virtual time.
 struct VirtualNet {
-    bus: BusSim,
+    bus: BusEngine,
     client_port: Port,
     device_port: Port,
     client: SdoClient,
@@ -231,7 +231,7 @@ impl VirtualNet {
         dev.boot(Instant::ZERO);
         // The boot-up message is not part of any measurement.
         while dev.poll_transmit().is_some() {}
-        let mut bus = BusSim::new(BusConfig { bitrate: BITRATE });
+        let mut bus = BusEngine::new(BusConfig { bitrate: BITRATE });
         let client_port = bus.attach();
         let device_port = bus.attach();
         Ok(VirtualNet {

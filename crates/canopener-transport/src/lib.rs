@@ -7,7 +7,7 @@
 //!
 //! Backends, each selected by a [`BusSpec`] (see [`spec`] for the grammar):
 //! - [`VirtualBus`], `virtual:NAME[?bitrate=RATE]`: an in-process bus; ideal (instant) or
-//!   bit-accurate in real time, driven by `canopener_sim::BusSim`.
+//!   bit-accurate in real time, driven by `canopener_bus_engine::BusEngine`.
 //! - [`SocketcandBus`], `socketcand://HOST:PORT/BUS`: a client of a socketcand server such as
 //!   `canopener bus serve`.
 //! - `SocketCanBus`, `socketcan:IFACE`: Linux SocketCAN with kernel receive timestamps (Linux only).

@@ -23,8 +23,8 @@ use std::sync::{Arc, Condvar, LazyLock, Mutex, MutexGuard, PoisonError, Weak};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use canopener_bus_engine::{BusConfig, BusEngine, Port, SubmitError};
 use canopener_can::{Bitrate, CanFrame};
-use canopener_sim::{BusConfig, BusSim, Port, SubmitError};
 
 use crate::clock::WallClock;
 use crate::error::TransportError;
@@ -363,7 +363,7 @@ pub(crate) struct BusState {
 /// The bit-accurate engine's state, guarded by the bus lock.
 #[derive(Debug)]
 pub(crate) struct Engine {
-    pub(crate) sim: BusSim,
+    pub(crate) sim: BusEngine,
 }
 
 #[derive(Debug)]
@@ -384,7 +384,7 @@ impl Inbox {
 impl SharedBus {
     fn new(name: &str, bitrate: Option<Bitrate>) -> io::Result<Arc<SharedBus>> {
         let engine = bitrate.map(|bitrate| Engine {
-            sim: BusSim::with_queue_capacity(BusConfig { bitrate }, MAX_TX_QUEUE_LEN),
+            sim: BusEngine::with_queue_capacity(BusConfig { bitrate }, MAX_TX_QUEUE_LEN),
         });
         let bus = Arc::new(SharedBus {
             name: name.to_owned(),

@@ -1,8 +1,8 @@
 //! The real-time driver of a bit-accurate virtual bus: one thread per bus feeding
-//! `canopener_sim::BusSim` the wall clock.
+//! `canopener_bus_engine::BusEngine` the wall clock.
 //!
 //! The engine's schedule depends only on when frames were submitted, never on when this thread
-//! wakes up (see `BusSim`), so a late wake-up delays delivery but does not stretch the bus timeline:
+//! wakes up (see `BusEngine`), so a late wake-up delays delivery but does not stretch the bus timeline:
 //! a saturated bus carries exactly `bitrate / frame_bits` frames per second.
 
 use std::io;

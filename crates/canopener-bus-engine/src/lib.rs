@@ -1,6 +1,6 @@
 //! A virtual classical CAN bus: arbitration by identifier and bit-exact frame timing.
 //!
-//! [`BusSim`] models what a saturated or idle CAN wire does with the frames its nodes want to send:
+//! [`BusEngine`] models what a saturated or idle CAN wire does with the frames its nodes want to send:
 //! each [`Port`] queues frames, the lowest arbitration field wins when the bus goes idle, and a frame
 //! occupies exactly as many bit times as its real stuffed bit sequence has
 //! ([`canopener_can::bits::frame_bits`]). Each frame comes out once, as a [`Delivery`] with the instant
@@ -12,7 +12,7 @@
 //! `virtual:NAME?bitrate=…` bus of the transport crate. It does not model error frames, bit errors,
 //! bus-off or ACK-less sending; every frame is received.
 //!
-//! Main types: [`BusSim`] (the engine), [`BusConfig`], [`Port`], [`Delivery`], [`BusStats`] and
+//! Main types: [`BusEngine`] (the engine), [`BusConfig`], [`Port`], [`Delivery`], [`BusStats`] and
 //! [`SubmitError`].
 //!
 //! # The drive loop
@@ -22,10 +22,10 @@
 //!
 //! ```
 //! use canopener_can::{Bitrate, CanFrame, Instant, StandardId};
-//! use canopener_sim::{BusConfig, BusSim};
+//! use canopener_bus_engine::{BusConfig, BusEngine};
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
-//! let mut bus = BusSim::new(BusConfig { bitrate: Bitrate::K500 });
+//! let mut bus = BusEngine::new(BusConfig { bitrate: Bitrate::K500 });
 //! let master = bus.attach();
 //! let device = bus.attach();
 //! let id = |raw| StandardId::new(raw).ok_or("bad id");
@@ -56,6 +56,6 @@
 
 #![warn(missing_docs)]
 
-mod bus;
+mod engine;
 
-pub use bus::{BusConfig, BusSim, BusStats, Delivery, Port, SubmitError};
+pub use engine::{BusConfig, BusEngine, BusStats, Delivery, Port, SubmitError};

@@ -1,12 +1,12 @@
 //! Acceptance: a saturated 1 Mbit/s bus delivers frames at the exact theoretical rate.
 //!
-//! Run with `cargo test -p canopener-sim --test saturation -- --nocapture` to see the numbers.
+//! Run with `cargo test -p canopener-bus-engine --test saturation -- --nocapture` to see the numbers.
 
 use std::time::Duration;
 
+use canopener_bus_engine::{BusConfig, BusEngine, Delivery};
 use canopener_can::bits::frame_bits;
 use canopener_can::{Bitrate, CanFrame, Instant, StandardId};
-use canopener_sim::{BusConfig, BusSim, Delivery};
 
 /// At least this much virtual time is simulated.
 const RUN: Duration = Duration::from_secs(1);
@@ -27,7 +27,7 @@ impl SplitMix64 {
 /// Keeps every port's queue topped up and drives the bus on virtual time until `RUN` has passed.
 /// Returns every delivery in bus order.
 fn saturate(
-    bus: &mut BusSim,
+    bus: &mut BusEngine,
     n_ports: usize,
     mut next_frame: impl FnMut(usize) -> CanFrame,
 ) -> Vec<Delivery> {
@@ -92,7 +92,7 @@ fn report(label: &str, m: &Measured) {
     );
 }
 
-fn assert_saturated(bitrate: Bitrate, bus: &BusSim, deliveries: &[Delivery], m: &Measured) {
+fn assert_saturated(bitrate: Bitrate, bus: &BusEngine, deliveries: &[Delivery], m: &Measured) {
     assert!(m.elapsed >= RUN, "simulated only {:?}", m.elapsed);
     let deviation = (m.rate - m.theoretical).abs() / m.theoretical;
     assert!(
@@ -116,7 +116,7 @@ fn assert_saturated(bitrate: Bitrate, bus: &BusSim, deliveries: &[Delivery], m: 
 #[test]
 fn saturated_1m_bus_with_dlc8_frames_runs_at_the_exact_frame_rate() {
     let bitrate = Bitrate::M1;
-    let mut bus = BusSim::new(BusConfig { bitrate });
+    let mut bus = BusEngine::new(BusConfig { bitrate });
     // Four PDO producers, each with its own fixed payload.
     let frames: Vec<CanFrame> = (0..4u8)
         .map(|i| {
@@ -137,7 +137,7 @@ fn saturated_1m_bus_with_dlc8_frames_runs_at_the_exact_frame_rate() {
 #[test]
 fn saturated_1m_bus_with_random_payloads_runs_at_the_exact_frame_rate() {
     let bitrate = Bitrate::M1;
-    let mut bus = BusSim::new(BusConfig { bitrate });
+    let mut bus = BusEngine::new(BusConfig { bitrate });
     let mut rng = SplitMix64(0x00C0_FFEE);
     // Eight ports with random ids and payloads: every arbitration has different contenders.
     let deliveries = saturate(&mut bus, 8, |_| {

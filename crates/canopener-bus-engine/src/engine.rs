@@ -20,7 +20,7 @@ pub struct BusConfig {
     pub bitrate: Bitrate,
 }
 
-/// One node attached to a [`BusSim`].
+/// One node attached to a [`BusEngine`].
 ///
 /// Ports are numbered in attach order and never reused, so a detached port stays unknown.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -57,7 +57,7 @@ pub struct BusStats {
     pub bits: u64,
 }
 
-/// Why [`BusSim::submit`] refused a frame.
+/// Why [`BusEngine::submit`] refused a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum SubmitError {
     /// The port was never attached to this bus or has been detached.
@@ -85,16 +85,16 @@ pub enum SubmitError {
 /// dominant bits win on a wire. A frame lasts `frame_bits(frame).total` bit times; receivers have it
 /// 3 bit times (the intermission) before the bus is free for the next SOF.
 ///
-/// Drive it like any sans-IO engine: [`BusSim::submit`] frames with the time they were handed over,
-/// call [`BusSim::handle_timeout`] at (or after) [`BusSim::poll_timeout`], then drain
-/// [`BusSim::poll_delivery`] until it returns `None`. Deliveries pile up until drained.
+/// Drive it like any sans-IO engine: [`BusEngine::submit`] frames with the time they were handed over,
+/// call [`BusEngine::handle_timeout`] at (or after) [`BusEngine::poll_timeout`], then drain
+/// [`BusEngine::poll_delivery`] until it returns `None`. Deliveries pile up until drained.
 ///
 /// The schedule depends only on the submit times, never on when `handle_timeout` is called: a driver
 /// that oversleeps gets the same `start` and `at` instants, just later. All instants of a run of
 /// back-to-back frames are computed from the bit count since the run began, so there is no rounding
 /// drift even at bit rates that do not divide 10⁹ ns.
 #[derive(Debug, Clone)]
-pub struct BusSim {
+pub struct BusEngine {
     bitrate: Bitrate,
     queue_capacity: usize,
     queues: BTreeMap<Port, VecDeque<Queued>>,
@@ -112,20 +112,20 @@ pub struct BusSim {
     busy_nanos: u64,
 }
 
-impl BusSim {
+impl BusEngine {
     /// Frames a port may have waiting before [`SubmitError::QueueFull`]. It holds a whole CiA 301
     /// SDO block (up to 127 segments) several times over, yet bounds a runaway sender to at most
     /// 140 ms of a saturated 1 Mbit/s bus (1024 DLC-8 frames of 111 to 135 bits) and a few tens of KiB.
     pub const DEFAULT_QUEUE_CAPACITY: usize = 1024;
 
-    /// An idle bus with no ports and [`BusSim::DEFAULT_QUEUE_CAPACITY`] frames per port queue.
-    pub fn new(config: BusConfig) -> BusSim {
-        BusSim::with_queue_capacity(config, BusSim::DEFAULT_QUEUE_CAPACITY)
+    /// An idle bus with no ports and [`BusEngine::DEFAULT_QUEUE_CAPACITY`] frames per port queue.
+    pub fn new(config: BusConfig) -> BusEngine {
+        BusEngine::with_queue_capacity(config, BusEngine::DEFAULT_QUEUE_CAPACITY)
     }
 
     /// An idle bus whose port queues hold `capacity` frames each (0 refuses every frame).
-    pub fn with_queue_capacity(config: BusConfig, capacity: usize) -> BusSim {
-        BusSim {
+    pub fn with_queue_capacity(config: BusConfig, capacity: usize) -> BusEngine {
+        BusEngine {
             bitrate: config.bitrate,
             queue_capacity: capacity,
             queues: BTreeMap::new(),
@@ -159,7 +159,7 @@ impl BusSim {
     /// wire completes and is delivered as usual. Unknown ports are ignored.
     ///
     /// Detach takes no time argument: it acts on the state as of the last call. A driver that is late
-    /// calls [`BusSim::handle_timeout`] first so frames that were due have left the queue.
+    /// calls [`BusEngine::handle_timeout`] first so frames that were due have left the queue.
     pub fn detach(&mut self, port: Port) {
         self.queues.remove(&port);
     }
@@ -180,8 +180,8 @@ impl BusSim {
     /// wins arbitration; on a busy bus it contends when the current frame's intermission ends. A `now`
     /// earlier than a time the engine has already seen is treated as that time.
     ///
-    /// Everything due before `now` is settled first, exactly as [`BusSim::handle_timeout`] would, so
-    /// deliveries may be waiting afterwards: drain [`BusSim::poll_delivery`] after submitting too.
+    /// Everything due before `now` is settled first, exactly as [`BusEngine::handle_timeout`] would, so
+    /// deliveries may be waiting afterwards: drain [`BusEngine::poll_delivery`] after submitting too.
     pub fn submit(&mut self, now: Instant, port: Port, frame: CanFrame) -> Result<(), SubmitError> {
         let ready = now.max(self.latest_input);
         self.latest_input = ready;
@@ -214,7 +214,7 @@ impl BusSim {
         self.advance(now, Bound::Inclusive);
     }
 
-    /// When the engine next needs [`BusSim::handle_timeout`]: the `at` of the frame on the wire, or
+    /// When the engine next needs [`BusEngine::handle_timeout`]: the `at` of the frame on the wire, or
     /// when the next arbitration happens. `None` while nothing is on the wire or waiting. The instant
     /// may lie in the past for a late driver; call `handle_timeout` right away then.
     pub fn poll_timeout(&self) -> Option<Instant> {
@@ -393,8 +393,8 @@ mod tests {
         CanFrame::new(StandardId::new(id).unwrap(), &[]).unwrap()
     }
 
-    fn bus() -> BusSim {
-        BusSim::new(BusConfig { bitrate: Bitrate::M1 })
+    fn bus() -> BusEngine {
+        BusEngine::new(BusConfig { bitrate: Bitrate::M1 })
     }
 
     #[test]
@@ -414,7 +414,7 @@ mod tests {
 
     #[test]
     fn full_queue_refuses_and_recovers() {
-        let mut bus = BusSim::with_queue_capacity(BusConfig { bitrate: Bitrate::M1 }, 2);
+        let mut bus = BusEngine::with_queue_capacity(BusConfig { bitrate: Bitrate::M1 }, 2);
         let port = bus.attach();
         bus.submit(Instant::ZERO, port, frame(1)).unwrap();
         bus.submit(Instant::ZERO, port, frame(2)).unwrap();

@@ -3,9 +3,9 @@
 
 use std::time::Duration;
 
+use canopener_bus_engine::{BusConfig, BusEngine, Delivery, Port};
 use canopener_can::bits::frame_bits;
 use canopener_can::{Bitrate, CanFrame, CanId, ExtendedId, Instant, StandardId};
-use canopener_sim::{BusConfig, BusSim, Delivery, Port};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
@@ -17,8 +17,8 @@ fn us(micros: u64) -> Instant {
     Instant::from_micros(micros)
 }
 
-fn bus(bitrate: Bitrate) -> BusSim {
-    BusSim::new(BusConfig { bitrate })
+fn bus(bitrate: Bitrate) -> BusEngine {
+    BusEngine::new(BusConfig { bitrate })
 }
 
 /// One frame handed to the bus at `at` by `port`.
@@ -32,7 +32,7 @@ struct Submission {
 /// A virtual-time driver that never oversleeps: it handles each deadline exactly when it falls due,
 /// and hands over frames at their instants, before any deadline at the same instant (a frame that
 /// becomes ready at an arbitration instant takes part in it).
-fn drive_on_time(bus: &mut BusSim, submissions: &[Submission]) -> Vec<Delivery> {
+fn drive_on_time(bus: &mut BusEngine, submissions: &[Submission]) -> Vec<Delivery> {
     let mut deliveries = Vec::new();
     let mut next = submissions.iter().peekable();
     loop {
@@ -56,7 +56,7 @@ fn drive_on_time(bus: &mut BusSim, submissions: &[Submission]) -> Vec<Delivery> 
 
 /// A driver that oversleeps: it hands over every frame at its instant but calls `handle_timeout`
 /// only every `tick` (and once at the very end), far later than the deadlines.
-fn drive_late(bus: &mut BusSim, submissions: &[Submission], tick: Duration) -> Vec<Delivery> {
+fn drive_late(bus: &mut BusEngine, submissions: &[Submission], tick: Duration) -> Vec<Delivery> {
     let mut deliveries = Vec::new();
     let mut next_tick = Instant::ZERO + tick;
     for sub in submissions {
@@ -72,7 +72,7 @@ fn drive_late(bus: &mut BusSim, submissions: &[Submission], tick: Duration) -> V
 }
 
 /// Handles every deadline on time until nothing is left to do.
-fn run_until_idle(bus: &mut BusSim) -> Vec<Delivery> {
+fn run_until_idle(bus: &mut BusEngine) -> Vec<Delivery> {
     let mut deliveries = Vec::new();
     while let Some(deadline) = bus.poll_timeout() {
         bus.handle_timeout(deadline);
@@ -477,7 +477,7 @@ proptest! {
     }
 }
 
-fn bus_with_ports(bitrate: Bitrate, n: usize) -> BusSim {
+fn bus_with_ports(bitrate: Bitrate, n: usize) -> BusEngine {
     let mut bus = bus(bitrate);
     for _ in 0..n {
         bus.attach();

@@ -5,15 +5,15 @@
 
 use std::hint::black_box;
 
+use canopener_bus_engine::{BusConfig, BusEngine};
 use canopener_can::{Bitrate, CanFrame, Instant, StandardId};
-use canopener_sim::{BusConfig, BusSim};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 const FRAMES: u64 = 10_000;
 
 /// Keeps every port's queue non-empty and runs the bus until `FRAMES` frames were delivered.
 fn saturate(n_ports: u16) -> u64 {
-    let mut bus = BusSim::new(BusConfig { bitrate: Bitrate::M1 });
+    let mut bus = BusEngine::new(BusConfig { bitrate: Bitrate::M1 });
     let ports: Vec<_> = (0..n_ports).map(|_| bus.attach()).collect();
     let frames: Vec<_> = (0..n_ports)
         .map(|i| {
