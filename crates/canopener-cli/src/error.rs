@@ -97,6 +97,14 @@ impl CliError {
     }
 }
 
+/// A result file that could not be written: `eds` commands report it as trouble (exit 2, as diff(1) does);
+/// commands that write what a device gave map it to an output error themselves.
+impl From<canopener_runtime::files::WriteError> for CliError {
+    fn from(err: canopener_runtime::files::WriteError) -> CliError {
+        CliError::EdsTrouble(err.to_string())
+    }
+}
+
 pub(crate) type CliResult<T = ()> = Result<T, CliError>;
 
 /// Wraps a write to stdout so that a closed pipe ends the command quietly.

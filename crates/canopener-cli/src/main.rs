@@ -10,7 +10,6 @@ mod cli;
 mod eds;
 mod error;
 mod master;
-mod output_file;
 mod sim;
 mod stop;
 

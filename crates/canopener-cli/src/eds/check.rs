@@ -11,7 +11,7 @@ use crate::eds::args::{CheckFormat, ColorChoice, DenyLevel, EdsCheckArgs};
 use crate::eds::check_inputs::{Checks, expand};
 use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult};
-use crate::output_file::write_atomic;
+use canopener_runtime::files::write_atomic;
 
 pub(crate) fn run(args: EdsCheckArgs) -> CliResult {
     let checks = Checks::from_args(&args.selection)?;

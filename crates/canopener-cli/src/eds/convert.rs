@@ -6,7 +6,7 @@ use canopener_eds::{dcf, json, write};
 use crate::eds::args::{ConvertTarget, EdsConvertArgs};
 use crate::eds::input::{Input, SourceFormat, print_stdout, read_input, report_diagnostics};
 use crate::error::{CliError, CliResult};
-use crate::output_file::{same_file, write_atomic};
+use canopener_runtime::files::{same_file, write_atomic};
 
 pub(crate) fn run(args: EdsConvertArgs) -> CliResult {
     if args.to != ConvertTarget::Dcf && (args.node_id.is_some() || args.bitrate.is_some()) {
@@ -67,7 +67,7 @@ pub(crate) fn run(args: EdsConvertArgs) -> CliResult {
         ConvertTarget::Xdd => crate::eds::input_xdd::write(&input.eds)?.into_bytes(),
     };
     match &args.output {
-        Some(out) => write_atomic(out, &bytes, false),
+        Some(out) => Ok(write_atomic(out, &bytes, false)?),
         None => print_stdout(&String::from_utf8_lossy(&bytes)),
     }
 }

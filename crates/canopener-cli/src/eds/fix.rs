@@ -11,7 +11,7 @@ use crate::eds::check::count;
 use crate::eds::check_inputs::Checks;
 use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult, stdout_error};
-use crate::output_file::{backup_path, same_file, write_atomic};
+use canopener_runtime::files::{backup_path, same_file, write_atomic};
 
 pub(crate) fn run(args: EdsFixArgs) -> CliResult {
     if let Some(out) = &args.output

@@ -4,7 +4,7 @@ use crate::eds::args::EdsFmtArgs;
 use crate::eds::convert::canonical_bytes;
 use crate::eds::input::{print_stdout, read_input, report_diagnostics};
 use crate::error::{CliError, CliResult};
-use crate::output_file::{backup_path, same_file, write_atomic};
+use canopener_runtime::files::{backup_path, same_file, write_atomic};
 
 pub(crate) fn run(args: EdsFmtArgs) -> CliResult {
     if let Some(out) = &args.output
@@ -47,7 +47,7 @@ pub(crate) fn run(args: EdsFmtArgs) -> CliResult {
         return Ok(());
     }
     match &args.output {
-        Some(out) => write_atomic(out, &bytes, false),
+        Some(out) => Ok(write_atomic(out, &bytes, false)?),
         None => print_stdout(&String::from_utf8_lossy(&bytes)),
     }
 }

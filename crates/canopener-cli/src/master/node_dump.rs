@@ -40,7 +40,7 @@ use crate::error::{CliError, CliResult};
 use crate::master::args::NodeDumpArgs;
 use crate::master::sdo::{output_error, print_json, refuse_existing};
 use crate::master::sdo_session::{SdoSession, Transfer, device_error, millis, object_name};
-use crate::output_file::{same_file, write_atomic};
+use canopener_runtime::files::{same_file, write_atomic};
 
 /// The longest value that fits a CiA 306 line (255 characters) after `ParameterValue=`.
 const MAX_VALUE_CHARS: usize = 255 - "ParameterValue=".len();

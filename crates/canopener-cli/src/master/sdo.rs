@@ -19,7 +19,7 @@ use crate::master::sdo_session::{ByteProgress, SdoSession, device_error, kbytes_
 use crate::master::sdo_typing::{
     TypeSource, Typing, decode, guess_type, json_value, raw_hex, value_type_of, write_warnings,
 };
-use crate::output_file::{backup_path, write_atomic};
+use canopener_runtime::files::{WriteError, backup_path, write_atomic};
 
 pub(crate) fn read(args: SdoReadArgs) -> CliResult {
     let example = "canopener sdo read --node 5 1018 1";
@@ -263,15 +263,12 @@ pub(crate) fn refuse_existing(path: &Path, force: bool) -> CliResult {
     Ok(())
 }
 
-/// A result file that could not be written is an output error (exit 5), whatever `write_atomic` says.
-pub(crate) fn output_error(path: &Path, err: CliError) -> CliError {
-    match err {
-        CliError::EdsTrouble(message) => CliError::output(
-            format!("writing {}", path.display()),
-            std::io::Error::other(message),
-        ),
-        other => other,
-    }
+/// A result file that could not be written is an output error (exit 5).
+pub(crate) fn output_error(path: &Path, err: WriteError) -> CliError {
+    CliError::output(
+        format!("writing {}", path.display()),
+        std::io::Error::other(err.to_string()),
+    )
 }
 
 /// The bytes of a fixed-size value in an expedited answer that indicates more bytes than the type has
@@ -371,7 +368,12 @@ mod tests {
         assert!(err.to_string().contains("--force") && err.to_string().contains("x.bin.bak"));
         assert!(refuse_existing(&file, true).is_ok());
         assert!(refuse_existing(&dir.join("new.bin"), false).is_ok());
-        let err = output_error(&file, CliError::EdsTrouble("cannot create".to_owned()));
+        let denied = WriteError {
+            action: "create",
+            path: file.clone(),
+            source: std::io::Error::from(std::io::ErrorKind::PermissionDenied),
+        };
+        let err = output_error(&file, denied);
         assert_eq!(err.exit_code(), 5);
         std::fs::remove_dir_all(&dir).unwrap();
     }

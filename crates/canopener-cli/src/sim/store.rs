@@ -22,7 +22,7 @@ use canopener_od::ObjectKey;
 use canopener_wire::NodeId;
 
 use crate::error::{CliError, CliResult};
-use crate::output_file::write_atomic;
+use canopener_runtime::files::write_atomic;
 
 /// A [`ParameterStore`] backed by one file.
 #[derive(Debug)]

@@ -2,19 +2,32 @@
 //! so a crash or a full disk never leaves a half-written file; optionally the old file kept as `.bak`.
 
 use std::fs;
-use std::io::Write;
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use crate::error::{CliError, CliResult};
+/// A file could not be written (or its backup kept); nothing was lost: the old file is untouched.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot {action} {}: {source}", path.display())]
+pub struct WriteError {
+    /// What was being done (`create`, `write`, `keep a backup as`, `replace`, ...).
+    pub action: &'static str,
+    /// The file it was done to.
+    pub path: PathBuf,
+    /// The operating system's reason.
+    #[source]
+    pub source: io::Error,
+}
 
 /// Writes `bytes` to `path` atomically. With `backup`, an existing `path` is first copied to `path.bak`.
 ///
 /// A `path` that exists and is no regular file (`/dev/null`, `/dev/stdout`, a FIFO) is written in place:
 /// renaming a temporary file over it would replace the device with a plain file, and nothing of it can be
 /// lost or half-written the way a regular file can.
-pub(crate) fn write_atomic(path: &Path, bytes: &[u8], backup: bool) -> CliResult {
-    let trouble = |what: &str, target: &Path, e: std::io::Error| {
-        CliError::EdsTrouble(format!("cannot {what} {}: {e}", target.display()))
+pub fn write_atomic(path: &Path, bytes: &[u8], backup: bool) -> Result<(), WriteError> {
+    let trouble = |action: &'static str, target: &Path, source: io::Error| WriteError {
+        action,
+        path: target.to_owned(),
+        source,
     };
     if fs::metadata(path).is_ok_and(|meta| !meta.is_file() && !meta.is_dir()) {
         let mut file = fs::OpenOptions::new()
@@ -49,14 +62,14 @@ pub(crate) fn write_atomic(path: &Path, bytes: &[u8], backup: bool) -> CliResult
 }
 
 /// `FILE.bak` next to `FILE`.
-pub(crate) fn backup_path(path: &Path) -> PathBuf {
+pub fn backup_path(path: &Path) -> PathBuf {
     let mut name = path.as_os_str().to_owned();
     name.push(".bak");
     PathBuf::from(name)
 }
 
 /// Whether two paths name the same existing file.
-pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
+pub fn same_file(a: &Path, b: &Path) -> bool {
     match (fs::canonicalize(a), fs::canonicalize(b)) {
         (Ok(x), Ok(y)) => x == y,
         _ => false,
@@ -94,10 +107,9 @@ mod tests {
             .collect();
         assert!(leftovers.is_empty());
         let missing_dir = dir.join("no/such/dir/x.eds");
-        assert!(matches!(
-            write_atomic(&missing_dir, b"x", false),
-            Err(CliError::EdsTrouble(_))
-        ));
+        let err = write_atomic(&missing_dir, b"x", false).unwrap_err();
+        assert_eq!(err.action, "create");
+        assert!(err.to_string().starts_with("cannot create "), "{err}");
         fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -1,0 +1,15 @@
+//! The runtime every canopener front end stands on.
+//!
+//! The protocol cores (`canopener-device`, `canopener-master`) are sans-IO: they never read a clock,
+//! sleep, or touch a socket or a file. This crate is where that happens, besides the transports
+//! (`canopener-transport`) and the hub (`canopener-hub`), so that a command-line tool, a test runner, a
+//! network monitor or a web server only parse what the user asked and present what came back.
+//!
+//! - [`cancel`]: a cancellation token that a front end sets (Ctrl-C, a web request going away) and every
+//!   long-running loop here polls.
+//! - [`files`]: writing results without losing data (temporary file, rename, optional backup).
+
+#![warn(missing_docs)]
+
+pub mod cancel;
+pub mod files;
