@@ -3,7 +3,7 @@
 //! The LSS master sends on CAN-ID 7E5h, slaves answer on 7E4h; every frame has 8 data bytes, D0 being
 //! the command specifier ([`canopener_wire::lss`] reads and writes them). A slave is addressed by its
 //! LSS address, the 128-bit identity of 1018h:01..04 (vendor-ID, product code, revision number,
-//! serial number), given as an [`LssIdentity`].
+//! serial number), given as an [`LssAddress`].
 //!
 //! The slave is in one of two LSS states, [`LssState::Waiting`] (after power-on) or
 //! [`LssState::Configuration`]. Which service runs in which state (CiA 305, LSS slave state machine):
@@ -48,26 +48,13 @@ use canopener_can::{CanFrame, Core, Instant, StandardId};
 use canopener_od::{DynamicOd, ObjectKey};
 use canopener_wire::lss::{FASTSCAN_RESET, UNCONFIGURED_NODE_ID};
 use canopener_wire::{
-    IdentifyField, LSS_MASTER_TO_SLAVE_ID, LSS_SLAVE_TO_MASTER_ID, LssAddressPart, LssError, LssRequest,
-    LssResponse, NodeId,
+    IdentifyField, LSS_MASTER_TO_SLAVE_ID, LSS_SLAVE_TO_MASTER_ID, LssAddress, LssAddressPart, LssError,
+    LssRequest, LssResponse, NodeId,
 };
 
-/// The identity object 1018h, whose sub-indices 1 to 4 form the LSS address.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct LssIdentity {
-    /// 1018h:01.
-    pub vendor_id: u32,
-    /// 1018h:02.
-    pub product_code: u32,
-    /// 1018h:03.
-    pub revision_number: u32,
-    /// 1018h:04.
-    pub serial_number: u32,
-}
-
-/// Why [`LssIdentity::from_od`] could not read the identity.
+/// Why [`lss_address_from_od`] could not read the LSS address.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-pub enum LssIdentityError {
+pub enum LssAddressError {
     /// The object dictionary has no 1018h:01 (vendor-ID).
     #[error("the object dictionary has no 1018h:01 (vendor-ID), so the device has no LSS address")]
     NoVendorId,
@@ -81,47 +68,25 @@ pub enum LssIdentityError {
     },
 }
 
-impl LssIdentity {
-    /// Reads 1018h:01..04 from `od`. The vendor-ID is required; a missing product code, revision
-    /// number or serial number (CiA 301 makes them optional) counts as 0.
-    pub fn from_od(od: &DynamicOd) -> Result<LssIdentity, LssIdentityError> {
-        let read = |sub: u8| -> Result<Option<u32>, LssIdentityError> {
-            let Some(entry) = od.get(ObjectKey::new(0x1018, sub)) else {
-                return Ok(None);
-            };
-            let bytes = <[u8; 4]>::try_from(entry.value()).map_err(|_| LssIdentityError::NotUnsigned32 {
-                sub,
-                len: entry.value().len(),
-            })?;
-            Ok(Some(u32::from_le_bytes(bytes)))
+/// Reads the LSS address 1018h:01..04 from `od`. The vendor-ID is required; a missing product code,
+/// revision number or serial number (CiA 301 makes them optional) counts as 0.
+pub fn lss_address_from_od(od: &DynamicOd) -> Result<LssAddress, LssAddressError> {
+    let read = |sub: u8| -> Result<Option<u32>, LssAddressError> {
+        let Some(entry) = od.get(ObjectKey::new(0x1018, sub)) else {
+            return Ok(None);
         };
-        Ok(LssIdentity {
-            vendor_id: read(1)?.ok_or(LssIdentityError::NoVendorId)?,
-            product_code: read(2)?.unwrap_or(0),
-            revision_number: read(3)?.unwrap_or(0),
-            serial_number: read(4)?.unwrap_or(0),
-        })
-    }
-
-    /// One part of the LSS address.
-    pub fn part(&self, part: LssAddressPart) -> u32 {
-        match part {
-            LssAddressPart::VendorId => self.vendor_id,
-            LssAddressPart::ProductCode => self.product_code,
-            LssAddressPart::RevisionNumber => self.revision_number,
-            LssAddressPart::SerialNumber => self.serial_number,
-        }
-    }
-
-    fn part_at(&self, position: u8) -> Option<u32> {
-        Some(match position {
-            0 => self.vendor_id,
-            1 => self.product_code,
-            2 => self.revision_number,
-            3 => self.serial_number,
-            _ => return None,
-        })
-    }
+        let bytes = <[u8; 4]>::try_from(entry.value()).map_err(|_| LssAddressError::NotUnsigned32 {
+            sub,
+            len: entry.value().len(),
+        })?;
+        Ok(Some(u32::from_le_bytes(bytes)))
+    };
+    Ok(LssAddress {
+        vendor_id: read(1)?.ok_or(LssAddressError::NoVendorId)?,
+        product_code: read(2)?.unwrap_or(0),
+        revision_number: read(3)?.unwrap_or(0),
+        serial_number: read(4)?.unwrap_or(0),
+    })
 }
 
 /// The LSS state of the slave (CiA 305, LSS slave state machine).
@@ -302,7 +267,7 @@ enum Switching {
 /// The LSS slave of one node.
 #[derive(Debug, Clone)]
 pub struct LssSlave {
-    identity: LssIdentity,
+    identity: LssAddress,
     state: LssState,
     active_node: Option<NodeId>,
     pending_node: Option<NodeId>,
@@ -320,7 +285,7 @@ pub struct LssSlave {
 impl LssSlave {
     /// A slave with LSS address `identity` running with node-ID `node` (`None`: unconfigured,
     /// FFh), in LSS waiting state, with [`DEFAULT_BIT_TIMINGS`] and no known bit rate.
-    pub fn new(identity: LssIdentity, node: Option<NodeId>) -> LssSlave {
+    pub fn new(identity: LssAddress, node: Option<NodeId>) -> LssSlave {
         LssSlave {
             identity,
             state: LssState::Waiting,
@@ -339,8 +304,8 @@ impl LssSlave {
     }
 
     /// [`LssSlave::new`] with the identity read from 1018h of `od`.
-    pub fn from_od(od: &DynamicOd, node: Option<NodeId>) -> Result<LssSlave, LssIdentityError> {
-        Ok(LssSlave::new(LssIdentity::from_od(od)?, node))
+    pub fn from_od(od: &DynamicOd, node: Option<NodeId>) -> Result<LssSlave, LssAddressError> {
+        Ok(LssSlave::new(lss_address_from_od(od)?, node))
     }
 
     /// The bit rate the node runs with (table selector 0 index), which activate bit timing uses
@@ -359,7 +324,7 @@ impl LssSlave {
     }
 
     /// The LSS address.
-    pub fn identity(&self) -> &LssIdentity {
+    pub fn identity(&self) -> &LssAddress {
         &self.identity
     }
 
@@ -649,7 +614,11 @@ impl LssSlave {
             self.respond(LssResponse::IdentifySlave);
             return;
         }
-        let (Some(part), true, true) = (self.identity.part_at(sub), bit_checked <= 31, next <= 3) else {
+        let (Some(part), true, true) = (
+            LssAddressPart::from_offset(sub).map(|part| self.identity.part(part)),
+            bit_checked <= 31,
+            next <= 3,
+        ) else {
             return self.ignore(specifier, IgnoredReason::InvalidFastscan);
         };
         if self.fastscan_position != sub {
@@ -792,7 +761,7 @@ mod tests {
         }
     }
 
-    const IDENTITY: LssIdentity = LssIdentity {
+    const IDENTITY: LssAddress = LssAddress {
         vendor_id: 0x0000_031A,
         product_code: 0x1234_5678,
         revision_number: 0x0001_0002,
@@ -1403,18 +1372,18 @@ mod tests {
         let identities = [
             IDENTITY,
             // Differs from the first only in the lowest serial number bit.
-            LssIdentity {
+            LssAddress {
                 serial_number: IDENTITY.serial_number ^ 1,
                 ..IDENTITY
             },
-            LssIdentity {
+            LssAddress {
                 vendor_id: 0xFFFF_FFFF,
                 product_code: 0,
                 revision_number: 0x8000_0001,
                 serial_number: 0x0000_0000,
             },
             // A configured slave with the smallest address: it must not take part.
-            LssIdentity::default(),
+            LssAddress::default(),
         ];
         let slaves = identities
             .iter()
@@ -1589,10 +1558,10 @@ mod tests {
         let mut partial = DynamicOd::with_capacity(8);
         partial.insert(u32_entry(1, 7)).unwrap();
         assert_eq!(
-            LssIdentity::from_od(&partial),
-            Ok(LssIdentity {
+            lss_address_from_od(&partial),
+            Ok(LssAddress {
                 vendor_id: 7,
-                ..LssIdentity::default()
+                ..LssAddress::default()
             })
         );
     }
@@ -1601,7 +1570,7 @@ mod tests {
     fn identity_errors() {
         let mut od = DynamicOd::with_capacity(8);
         od.insert(u32_entry(2, 1)).unwrap();
-        assert_eq!(LssIdentity::from_od(&od), Err(LssIdentityError::NoVendorId));
+        assert_eq!(lss_address_from_od(&od), Err(LssAddressError::NoVendorId));
         let short = Entry::new(
             ObjectKey::new(0x1018, 1),
             DataType::VISIBLE_STRING,
@@ -1610,8 +1579,8 @@ mod tests {
         )
         .unwrap();
         od.insert(short).unwrap();
-        let err = LssIdentity::from_od(&od).unwrap_err();
-        assert_eq!(err, LssIdentityError::NotUnsigned32 { sub: 1, len: 3 });
+        let err = lss_address_from_od(&od).unwrap_err();
+        assert_eq!(err, LssAddressError::NotUnsigned32 { sub: 1, len: 3 });
         assert_eq!(
             err.to_string(),
             "1018h:01 holds 3 bytes, not the 4 of an UNSIGNED32"

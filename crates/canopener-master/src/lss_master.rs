@@ -62,8 +62,8 @@ use std::time::Duration;
 use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
 use canopener_wire::lss::{FASTSCAN_RESET, UNCONFIGURED_NODE_ID};
 use canopener_wire::{
-    IdentifyField, LSS_MASTER_TO_SLAVE_ID, LSS_SLAVE_TO_MASTER_ID, LssAddressPart, LssRequest, LssResponse,
-    NodeId, bit_timing_text,
+    IdentifyField, LSS_MASTER_TO_SLAVE_ID, LSS_SLAVE_TO_MASTER_ID, LssAddress, LssAddressPart, LssRequest,
+    LssResponse, NodeId, bit_timing_text,
 };
 
 /// How long the master waits for answers.
@@ -85,52 +85,6 @@ impl LssConfig {
         timeout: Duration::from_millis(100),
         settle: Duration::from_millis(20),
     };
-}
-
-/// The 128-bit LSS address: the identity object 1018h:01..04.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
-pub struct LssAddress {
-    /// 1018h:01.
-    pub vendor_id: u32,
-    /// 1018h:02.
-    pub product_code: u32,
-    /// 1018h:03.
-    pub revision_number: u32,
-    /// 1018h:04.
-    pub serial_number: u32,
-}
-
-impl LssAddress {
-    /// One part of the address.
-    pub fn part(&self, part: LssAddressPart) -> u32 {
-        match part {
-            LssAddressPart::VendorId => self.vendor_id,
-            LssAddressPart::ProductCode => self.product_code,
-            LssAddressPart::RevisionNumber => self.revision_number,
-            LssAddressPart::SerialNumber => self.serial_number,
-        }
-    }
-
-    fn from_parts([vendor_id, product_code, revision_number, serial_number]: [u32; 4]) -> LssAddress {
-        LssAddress {
-            vendor_id,
-            product_code,
-            revision_number,
-            serial_number,
-        }
-    }
-}
-
-/// `vendor-id 0x0000031A, product code 0x00000001, revision number 0x00010000, serial number 0x00000007`.
-impl fmt::Display for LssAddress {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let parts = PARTS.map(|part| (part, self.part(part)));
-        for (idx, (part, value)) in parts.iter().enumerate() {
-            let separator = if idx == 0 { "" } else { ", " };
-            write!(f, "{separator}{part} 0x{value:08X}")?;
-        }
-        Ok(())
-    }
 }
 
 /// The parts of the LSS address a fastscan does not need to search, CANopenNode's "MATCH" mode:
@@ -1168,21 +1122,13 @@ impl Core for LssMaster {
 }
 
 /// The address parts in fastscan order (LSSSub 0 to 3).
-const PARTS: [LssAddressPart; 4] = [
-    LssAddressPart::VendorId,
-    LssAddressPart::ProductCode,
-    LssAddressPart::RevisionNumber,
-    LssAddressPart::SerialNumber,
-];
+const PARTS: [LssAddressPart; 4] = LssAddressPart::ALL;
 
 /// LSSSub of the serial number, the part whose confirmation ends the search.
 const LAST_PART: u8 = 3;
 
 fn part_at(sub: u8) -> LssAddressPart {
-    PARTS
-        .get(usize::from(sub))
-        .copied()
-        .unwrap_or(LssAddressPart::SerialNumber)
+    LssAddressPart::from_offset(sub).unwrap_or(LssAddressPart::SerialNumber)
 }
 
 fn slave_id() -> CanId {
@@ -1273,7 +1219,7 @@ enum Step {
 mod tests {
     use super::*;
     use canopener_can::candump::parse_compact_frame;
-    use canopener_device::lss_slave::{LssEvent as SlaveEvent, LssIdentity, LssSlave, LssState};
+    use canopener_device::lss_slave::{LssEvent as SlaveEvent, LssSlave, LssState};
 
     const A: LssAddress = LssAddress {
         vendor_id: 0x0000_031A,
@@ -1289,8 +1235,8 @@ mod tests {
         serial_number: Some(A.serial_number),
     };
 
-    fn identity(address: LssAddress) -> LssIdentity {
-        LssIdentity {
+    fn identity(address: LssAddress) -> LssAddress {
+        LssAddress {
             vendor_id: address.vendor_id,
             product_code: address.product_code,
             revision_number: address.revision_number,
@@ -2030,7 +1976,7 @@ mod tests {
         ];
         let mut t = Trace::slaves(&addresses);
         // A configured slave does not take part.
-        let configured = LssSlave::new(LssIdentity::default(), Some(node(9)));
+        let configured = LssSlave::new(LssAddress::default(), Some(node(9)));
         t.partners.push(Partner::Slave(Box::new(configured)));
         t.call(0, |m, now| {
             m.scan_all(now, plan(&[20, 21, 22, 23], false, KnownParts::NONE))

@@ -6,7 +6,7 @@
 //! A TIME frame (default CAN-ID 100h) carries 6 bytes: milliseconds after midnight and days since
 //! 1 January 1984 ([`TimeOfDay`]). The core reads no clock, so the caller says what the wall time
 //! is: [`TimeProducer::set_clock`] pairs an [`Instant`] with a wall time in milliseconds since
-//! 1984-01-01 00:00 (see [`since_1984_from_unix_millis`]), and the producer extends that pairing
+//! 1984-01-01 00:00 (see [`canopener_wire::since_1984_from_unix_millis`]), and the producer extends that pairing
 //! along the `now` values it is given. [`TimeProducer::send`] sends a given wall time once (and
 //! takes it as the new pairing); periodic production ([`TimeProducer::start_periodic`]) sends the
 //! paired time every period, the first at once.
@@ -15,25 +15,11 @@ use std::collections::VecDeque;
 use std::time::Duration;
 
 use canopener_can::{CanFrame, CanId, Core, Instant, StandardId};
-use canopener_wire::{MILLIS_PER_DAY, TIME_ID, TimeOfDay};
+use canopener_wire::{TIME_ID, TimeOfDay};
 
-/// 1984-01-01T00:00:00Z in milliseconds since the Unix epoch.
-pub const UNIX_MILLIS_AT_1984: u64 = 441_763_200_000;
-
-/// Milliseconds since 1984-01-01 of a time in milliseconds since the Unix epoch, or `None` before
-/// 1984 (TIME_OF_DAY cannot express it).
-pub fn since_1984_from_unix_millis(unix_millis: u64) -> Option<u64> {
-    unix_millis.checked_sub(UNIX_MILLIS_AT_1984)
-}
-
-/// The TIME_OF_DAY of a wall time in milliseconds since 1984-01-01.
-pub fn time_of_day(since_1984_millis: u64) -> Result<TimeOfDay, TimeError> {
-    let per_day = u64::from(MILLIS_PER_DAY);
-    let days = u16::try_from(since_1984_millis / per_day)
-        .map_err(|_| TimeError::OutOfRange { since_1984_millis })?;
-    // The remainder is below one day, which fits 32 bits.
-    let millis = (since_1984_millis % per_day) as u32;
-    Ok(TimeOfDay { millis, days })
+/// The TIME_OF_DAY of a wall time in milliseconds since 1984-01-01, or why it cannot be sent.
+fn time_of_day(since_1984_millis: u64) -> Result<TimeOfDay, TimeError> {
+    TimeOfDay::from_millis_since_1984(since_1984_millis).ok_or(TimeError::OutOfRange { since_1984_millis })
 }
 
 /// Why no TIME was sent.
@@ -279,8 +265,11 @@ mod tests {
     #[test]
     fn wall_time_helpers_and_limits() {
         // 2024-01-01T12:00:00Z is 1 704 110 400 s after the Unix epoch.
-        assert_eq!(since_1984_from_unix_millis(1_704_110_400_000), Some(NOON_2024));
-        assert_eq!(since_1984_from_unix_millis(0), None);
+        assert_eq!(
+            canopener_wire::since_1984_from_unix_millis(1_704_110_400_000),
+            Some(NOON_2024)
+        );
+        assert_eq!(canopener_wire::since_1984_from_unix_millis(0), None);
         assert_eq!(
             time_of_day(u64::from(u16::MAX) * 86_400_000 + 86_399_999).map(|t| t.days),
             Ok(u16::MAX)

@@ -10,10 +10,10 @@ use canopener_device::application::NoApplication;
 use canopener_device::device::{self, Device};
 use canopener_device::nmt_slave::NmtSlaveState;
 use canopener_master::lss_master::{
-    KnownParts, LssAddress, LssConfig, LssEvent, LssMaster, LssMode, LssService, LssServiceError, ScanPlan,
-    node_id_range,
+    KnownParts, LssConfig, LssEvent, LssMaster, LssMode, LssService, LssServiceError, ScanPlan, node_id_range,
 };
 use canopener_od::ObjectKey;
+use canopener_wire::LssAddress;
 use canopener_wire::{LssAddressPart, NodeId};
 
 const BASE: &str = concat!(

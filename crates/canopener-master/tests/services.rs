@@ -529,8 +529,7 @@ fn time_producer_reaches_the_device_time_consumer() {
         ConsumerTime::Off,
     );
     // 2024-01-01 12:00:00.000 UTC.
-    let noon =
-        canopener_master::time_producer::since_1984_from_unix_millis(1_704_110_400_000).expect("after 1984");
+    let noon = canopener_wire::since_1984_from_unix_millis(1_704_110_400_000).expect("after 1984");
     net.time.set_clock(Instant::from_millis(100), noon);
     net.time
         .start_periodic(Instant::from_millis(100), Duration::from_secs(1))

@@ -60,10 +60,14 @@ pub use emcy::{
     EMCY_CODES, ERROR_REGISTER_BITS, ERROR_REGISTER_GENERIC, ERROR_REGISTER_RESERVED, EmcyError, EmcyMessage,
     emcy_code_text, error_register_text,
 };
-pub use lss::{IdentifyField, LssAddressPart, LssError, LssRequest, LssResponse, bit_timing_text};
+pub use lss::{
+    IdentifyField, LssAddress, LssAddressPart, LssError, LssRequest, LssResponse, bit_timing_text,
+};
 pub use nmt::{GUARD_TOGGLE_BIT, NmtCommand, NmtState, encode_guard_response};
 pub use node::NodeId;
 pub use sdo::{
     BlockSegment, InitiateData, Multiplexer, SdoEncodeError, SdoParseError, SdoRequest, SdoResponse, Segment,
 };
-pub use time_of_day::{MILLIS_MASK, MILLIS_PER_DAY, TimeOfDay, TimeOfDayError};
+pub use time_of_day::{
+    MILLIS_MASK, MILLIS_PER_DAY, TimeOfDay, TimeOfDayError, UNIX_MILLIS_AT_1984, since_1984_from_unix_millis,
+};

@@ -80,14 +80,16 @@ pub enum LssAddressPart {
 }
 
 impl LssAddressPart {
-    const ALL: [LssAddressPart; 4] = [
+    /// The four parts in fastscan order (LSSSub 0 to 3), which is also their order in 1018h.
+    pub const ALL: [LssAddressPart; 4] = [
         LssAddressPart::VendorId,
         LssAddressPart::ProductCode,
         LssAddressPart::RevisionNumber,
         LssAddressPart::SerialNumber,
     ];
 
-    fn from_offset(offset: u8) -> Option<LssAddressPart> {
+    /// The part at fastscan position `offset` (LSSSub/LSSNext 0 to 3).
+    pub fn from_offset(offset: u8) -> Option<LssAddressPart> {
         LssAddressPart::ALL.get(usize::from(offset)).copied()
     }
 
@@ -109,6 +111,53 @@ impl fmt::Display for LssAddressPart {
             LssAddressPart::RevisionNumber => "revision number",
             LssAddressPart::SerialNumber => "serial number",
         })
+    }
+}
+
+/// The 128-bit LSS address of a device: its identity object 1018h:01..04 (CiA 305 §4, CiA 301
+/// §7.5.2.21). Master and slave cores share this one type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+pub struct LssAddress {
+    /// 1018h:01.
+    pub vendor_id: u32,
+    /// 1018h:02.
+    pub product_code: u32,
+    /// 1018h:03.
+    pub revision_number: u32,
+    /// 1018h:04.
+    pub serial_number: u32,
+}
+
+impl LssAddress {
+    /// The address from its four parts in fastscan order.
+    pub fn from_parts([vendor_id, product_code, revision_number, serial_number]: [u32; 4]) -> LssAddress {
+        LssAddress {
+            vendor_id,
+            product_code,
+            revision_number,
+            serial_number,
+        }
+    }
+
+    /// One part of the address.
+    pub fn part(&self, part: LssAddressPart) -> u32 {
+        match part {
+            LssAddressPart::VendorId => self.vendor_id,
+            LssAddressPart::ProductCode => self.product_code,
+            LssAddressPart::RevisionNumber => self.revision_number,
+            LssAddressPart::SerialNumber => self.serial_number,
+        }
+    }
+}
+
+/// `vendor-id 0x0000031A, product code 0x00000001, revision number 0x00010000, serial number 0x00000007`.
+impl fmt::Display for LssAddress {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (idx, part) in LssAddressPart::ALL.into_iter().enumerate() {
+            let separator = if idx == 0 { "" } else { ", " };
+            write!(f, "{separator}{part} 0x{:08X}", self.part(part))?;
+        }
+        Ok(())
     }
 }
 

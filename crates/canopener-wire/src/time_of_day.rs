@@ -11,6 +11,15 @@ pub const MILLIS_PER_DAY: u32 = 86_400_000;
 /// The mask of the 28 bits that hold the milliseconds.
 pub const MILLIS_MASK: u32 = 0x0FFF_FFFF;
 
+/// 1984-01-01T00:00:00Z, day 0 of TIME_OF_DAY, in milliseconds since the Unix epoch.
+pub const UNIX_MILLIS_AT_1984: u64 = 441_763_200_000;
+
+/// Milliseconds since 1984-01-01 of a time in milliseconds since the Unix epoch, or `None` before
+/// 1984 (TIME_OF_DAY cannot express it).
+pub fn since_1984_from_unix_millis(unix_millis: u64) -> Option<u64> {
+    unix_millis.checked_sub(UNIX_MILLIS_AT_1984)
+}
+
 /// A TIME_OF_DAY value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct TimeOfDay {
@@ -29,6 +38,22 @@ pub enum TimeOfDayError {
 }
 
 impl TimeOfDay {
+    /// The TIME_OF_DAY of a wall time in milliseconds since 1984-01-01 00:00, or `None` after
+    /// 2163-06-06, the last day its 16-bit day count reaches.
+    pub fn from_millis_since_1984(since_1984_millis: u64) -> Option<TimeOfDay> {
+        let per_day = u64::from(MILLIS_PER_DAY);
+        let days = u16::try_from(since_1984_millis / per_day).ok()?;
+        // The remainder is below one day, which fits 32 bits.
+        let millis = (since_1984_millis % per_day) as u32;
+        Some(TimeOfDay { millis, days })
+    }
+
+    /// The TIME_OF_DAY of a wall time in milliseconds since the Unix epoch (UTC, as a system clock
+    /// gives it), or `None` outside 1984-01-01 to 2163-06-06.
+    pub fn from_unix_millis(unix_millis: u64) -> Option<TimeOfDay> {
+        since_1984_from_unix_millis(unix_millis).and_then(TimeOfDay::from_millis_since_1984)
+    }
+
     /// Reads the first 6 bytes. The reserved top 4 bits of the milliseconds are dropped; check
     /// [`TimeOfDay::reserved_bits`] to see them.
     pub fn parse(data: &[u8]) -> Result<TimeOfDay, TimeOfDayError> {
@@ -177,5 +202,20 @@ mod tests {
             let (_, month, day) = time.date();
             prop_assert!((1..=12).contains(&month) && (1..=31).contains(&day));
         }
+    }
+
+    #[test]
+    fn wall_times_convert_to_days_since_1984() {
+        // 2024-01-01T12:00:00Z.
+        let noon = TimeOfDay::from_unix_millis(1_704_110_400_000).expect("in range");
+        assert_eq!(noon.millis, 12 * 3_600_000);
+        assert_eq!(noon.date(), (2024, 1, 1));
+        assert_eq!(TimeOfDay::from_unix_millis(UNIX_MILLIS_AT_1984 - 1), None);
+        let last = u64::from(u16::MAX) * u64::from(MILLIS_PER_DAY) + u64::from(MILLIS_PER_DAY) - 1;
+        assert_eq!(
+            TimeOfDay::from_millis_since_1984(last).map(|t| t.days),
+            Some(u16::MAX)
+        );
+        assert_eq!(TimeOfDay::from_millis_since_1984(last + 1), None);
     }
 }

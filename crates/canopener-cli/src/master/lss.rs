@@ -18,11 +18,10 @@ use std::time::Duration;
 
 use canopener_can::{CanFrame, Instant, StandardId};
 use canopener_master::lss_master::{
-    KnownParts, LssAddress, LssCommandError, LssConfig, LssEvent, LssMaster, LssMode, LssService, ScanError,
-    ScanPlan,
+    KnownParts, LssCommandError, LssConfig, LssEvent, LssMaster, LssMode, LssService, ScanError, ScanPlan,
 };
 use canopener_wire::lss::UNCONFIGURED_NODE_ID;
-use canopener_wire::{LSS_MASTER_TO_SLAVE_ID, LssAddressPart, LssRequest, NodeId};
+use canopener_wire::{LSS_MASTER_TO_SLAVE_ID, LssAddress, LssAddressPart, LssRequest, NodeId};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 

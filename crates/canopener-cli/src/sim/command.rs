@@ -30,9 +30,9 @@ use canopener_device::store::StoreEvent;
 use canopener_device::sync::SyncEvent;
 use canopener_device::time_stamp::TimeEvent;
 use canopener_eds::{Eds, Severity};
-use canopener_master::time_producer::{since_1984_from_unix_millis, time_of_day};
 use canopener_od::ObjectKey;
 use canopener_transport::{CanBus, TransportError, WallClock};
+use canopener_wire::TimeOfDay;
 use canopener_wire::abort::abort_code_text;
 use serde_json::{Map, Value, json};
 
@@ -336,8 +336,7 @@ impl Simulator {
             }
             sim.next_time = Some(now + TIME_PERIOD);
             let unix_millis = now.as_nanos() / 1_000_000;
-            let Some(time) = since_1984_from_unix_millis(unix_millis).and_then(|ms| time_of_day(ms).ok())
-            else {
+            let Some(time) = TimeOfDay::from_unix_millis(unix_millis) else {
                 continue;
             };
             // Refused outside the NMT states that run TIME: nothing to send then.

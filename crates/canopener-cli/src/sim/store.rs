@@ -16,9 +16,10 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use canopener_device::lss_slave::{BitTiming, LssIdentity, LssStorage, LssStoreError};
+use canopener_device::lss_slave::{BitTiming, LssStorage, LssStoreError};
 use canopener_device::store::{ParameterGroup, ParameterStore, Snapshot, StorageError};
 use canopener_od::ObjectKey;
+use canopener_wire::LssAddress;
 use canopener_wire::NodeId;
 
 use crate::error::{CliError, CliResult};
@@ -39,7 +40,7 @@ impl FileStore {
     }
 
     /// The store of the device with LSS address `address` in `dir`.
-    pub(crate) fn open_lss(dir: &Path, address: &LssIdentity) -> CliResult<FileStore> {
+    pub(crate) fn open_lss(dir: &Path, address: &LssAddress) -> CliResult<FileStore> {
         FileStore::open_named(dir, &lss_stem(address))
     }
 
@@ -107,7 +108,7 @@ pub(crate) struct LssFile {
 impl LssFile {
     /// The stored LSS configuration of the device with LSS address `address` (none stored yet if the
     /// file does not exist). A file that does not parse is invalid input (exit 3), named with the line.
-    pub(crate) fn open(dir: &Path, address: &LssIdentity) -> CliResult<LssFile> {
+    pub(crate) fn open(dir: &Path, address: &LssAddress) -> CliResult<LssFile> {
         create_state_dir(dir)?;
         let path = dir.join(format!("{}.lss", lss_stem(address)));
         let mut file = LssFile {
@@ -189,7 +190,7 @@ fn bad_lss_line(path: &Path, line: usize, message: &str) -> CliError {
     ))
 }
 
-fn lss_stem(address: &LssIdentity) -> String {
+fn lss_stem(address: &LssAddress) -> String {
     format!(
         "lss-{:08X}-{:08X}-{:08X}-{:08X}",
         address.vendor_id, address.product_code, address.revision_number, address.serial_number
@@ -359,7 +360,7 @@ mod tests {
     #[test]
     fn a_stored_lss_configuration_is_read_back_per_lss_address() {
         let dir = temp_dir("lss-file");
-        let address = LssIdentity {
+        let address = LssAddress {
             vendor_id: 0xABC,
             product_code: 0x401,
             revision_number: 0x10002,
@@ -385,7 +386,7 @@ mod tests {
         file.store(None, None).unwrap();
         assert_eq!(LssFile::open(&dir, &address).unwrap().node_id(), None);
         // Another serial number is another device.
-        let other = LssIdentity {
+        let other = LssAddress {
             serial_number: 8,
             ..address
         };
