@@ -57,5 +57,6 @@
 #![warn(missing_docs)]
 
 mod engine;
+pub mod network;
 
 pub use engine::{BusConfig, BusEngine, BusStats, Delivery, Port, SubmitError};

@@ -8,8 +8,15 @@
 //! - [`cancel`]: a cancellation token that a front end sets (Ctrl-C, a web request going away) and every
 //!   long-running loop here polls.
 //! - [`files`]: writing results without losing data (temporary file, rename, optional backup).
+//! - [`link`]: the drive loop that moves frames between a bus and any sans-IO
+//!   [`Core`](canopener_can::Core): [`link::BusLink`] on a transport and the wall clock,
+//!   [`virtual_link::VirtualLink`] on a simulated bus and virtual time, the same API for both.
+//! - [`sdo_session`]: blocking SDO transfers with progress and cancellation, on any link.
 
 #![warn(missing_docs)]
 
 pub mod cancel;
 pub mod files;
+pub mod link;
+pub mod sdo_session;
+pub mod virtual_link;

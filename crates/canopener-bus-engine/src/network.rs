@@ -1,0 +1,528 @@
+//! Sans-IO cores on one simulated bus, on virtual time: the single loop behind the runtime's virtual
+//! bus and the test harness.
+//!
+//! A [`Network`] owns *nodes* (any [`Core`]: simulated devices, master cores) and *taps* (endpoints
+//! without a core, whose received frames queue up for whoever drives the network from outside, such as a
+//! master session or a recorder). Every frame a station sends reaches every other station, as on a real
+//! bus. Time only moves when the driver calls [`Network::run_until`]; it then jumps from deadline to
+//! deadline, so a run is a pure function of its inputs.
+//!
+//! Two timings: [`Timing::Ideal`] delivers a frame at the instant it is sent (exact, readable traces in
+//! protocol tests), [`Timing::BitAccurate`] arbitrates and times every frame with [`BusEngine`] at a
+//! bit rate (what a real wire would allow).
+
+use std::collections::VecDeque;
+
+use canopener_can::{Bitrate, CanFrame, Core, Instant};
+
+use crate::{BusConfig, BusEngine, BusStats, Port, SubmitError};
+
+/// How long frames take on the simulated bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Timing {
+    /// No time at all: a frame reaches the other stations at the instant it is sent, in send order.
+    Ideal,
+    /// Arbitration and exact frame durations at this bit rate ([`BusEngine`]).
+    BitAccurate(Bitrate),
+}
+
+/// A station of a [`Network`]: a node or a tap, numbered in the order they were added.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct StationId(usize);
+
+impl StationId {
+    /// The position of the station in the order of attaching (0 for the first).
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
+/// A frame that went over the bus, as a recording shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BusFrame {
+    /// When the other stations had it.
+    pub at: Instant,
+    /// Who sent it.
+    pub from: StationId,
+    /// The frame.
+    pub frame: CanFrame,
+}
+
+/// An event of a node, with when and where it happened.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct NodeEvent<E> {
+    /// When the node reported it.
+    pub at: Instant,
+    /// The node.
+    pub node: StationId,
+    /// What it reported.
+    pub event: E,
+}
+
+/// Why a frame could not be sent from a tap.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SendError {
+    /// The station is a node (nodes send through their core) or does not exist.
+    #[error("station {0:?} is not a tap of this network")]
+    NotATap(StationId),
+    /// The bus engine refused the frame.
+    #[error(transparent)]
+    Submit(#[from] SubmitError),
+}
+
+/// Sans-IO cores and taps on one simulated bus, on virtual time (see the [module docs](self)).
+pub struct Network<N: Core> {
+    timing: Timing,
+    engine: Option<BusEngine>,
+    now: Instant,
+    stations: Vec<Station<N>>,
+    /// Frames sent on an ideal bus and not yet delivered, in send order.
+    ideal: VecDeque<(StationId, CanFrame)>,
+    events: VecDeque<NodeEvent<N::Event>>,
+    recording: Option<Vec<BusFrame>>,
+    ideal_frames: u64,
+}
+
+impl<N: Core + std::fmt::Debug> std::fmt::Debug for Network<N> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Network")
+            .field("timing", &self.timing)
+            .field("now", &self.now)
+            .field("stations", &self.stations)
+            .field("events", &self.events.len())
+            .finish_non_exhaustive()
+    }
+}
+
+#[derive(Debug)]
+struct Station<N> {
+    kind: StationKind<N>,
+    port: Option<Port>,
+}
+
+#[derive(Debug)]
+enum StationKind<N> {
+    Node(N),
+    Tap(VecDeque<(Instant, CanFrame)>),
+}
+
+impl<N: Core> Network<N> {
+    /// Frames delivered at one instant on an ideal bus before the rest waits for the next call of
+    /// [`Network::run_until`]: a guard against two cores answering each other forever, which no correct
+    /// core does, but a network must not hang its driver.
+    pub const MAX_FRAMES_PER_INSTANT: usize = 100_000;
+
+    /// An empty network at virtual time zero.
+    pub fn new(timing: Timing) -> Network<N> {
+        let engine = match timing {
+            Timing::Ideal => None,
+            Timing::BitAccurate(bitrate) => Some(BusEngine::new(BusConfig { bitrate })),
+        };
+        Network {
+            timing,
+            engine,
+            now: Instant::ZERO,
+            stations: Vec::new(),
+            ideal: VecDeque::new(),
+            events: VecDeque::new(),
+            recording: None,
+            ideal_frames: 0,
+        }
+    }
+
+    /// The timing the network was made with.
+    pub fn timing(&self) -> Timing {
+        self.timing
+    }
+
+    /// The virtual time.
+    pub fn now(&self) -> Instant {
+        self.now
+    }
+
+    /// Adds a core to the bus.
+    pub fn attach(&mut self, node: N) -> StationId {
+        self.add(StationKind::Node(node))
+    }
+
+    /// Adds an endpoint without a core: frames other stations send queue up for
+    /// [`Network::take_received`], and [`Network::send`] puts frames on the bus from it.
+    pub fn tap(&mut self) -> StationId {
+        self.add(StationKind::Tap(VecDeque::new()))
+    }
+
+    /// Keeps every frame that goes over the bus from now on, for [`Network::take_recording`].
+    pub fn record(&mut self) {
+        self.recording.get_or_insert_with(Vec::new);
+    }
+
+    /// The frames that went over the bus since recording started or was last taken.
+    pub fn take_recording(&mut self) -> Vec<BusFrame> {
+        self.recording.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
+    /// The node at `id`, if `id` is a node.
+    pub fn node(&self, id: StationId) -> Option<&N> {
+        match &self.stations.get(id.0)?.kind {
+            StationKind::Node(node) => Some(node),
+            StationKind::Tap(_) => None,
+        }
+    }
+
+    /// The node at `id`, mutably. A core changed from outside may have frames to send or a new deadline:
+    /// the next [`Network::run_until`] collects them.
+    pub fn node_mut(&mut self, id: StationId) -> Option<&mut N> {
+        match &mut self.stations.get_mut(id.0)?.kind {
+            StationKind::Node(node) => Some(node),
+            StationKind::Tap(_) => None,
+        }
+    }
+
+    /// Every node with its id, in attach order.
+    pub fn nodes(&self) -> impl Iterator<Item = (StationId, &N)> + '_ {
+        self.stations
+            .iter()
+            .enumerate()
+            .filter_map(|(index, station)| match &station.kind {
+                StationKind::Node(node) => Some((StationId(index), node)),
+                StationKind::Tap(_) => None,
+            })
+    }
+
+    /// Every node mutably, in attach order.
+    pub fn nodes_mut(&mut self) -> impl Iterator<Item = (StationId, &mut N)> + '_ {
+        self.stations
+            .iter_mut()
+            .enumerate()
+            .filter_map(|(index, station)| match &mut station.kind {
+                StationKind::Node(node) => Some((StationId(index), node)),
+                StationKind::Tap(_) => None,
+            })
+    }
+
+    /// Puts `frame` on the bus from tap `tap` at the current virtual time, after the frames the nodes
+    /// already have waiting (a core that was just attached or changed from outside sent those first).
+    pub fn send(&mut self, tap: StationId, frame: CanFrame) -> Result<(), SendError> {
+        let station = self.stations.get(tap.0).ok_or(SendError::NotATap(tap))?;
+        if !matches!(station.kind, StationKind::Tap(_)) {
+            return Err(SendError::NotATap(tap));
+        }
+        self.collect()?;
+        self.put_on_bus(tap, frame)?;
+        Ok(())
+    }
+
+    /// The next frame tap `tap` received, with when it had it.
+    pub fn take_received(&mut self, tap: StationId) -> Option<(Instant, CanFrame)> {
+        match &mut self.stations.get_mut(tap.0)?.kind {
+            StationKind::Tap(inbox) => inbox.pop_front(),
+            StationKind::Node(_) => None,
+        }
+    }
+
+    /// Whether tap `tap` has received frames not yet taken.
+    pub fn has_received(&self, tap: StationId) -> bool {
+        matches!(
+            self.stations.get(tap.0).map(|station| &station.kind),
+            Some(StationKind::Tap(inbox)) if !inbox.is_empty()
+        )
+    }
+
+    /// The next event a node reported.
+    pub fn poll_event(&mut self) -> Option<NodeEvent<N::Event>> {
+        self.events.pop_front()
+    }
+
+    /// When something next happens on its own: a node's timer or the end of a frame on the wire.
+    pub fn poll_timeout(&self) -> Option<Instant> {
+        let nodes = self.stations.iter().filter_map(|station| match &station.kind {
+            StationKind::Node(node) => node.poll_timeout(),
+            StationKind::Tap(_) => None,
+        });
+        let engine = self.engine.as_ref().and_then(BusEngine::poll_timeout);
+        nodes.chain(engine).min()
+    }
+
+    /// Runs the network up to and including `until`: every frame sent, every timer and every frame
+    /// end due by then, in time order. With `stop_at` a tap, it returns as soon as that tap has a frame
+    /// to take (the time is then that frame's arrival), so a driver can answer it. Returns whether it
+    /// stopped for the tap. Time never runs backwards: an `until` in the past only settles what is due now.
+    pub fn run_until(&mut self, until: Instant, stop_at: Option<StationId>) -> Result<bool, SubmitError> {
+        let until = until.max(self.now);
+        loop {
+            self.exchange()?;
+            if stop_at.is_some_and(|tap| self.has_received(tap)) {
+                return Ok(true);
+            }
+            let Some(due) = self.poll_timeout().filter(|due| *due <= until) else {
+                self.now = until;
+                return Ok(false);
+            };
+            self.now = self.now.max(due);
+            let now = self.now;
+            for station in &mut self.stations {
+                if let StationKind::Node(node) = &mut station.kind
+                    && node.poll_timeout().is_some_and(|at| at <= now)
+                {
+                    node.handle_timeout(now);
+                }
+            }
+            if let Some(engine) = &mut self.engine {
+                engine.handle_timeout(now);
+            }
+        }
+    }
+
+    /// Runs everything due at the current instant (frames handed over from outside, timers at `now`).
+    pub fn settle(&mut self) -> Result<(), SubmitError> {
+        self.run_until(self.now, None).map(drop)
+    }
+
+    /// Totals of the frames that went over the bus (bit times and busy time only with
+    /// [`Timing::BitAccurate`]).
+    pub fn stats(&self) -> BusStats {
+        match &self.engine {
+            Some(engine) => engine.stats(),
+            None => BusStats {
+                frames: self.ideal_frames,
+                ..BusStats::default()
+            },
+        }
+    }
+
+    fn add(&mut self, kind: StationKind<N>) -> StationId {
+        let port = self.engine.as_mut().map(BusEngine::attach);
+        self.stations.push(Station { kind, port });
+        StationId(self.stations.len() - 1)
+    }
+
+    fn put_on_bus(&mut self, from: StationId, frame: CanFrame) -> Result<(), SubmitError> {
+        match (&mut self.engine, self.stations.get(from.0).and_then(|s| s.port)) {
+            (Some(engine), Some(port)) => engine.submit(self.now, port, frame),
+            _ => {
+                self.ideal.push_back((from, frame));
+                Ok(())
+            }
+        }
+    }
+
+    /// Moves frames until nothing is left to move at the current instant: nodes' frames onto the bus,
+    /// delivered frames to the stations, events out of the nodes.
+    fn exchange(&mut self) -> Result<(), SubmitError> {
+        for _ in 0..Self::MAX_FRAMES_PER_INSTANT {
+            self.collect()?;
+            let delivered = if self.engine.is_some() {
+                let deliveries: Vec<_> = self
+                    .engine
+                    .as_mut()
+                    .map(|engine| std::iter::from_fn(|| engine.poll_delivery()).collect())
+                    .unwrap_or_default();
+                for delivery in &deliveries {
+                    let from = self
+                        .stations
+                        .iter()
+                        .position(|station| station.port == Some(delivery.from))
+                        .map(StationId);
+                    if let Some(from) = from {
+                        self.deliver(delivery.at, from, &delivery.frame);
+                    }
+                }
+                !deliveries.is_empty()
+            } else {
+                match self.ideal.pop_front() {
+                    Some((from, frame)) => {
+                        self.ideal_frames += 1;
+                        self.deliver(self.now, from, &frame);
+                        true
+                    }
+                    None => false,
+                }
+            };
+            if !delivered {
+                return Ok(());
+            }
+        }
+        Ok(())
+    }
+
+    /// Takes every node's pending frames (onto the bus) and events.
+    fn collect(&mut self) -> Result<(), SubmitError> {
+        let now = self.now;
+        let mut outgoing = Vec::new();
+        for (index, station) in self.stations.iter_mut().enumerate() {
+            if let StationKind::Node(node) = &mut station.kind {
+                while let Some(event) = node.poll_event() {
+                    self.events.push_back(NodeEvent {
+                        at: now,
+                        node: StationId(index),
+                        event,
+                    });
+                }
+                while let Some(frame) = node.poll_transmit() {
+                    outgoing.push((StationId(index), frame));
+                }
+            }
+        }
+        for (from, frame) in outgoing {
+            self.put_on_bus(from, frame)?;
+        }
+        Ok(())
+    }
+
+    fn deliver(&mut self, at: Instant, from: StationId, frame: &CanFrame) {
+        if let Some(recording) = &mut self.recording {
+            recording.push(BusFrame {
+                at,
+                from,
+                frame: *frame,
+            });
+        }
+        for (index, station) in self.stations.iter_mut().enumerate() {
+            if index == from.0 {
+                continue;
+            }
+            match &mut station.kind {
+                StationKind::Node(node) => node.handle_frame(at, frame),
+                StationKind::Tap(inbox) => inbox.push_back((at, *frame)),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use canopener_can::StandardId;
+
+    use super::*;
+
+    /// Answers every frame on `listen` with `reply` after `delay`, and counts what it heard.
+    #[derive(Debug)]
+    struct Echo {
+        listen: u16,
+        reply: CanFrame,
+        delay: Duration,
+        due: Option<Instant>,
+        out: Option<CanFrame>,
+        heard: usize,
+    }
+
+    impl Echo {
+        fn new(listen: u16, reply: u16, delay: Duration) -> Echo {
+            Echo {
+                listen,
+                reply: frame(reply, &[1]),
+                delay,
+                due: None,
+                out: None,
+                heard: 0,
+            }
+        }
+    }
+
+    impl Core for Echo {
+        type Event = u16;
+
+        fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+            self.heard += 1;
+            if frame.id().as_raw() == u32::from(self.listen) {
+                self.due = Some(now + self.delay);
+            }
+        }
+
+        fn handle_timeout(&mut self, now: Instant) {
+            if self.due.is_some_and(|due| due <= now) {
+                self.due = None;
+                self.out = Some(self.reply);
+            }
+        }
+
+        fn poll_transmit(&mut self) -> Option<CanFrame> {
+            self.out.take()
+        }
+
+        fn poll_event(&mut self) -> Option<u16> {
+            None
+        }
+
+        fn poll_timeout(&self) -> Option<Instant> {
+            self.due
+        }
+    }
+
+    fn frame(id: u16, data: &[u8]) -> CanFrame {
+        CanFrame::new(StandardId::new(id).expect("11 bits"), data).expect("<= 8 bytes")
+    }
+
+    #[test]
+    fn ideal_timing_answers_at_the_core_deadline_and_the_tap_hears_it() {
+        let mut net = Network::new(Timing::Ideal);
+        let echo = net.attach(Echo::new(0x601, 0x581, Duration::from_millis(3)));
+        let tap = net.tap();
+        net.record();
+        net.send(tap, frame(0x601, &[0x40])).unwrap();
+        assert!(net.run_until(Instant::from_millis(10), Some(tap)).unwrap());
+        assert_eq!(net.now(), Instant::from_millis(3));
+        let (at, reply) = net.take_received(tap).unwrap();
+        assert_eq!((at, reply.id().as_raw()), (Instant::from_millis(3), 0x581));
+        // Nothing else happens: the run goes to the end of the window.
+        assert!(!net.run_until(Instant::from_millis(10), Some(tap)).unwrap());
+        assert_eq!(net.now(), Instant::from_millis(10));
+        let recorded: Vec<(u64, usize)> = net
+            .take_recording()
+            .iter()
+            .map(|f| (f.at.as_micros(), f.from.index()))
+            .collect();
+        assert_eq!(recorded, [(0, tap.index()), (3000, echo.index())]);
+        assert_eq!(net.node(echo).unwrap().heard, 1, "a sender does not hear itself");
+    }
+
+    #[test]
+    fn bit_accurate_timing_delays_each_frame_by_its_length() {
+        let mut net = Network::new(Timing::BitAccurate(Bitrate::K500));
+        net.attach(Echo::new(0x601, 0x581, Duration::ZERO));
+        let tap = net.tap();
+        net.send(tap, frame(0x601, &[0x40, 0, 0, 0, 0, 0, 0, 0])).unwrap();
+        assert!(net.run_until(Instant::from_millis(10), Some(tap)).unwrap());
+        // Request and answer are each well over 100 bits at 2 µs a bit, back to back.
+        let (at, _) = net.take_received(tap).unwrap();
+        assert!(
+            at > Instant::from_micros(300) && at < Instant::from_millis(1),
+            "{at:?}"
+        );
+        assert_eq!(net.stats().frames, 2);
+    }
+
+    #[test]
+    fn runs_are_deterministic_and_time_never_goes_back() {
+        let run = || {
+            let mut net = Network::new(Timing::BitAccurate(Bitrate::M1));
+            let tap = net.tap();
+            for node in 0..4u16 {
+                net.attach(Echo::new(
+                    0x100,
+                    0x200 + node,
+                    Duration::from_micros(u64::from(node) * 7),
+                ));
+            }
+            net.record();
+            net.send(tap, frame(0x100, &[])).unwrap();
+            net.run_until(Instant::from_millis(5), None).unwrap();
+            net.run_until(Instant::from_millis(1), None).unwrap();
+            assert_eq!(net.now(), Instant::from_millis(5));
+            net.take_recording()
+        };
+        let first = run();
+        assert_eq!(first.len(), 5);
+        assert_eq!(first, run());
+    }
+
+    #[test]
+    fn nodes_cannot_be_sent_from_as_taps() {
+        let mut net = Network::new(Timing::Ideal);
+        let echo = net.attach(Echo::new(1, 2, Duration::ZERO));
+        assert_eq!(net.send(echo, frame(1, &[])), Err(SendError::NotATap(echo)));
+        assert_eq!(net.take_received(echo), None);
+    }
+}

@@ -1,0 +1,240 @@
+//! The drive loop: frames between a bus and a sans-IO core, on a clock.
+//!
+//! A [`Link`] is one endpoint on a bus together with the clock the cores run on: [`BusLink`] is a real
+//! transport (SocketCAN, socketcand, a `virtual:` bus of another thread) on the wall clock;
+//! [`VirtualLink`](crate::virtual_link::VirtualLink) is a simulated bus on virtual time, deterministic.
+//! [`drive`] moves frames between any link and any [`Core`] until the caller has what it wanted, the
+//! deadline passes or someone cancels: the same code runs a bench session and a test on virtual time.
+//!
+//! The cores never block; the wait is here, bounded by the core's next deadline, the caller's deadline
+//! and [`MAX_WAIT`] so that a cancellation is noticed. A core that stops asking for time while the
+//! caller still waits cannot hang it: every wait has the caller's deadline.
+
+use std::time::Duration;
+
+use canopener_bus_engine::SubmitError;
+use canopener_bus_engine::network::SendError;
+use canopener_can::{CanFrame, Core, Instant};
+use canopener_transport::{BusSpec, CanBus, TransportError, WallClock};
+
+use crate::cancel::Cancel;
+
+/// The longest one receive waits, so that a cancellation is noticed quickly.
+pub const MAX_WAIT: Duration = Duration::from_millis(50);
+
+/// Longer than `canopener bus serve`'s default raw-mode grace (50 ms): a socketcand hub holds a new
+/// client's traffic back that long.
+const HUB_RAW_GRACE: Duration = Duration::from_millis(60);
+
+/// Why a link stopped working.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    /// The transport failed (connection lost, interface down, ...).
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+    /// The simulated bus refused a frame (a station's transmit queue is full).
+    #[error("the simulated bus refused a frame: {0}")]
+    Simulated(#[from] SubmitError),
+    /// The simulated bus has no such tap.
+    #[error(transparent)]
+    Tap(#[from] SendError),
+}
+
+/// One endpoint on a bus and the clock the cores run on.
+pub trait Link {
+    /// The time given to the cores.
+    fn now(&self) -> Instant;
+
+    /// Sends one frame now.
+    fn send(&mut self, frame: &CanFrame) -> Result<(), LinkError>;
+
+    /// The next frame received before `deadline`, with its receive time on [`Link::now`]'s clock;
+    /// `None` once the deadline has come or the link is cancelled.
+    fn recv_until(&mut self, deadline: Instant) -> Result<Option<(Instant, CanFrame)>, LinkError>;
+
+    /// Whether whoever runs this link asked to stop.
+    fn is_cancelled(&self) -> bool;
+
+    /// The bus, for messages (`socketcand://127.0.0.1:29536/can0`, `virtual bus (1 Mbit/s)`).
+    fn describe(&self) -> String;
+}
+
+impl<L: Link + ?Sized> Link for &mut L {
+    fn now(&self) -> Instant {
+        (**self).now()
+    }
+
+    fn send(&mut self, frame: &CanFrame) -> Result<(), LinkError> {
+        (**self).send(frame)
+    }
+
+    fn recv_until(&mut self, deadline: Instant) -> Result<Option<(Instant, CanFrame)>, LinkError> {
+        (**self).recv_until(deadline)
+    }
+
+    fn is_cancelled(&self) -> bool {
+        (**self).is_cancelled()
+    }
+
+    fn describe(&self) -> String {
+        (**self).describe()
+    }
+}
+
+/// What the caller's event handler tells [`drive`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow<T> {
+    /// Keep going.
+    Continue,
+    /// Stop driving and return this.
+    Done(T),
+}
+
+/// Why [`drive`] ended without a result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ended {
+    /// The deadline passed.
+    Deadline,
+    /// The link was cancelled.
+    Cancelled,
+}
+
+/// Runs `core` on `link` until `on_event` returns [`Flow::Done`], `deadline` passes or the link is
+/// cancelled. Every frame the core produces is sent; every frame received goes to the core; its timers
+/// run when due. The handler's own errors (and link errors, converted) end the drive at once.
+pub fn drive<L, C, T, E>(
+    link: &mut L,
+    core: &mut C,
+    deadline: Option<Instant>,
+    mut on_event: impl FnMut(&mut C, C::Event) -> Result<Flow<T>, E>,
+) -> Result<Result<T, Ended>, E>
+where
+    L: Link + ?Sized,
+    C: Core,
+    E: From<LinkError>,
+{
+    loop {
+        flush(link, core)?;
+        while let Some(event) = core.poll_event() {
+            if let Flow::Done(result) = on_event(core, event)? {
+                flush(link, core)?;
+                return Ok(Ok(result));
+            }
+            flush(link, core)?;
+        }
+        if link.is_cancelled() {
+            return Ok(Err(Ended::Cancelled));
+        }
+        let now = link.now();
+        if deadline.is_some_and(|deadline| now >= deadline) {
+            return Ok(Err(Ended::Deadline));
+        }
+        if let Some(due) = core.poll_timeout()
+            && due <= now
+        {
+            core.handle_timeout(now);
+            continue;
+        }
+        let until = [core.poll_timeout(), deadline, Some(now + MAX_WAIT)]
+            .into_iter()
+            .flatten()
+            .min()
+            .unwrap_or(now + MAX_WAIT);
+        if let Some((at, frame)) = link.recv_until(until)? {
+            core.handle_frame(at, &frame);
+        }
+    }
+}
+
+/// Sends every frame `core` has queued.
+pub fn flush<L: Link + ?Sized, C: Core>(link: &mut L, core: &mut C) -> Result<(), LinkError> {
+    while let Some(frame) = core.poll_transmit() {
+        link.send(&frame)?;
+    }
+    Ok(())
+}
+
+/// A transport endpoint on the wall clock.
+#[derive(Debug)]
+pub struct BusLink {
+    bus: Box<dyn CanBus>,
+    cancel: Cancel,
+}
+
+impl BusLink {
+    /// A link on an open bus, cancelled through `cancel`.
+    ///
+    /// On a socketcand hub (ours by default) the first 60 ms of traffic are waited out: the
+    /// hub holds a new client's traffic back for its raw-mode grace (for python-can's handshake), and
+    /// answers arriving that late would look like silence to a short timeout. Nothing sent before our
+    /// first request matters to a master.
+    pub fn new(bus: Box<dyn CanBus>, cancel: Cancel) -> Result<BusLink, LinkError> {
+        let mut link = BusLink { bus, cancel };
+        if matches!(link.bus.spec(), BusSpec::Socketcand { .. }) {
+            let until = link.now() + HUB_RAW_GRACE;
+            while link.recv_until(until)?.is_some() {}
+        }
+        Ok(link)
+    }
+
+    /// The bus spec.
+    pub fn spec(&self) -> &BusSpec {
+        self.bus.spec()
+    }
+
+    /// The transport, for what a link does not offer.
+    pub fn bus_mut(&mut self) -> &mut dyn CanBus {
+        &mut *self.bus
+    }
+
+    /// The transport back.
+    pub fn into_bus(self) -> Box<dyn CanBus> {
+        self.bus
+    }
+
+    /// One receive of at most `wait`. Overruns are logged and otherwise ignored: a lost frame shows up
+    /// as a timeout or protocol error of the core that needed it.
+    fn recv_one(&mut self, wait: Duration) -> Result<Option<(Instant, CanFrame)>, LinkError> {
+        match self.bus.recv(wait) {
+            // The cores run on our clock: a hub's receive timestamp may come from another clock.
+            Ok(Some(received)) => Ok(Some((self.now(), received.frame))),
+            Ok(None) => Ok(None),
+            Err(TransportError::Overrun { lost, .. }) => {
+                tracing::warn!("{lost} frames lost because canopener did not keep up with the bus");
+                Ok(None)
+            }
+            Err(err) => Err(err.into()),
+        }
+    }
+}
+
+impl Link for BusLink {
+    fn now(&self) -> Instant {
+        WallClock::now()
+    }
+
+    fn send(&mut self, frame: &CanFrame) -> Result<(), LinkError> {
+        Ok(self.bus.send(frame)?)
+    }
+
+    fn recv_until(&mut self, deadline: Instant) -> Result<Option<(Instant, CanFrame)>, LinkError> {
+        loop {
+            let now = self.now();
+            if now >= deadline || self.is_cancelled() {
+                return Ok(None);
+            }
+            let wait = deadline.saturating_duration_since(now).min(MAX_WAIT);
+            if let Some(received) = self.recv_one(wait)? {
+                return Ok(Some(received));
+            }
+        }
+    }
+
+    fn is_cancelled(&self) -> bool {
+        self.cancel.is_cancelled()
+    }
+
+    fn describe(&self) -> String {
+        self.bus.spec().to_string()
+    }
+}
