@@ -105,6 +105,16 @@ impl From<canopener_runtime::files::WriteError> for CliError {
     }
 }
 
+/// A failing bus is a bus error (exit 4); the simulated bus refusing a frame is a bug of ours.
+impl From<canopener_runtime::link::LinkError> for CliError {
+    fn from(err: canopener_runtime::link::LinkError) -> CliError {
+        match err {
+            canopener_runtime::link::LinkError::Transport(err) => CliError::Bus(err),
+            other => CliError::Internal(anyhow::Error::new(other)),
+        }
+    }
+}
+
 pub(crate) type CliResult<T = ()> = Result<T, CliError>;
 
 /// Wraps a write to stdout so that a closed pipe ends the command quietly.

@@ -19,7 +19,9 @@ use serde_json::json;
 use crate::args::OutputFormat;
 use crate::error::{CliError, CliResult, stdout_error};
 use crate::master::args::HeartbeatWatchArgs;
-use crate::master::link::{Ended, Flow, Link};
+use canopener_runtime::link::{Ended, Flow, Link, drive};
+
+use crate::master::link::open_link;
 use crate::master::node_list::parse_node_list;
 use crate::master::sync::Spread;
 
@@ -57,7 +59,7 @@ pub(crate) fn watch(args: HeartbeatWatchArgs) -> CliResult {
         guard_time: args.guard_time,
         life_time_factor: args.life_time_factor,
     };
-    let mut link = Link::open(args.master.bus.spec.as_deref(), "heartbeat watch")?;
+    let mut link = open_link(args.master.bus.spec.as_deref(), "heartbeat watch")?;
     let mut monitor = NodeMonitor::new(consumer);
     let started = link.now();
     for node in guarded {
@@ -72,7 +74,7 @@ pub(crate) fn watch(args: HeartbeatWatchArgs) -> CliResult {
     let format = args.master.format;
     let mut stats: BTreeMap<NodeId, NodeStats> = BTreeMap::new();
     let stdout = std::io::stdout();
-    let ended = link.drive(&mut core, deadline, |_, heard| {
+    let ended = drive::<_, _, _, CliError>(&mut link, &mut core, deadline, |_, heard| {
         let node = heard.node();
         if only.as_ref().is_some_and(|only| !only.contains(&node)) {
             return Ok(Flow::<()>::Continue);

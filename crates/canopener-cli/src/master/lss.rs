@@ -29,7 +29,9 @@ use crate::args::OutputFormat;
 use crate::error::{CliError, CliResult, stdout_error};
 use crate::master::args::{LssAddressArgs, LssConfigureArgs, LssInquireArgs, LssScanArgs, MasterArgs};
 use crate::master::heartbeat::millis;
-use crate::master::link::{Ended, Flow, Link};
+use canopener_runtime::link::{BusLink, Ended, Flow, Link, drive};
+
+use crate::master::link::open_link;
 use crate::master::node_list::parse_node_list;
 
 /// More devices than this in one listing means something answers that is no CiA 305 slave.
@@ -276,7 +278,7 @@ const PARTS: [LssAddressPart; 4] = [
 /// One LSS master on one bus, and what it saw besides the answers it waited for.
 #[derive(Debug)]
 struct Session {
-    link: Link,
+    link: BusLink,
     master: LssMaster,
     /// Answers from a second device where one was expected (several in configuration state).
     extra_answers: u64,
@@ -287,7 +289,7 @@ struct Session {
 impl Session {
     fn open(master_args: &MasterArgs, command: &str) -> CliResult<Session> {
         let config = lss_config(master_args.timeout, timeout_given())?;
-        let link = Link::open(master_args.bus.spec.as_deref(), command)?;
+        let link = open_link(master_args.bus.spec.as_deref(), command)?;
         Ok(Session {
             link,
             master: LssMaster::new(config),
@@ -308,23 +310,24 @@ impl Session {
         let config = self.master.config();
         let deadline = now + config.timeout * 2 + config.settle + Duration::from_secs(1);
         let (extra, ignored) = (&mut self.extra_answers, &mut self.ignored);
-        let ended = self.link.drive(&mut self.master, Some(deadline), |_, event| {
-            Ok(match event {
-                LssEvent::ExtraAnswer { .. } => {
-                    *extra += 1;
-                    Flow::Continue
-                }
-                LssEvent::Ignored { .. } => {
-                    *ignored += 1;
-                    Flow::Continue
-                }
-                LssEvent::Found { .. } | LssEvent::SwitchBitRate => Flow::Continue,
-                end => Flow::Done(end),
-            })
-        })?;
+        let ended =
+            drive::<_, _, _, CliError>(&mut self.link, &mut self.master, Some(deadline), |_, event| {
+                Ok(match event {
+                    LssEvent::ExtraAnswer { .. } => {
+                        *extra += 1;
+                        Flow::Continue
+                    }
+                    LssEvent::Ignored { .. } => {
+                        *ignored += 1;
+                        Flow::Continue
+                    }
+                    LssEvent::Found { .. } | LssEvent::SwitchBitRate => Flow::Continue,
+                    end => Flow::Done(end),
+                })
+            })?;
         match ended {
             Ok(event) => Ok(event),
-            Err(Ended::Interrupted) => {
+            Err(Ended::Cancelled) => {
                 self.abandon();
                 eprintln!("interrupted");
                 Err(CliError::Exit(crate::error::exit_code::INTERRUPTED))
@@ -544,7 +547,7 @@ fn scan_all(
     let mut found = Vec::new();
     let mut store_problem = None;
     let (extra, ignored) = (&mut session.extra_answers, &mut session.ignored);
-    let ended = session.link.drive(&mut session.master, None, |_, event| {
+    let ended = drive::<_, _, _, CliError>(&mut session.link, &mut session.master, None, |_, event| {
         match event {
             LssEvent::Found { address, node_id } => {
                 let device = Found {
@@ -608,7 +611,7 @@ fn list_all(
             .map_err(|err| CliError::Internal(anyhow::anyhow!("LSS master: {err}")))?;
         let (extra, ignored) = (&mut session.extra_answers, &mut session.ignored);
         let mut this = None;
-        let ended = session.link.drive(&mut session.master, None, |_, event| {
+        let ended = drive::<_, _, _, CliError>(&mut session.link, &mut session.master, None, |_, event| {
             match event {
                 LssEvent::Found { address, .. } => this = Some(address),
                 LssEvent::ExtraAnswer { .. } => *extra += 1,

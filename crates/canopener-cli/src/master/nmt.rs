@@ -30,7 +30,9 @@ use crate::args::OutputFormat;
 use crate::error::{CliError, CliResult, stdout_error};
 use crate::master::args::{NmtArgs, NmtVerb};
 use crate::master::heartbeat::{Heard, HeardKind, HeartbeatCore, millis, state_key};
-use crate::master::link::{Ended, Flow, Link};
+use canopener_runtime::link::{Ended, Flow, Link, drive};
+
+use crate::master::link::open_link;
 
 /// How long a node that reported its old state is given for its next heartbeat: the longest
 /// producer heartbeat time 1017h can hold (UNSIGNED16 ms), and half a second for the bus.
@@ -39,7 +41,7 @@ pub(crate) const NEXT_HEARTBEAT_WAIT: Duration = Duration::from_millis(65_535 + 
 pub(crate) fn run(args: NmtArgs) -> CliResult {
     let target = parse_target(&args.target)?;
     let command = nmt_command(args.command);
-    let mut link = Link::open(args.master.bus.spec.as_deref(), "nmt")?;
+    let mut link = open_link(args.master.bus.spec.as_deref(), "nmt")?;
     let mut master = NmtMaster::new();
     let sent_at = link.now();
     master.send(sent_at, command, target);
@@ -55,7 +57,7 @@ pub(crate) fn run(args: NmtArgs) -> CliResult {
     let mut told_extension = false;
     let interrupted = loop {
         let deadline = confirmation.deadline();
-        let ended = link.drive(&mut core, Some(deadline), |_, heard| {
+        let ended = drive::<_, _, _, CliError>(&mut link, &mut core, Some(deadline), |_, heard| {
             confirmation.on(&heard);
             let moved = confirmation.deadline() != deadline;
             Ok(if confirmation.finished(heard.at) || moved {
@@ -64,7 +66,7 @@ pub(crate) fn run(args: NmtArgs) -> CliResult {
                 Flow::Continue
             })
         })?;
-        if matches!(ended, Err(Ended::Interrupted)) {
+        if matches!(ended, Err(Ended::Cancelled)) {
             break true;
         }
         let now = link.now();

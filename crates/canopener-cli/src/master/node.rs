@@ -22,7 +22,9 @@ use crate::args::OutputFormat;
 use crate::eds::input::{print_stdout, read_input};
 use crate::error::{CliError, CliResult};
 use crate::master::args::{NodeDumpArgs, NodeInfoArgs, NodeScanArgs};
-use crate::master::link::{Ended, Flow, Link};
+use canopener_runtime::link::{BusLink, Ended, Flow, Link, drive};
+
+use crate::master::link::open_link;
 use crate::master::node_list::parse_node_list;
 use crate::master::node_scan::{Fleet, ScanResult};
 use crate::master::sdo::print_json;
@@ -104,7 +106,7 @@ pub(crate) fn scan(args: NodeScanArgs) -> CliResult {
         usize::from(args.parallel),
         timeout,
     )?;
-    let mut link = Link::open(args.master.bus.spec.as_deref(), "node scan")?;
+    let mut link = open_link(args.master.bus.spec.as_deref(), "node scan")?;
     let started = link.now();
     fleet.start(started);
     let mut results: Vec<ScanResult> = Vec::new();
@@ -112,7 +114,7 @@ pub(crate) fn scan(args: NodeScanArgs) -> CliResult {
     // deadline only guards against a core that stops asking for time.
     let rounds = nodes.len().div_ceil(usize::from(args.parallel)) as u32;
     let deadline = started + (timeout * 5 + Duration::from_millis(500)) * rounds.max(1);
-    let ended = link.drive(&mut fleet, Some(deadline), |fleet, result| {
+    let ended = drive::<_, _, _, CliError>(&mut link, &mut fleet, Some(deadline), |fleet, result| {
         results.push(result);
         Ok(if fleet.finished() {
             Flow::Done(())
@@ -125,7 +127,7 @@ pub(crate) fn scan(args: NodeScanArgs) -> CliResult {
         Err(Ended::Deadline) => {
             eprintln!("warning: the scan ran out of time; node-IDs not answered yet are not listed");
         }
-        Err(Ended::Interrupted) => {
+        Err(Ended::Cancelled) => {
             eprintln!("interrupted: the scan stopped before every node-ID was asked");
             return Err(CliError::Exit(crate::error::exit_code::INTERRUPTED));
         }
@@ -242,7 +244,7 @@ struct HeartbeatSeen {
 }
 
 /// Waits up to 1.5 heartbeat periods for one heartbeat of `node` (CiA 301 §7.2.8.3.2.2).
-fn wait_heartbeat(link: &mut Link, node: u8, period_ms: u64) -> CliResult<HeartbeatSeen> {
+fn wait_heartbeat(link: &mut BusLink, node: u8, period_ms: u64) -> CliResult<HeartbeatSeen> {
     let waited = Duration::from_millis(period_ms.saturating_mul(3) / 2);
     let start = link.now();
     let deadline: Instant = start + waited;

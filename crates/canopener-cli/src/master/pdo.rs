@@ -27,7 +27,9 @@ use crate::args::OutputFormat;
 use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult};
 use crate::master::args::{PdoMapArgs, PdoWatchArgs};
-use crate::master::link::{Ended, Flow, Link};
+use canopener_runtime::link::{BusLink, Ended, Flow, Link, drive};
+
+use crate::master::link::open_link;
 
 /// Exit status after Ctrl-C interrupted a command that had not finished (128 + SIGINT, as shells use).
 pub(crate) const INTERRUPTED_EXIT: u8 = crate::error::exit_code::INTERRUPTED;
@@ -35,7 +37,7 @@ pub(crate) const INTERRUPTED_EXIT: u8 = crate::error::exit_code::INTERRUPTED;
 pub(crate) fn map(args: PdoMapArgs) -> CliResult {
     let request = MapRequest::from_args(&args)?;
     request.precheck()?;
-    let link = Link::open(args.master.bus.spec.as_deref(), "pdo map")?;
+    let link = open_link(args.master.bus.spec.as_deref(), "pdo map")?;
     let mut sdo = LinkSdo::new(link, args.target.node, args.master.timeout)?;
     let format = args.master.format;
     let current = match request.read_cob_id(&mut sdo)? {
@@ -107,13 +109,13 @@ pub(crate) trait SdoAccess {
 /// [`SdoAccess`] over a bus: the default SDO channel of one node (600h/580h + node-ID).
 #[derive(Debug)]
 pub(crate) struct LinkSdo {
-    link: Link,
+    link: BusLink,
     client: SdoClient,
     timeout: Duration,
 }
 
 impl LinkSdo {
-    pub(crate) fn new(link: Link, node: u8, timeout: Duration) -> CliResult<LinkSdo> {
+    pub(crate) fn new(link: BusLink, node: u8, timeout: Duration) -> CliResult<LinkSdo> {
         let client = SdoClient::new(node)
             .map_err(|err| CliError::Usage(format!("{err}; e.g. --node 5")))?
             .with_timeout(timeout);
@@ -125,7 +127,7 @@ impl LinkSdo {
     }
 
     /// The bus, for what comes after the SDO transfers.
-    pub(crate) fn into_link(self) -> Link {
+    pub(crate) fn into_link(self) -> BusLink {
         self.link
     }
 
@@ -138,14 +140,15 @@ impl LinkSdo {
         // The client times out on its own; this bound only matters with --timeout 0, which turns
         // the client's timeout off, so that a silent device still cannot hang the command.
         let limit = self.timeout.saturating_mul(2) + Duration::from_secs(1);
-        let ended = self.link.drive(&mut self.client, Some(now + limit), |_, event| {
-            Ok(match event {
-                SdoClientEvent::Uploaded { data, .. } => Flow::Done(Ok(Some(data))),
-                SdoClientEvent::Downloaded { .. } => Flow::Done(Ok(None)),
-                SdoClientEvent::Failed { error, .. } => Flow::Done(Err(error)),
-                SdoClientEvent::Progress { .. } => Flow::Continue,
-            })
-        })?;
+        let ended =
+            drive::<_, _, _, CliError>(&mut self.link, &mut self.client, Some(now + limit), |_, event| {
+                Ok(match event {
+                    SdoClientEvent::Uploaded { data, .. } => Flow::Done(Ok(Some(data))),
+                    SdoClientEvent::Downloaded { .. } => Flow::Done(Ok(None)),
+                    SdoClientEvent::Failed { error, .. } => Flow::Done(Err(error)),
+                    SdoClientEvent::Progress { .. } => Flow::Continue,
+                })
+            })?;
         Ok(match ended {
             Ok(Ok(data)) => Transfer::Done(data),
             Ok(Err(error)) => Transfer::Failed(error),
@@ -156,7 +159,7 @@ impl LinkSdo {
                     after: limit,
                 })
             }
-            Err(Ended::Interrupted) => {
+            Err(Ended::Cancelled) => {
                 self.abort(abort::GENERAL_ERROR)?;
                 Transfer::Interrupted
             }

@@ -29,7 +29,9 @@ use crate::args::OutputFormat;
 use crate::eds::input::{print_stdout, read_input};
 use crate::error::{CliError, CliResult};
 use crate::master::args::PdoWatchArgs;
-use crate::master::link::Link;
+use canopener_runtime::link::{BusLink, Link};
+
+use crate::master::link::open_link;
 use crate::master::pdo::{INTERRUPTED_EXIT, LinkSdo, SdoAccess, Transfer, hex_value, object_name};
 
 /// How long one wait for a frame lasts when neither --duration nor Ctrl-C ends it sooner.
@@ -57,9 +59,9 @@ pub(crate) fn run(args: PdoWatchArgs) -> CliResult {
             ))
         })?;
         let found = numbers.iter().map(|&n| from_od(&built.od, n)).collect();
-        (Link::open(args.master.bus.spec.as_deref(), "pdo watch")?, found)
+        (open_link(args.master.bus.spec.as_deref(), "pdo watch")?, found)
     } else {
-        let link = Link::open(args.master.bus.spec.as_deref(), "pdo watch")?;
+        let link = open_link(args.master.bus.spec.as_deref(), "pdo watch")?;
         let mut sdo = LinkSdo::new(link, node, args.master.timeout)?;
         let progress = progress_bar(numbers.len());
         let found = discover(&mut sdo, node, &numbers, |done| {
@@ -105,7 +107,7 @@ pub(crate) fn run(args: PdoWatchArgs) -> CliResult {
         eprintln!(
             "watching {} TPDO(s) of node {node} on {}; Ctrl-C stops",
             watched.len(),
-            link.spec()
+            link.describe()
         );
     }
     receive(&mut link, &mut watched, &args, format)?;
@@ -515,7 +517,7 @@ fn eds_lookup(eds: &Eds) -> impl FnMut(u16, u8) -> Option<(String, DataType)> + 
 
 /// Receives until --count, --duration or Ctrl-C, printing every frame of a watched TPDO.
 fn receive(
-    link: &mut Link,
+    link: &mut BusLink,
     watched: &mut [WatchedPdo],
     args: &PdoWatchArgs,
     format: OutputFormat,
@@ -526,7 +528,7 @@ fn receive(
     while args.count.is_none_or(|count| received < count) {
         let until = end.unwrap_or_else(|| link.now() + RECV_SLICE);
         let Some((at, frame)) = link.recv_until(until)? else {
-            if link.interrupted() || end.is_some_and(|end| link.now() >= end) {
+            if link.is_cancelled() || end.is_some_and(|end| link.now() >= end) {
                 break;
             }
             continue;

@@ -18,7 +18,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::error::{CliError, CliResult};
 use crate::master::args::MasterArgs;
-use crate::master::link::{Ended, Flow, Link};
+use canopener_runtime::link::{BusLink, Ended, Flow, Link, drive};
+
+use crate::master::link::open_link;
 
 /// Added to the watchdog of one drive, for a loaded machine between the core's timeout and ours.
 const WATCHDOG_SLACK: Duration = Duration::from_millis(500);
@@ -37,7 +39,7 @@ pub(crate) struct Transfer {
 /// One bus link and the SDO client of one node's default channel (600h/580h + node-ID).
 #[derive(Debug)]
 pub(crate) struct SdoSession {
-    link: Link,
+    link: BusLink,
     client: SdoClient,
     node: u8,
     timeout: Duration,
@@ -56,7 +58,7 @@ impl SdoSession {
         let client = SdoClient::new(node)
             .map_err(|err| CliError::Usage(format!("{err}; give --node 1..127, e.g. --node 5")))?
             .with_timeout(timeout);
-        let link = Link::open(master.bus.spec.as_deref(), command)?;
+        let link = open_link(master.bus.spec.as_deref(), command)?;
         Ok(SdoSession {
             link,
             client,
@@ -71,7 +73,7 @@ impl SdoSession {
     }
 
     /// The bus link, for waiting on other traffic between transfers.
-    pub(crate) fn link_mut(&mut self) -> &mut Link {
+    pub(crate) fn link_mut(&mut self) -> &mut BusLink {
         &mut self.link
     }
 
@@ -121,18 +123,19 @@ impl SdoSession {
         let start = self.link.now();
         loop {
             let watchdog = self.link.now() + self.timeout * 2 + WATCHDOG_SLACK;
-            let step = self.link.drive(&mut self.client, Some(watchdog), |_, event| {
-                Ok(match event {
-                    SdoClientEvent::Progress { done, total } => Flow::Done(Step::Progress(done, total)),
-                    SdoClientEvent::Uploaded { data, protocol, .. } => {
-                        Flow::Done(Step::Finished(Ok((data, protocol))))
-                    }
-                    SdoClientEvent::Downloaded { protocol, .. } => {
-                        Flow::Done(Step::Finished(Ok((Vec::new(), protocol))))
-                    }
-                    SdoClientEvent::Failed { error, .. } => Flow::Done(Step::Finished(Err(error))),
-                })
-            })?;
+            let step =
+                drive::<_, _, _, CliError>(&mut self.link, &mut self.client, Some(watchdog), |_, event| {
+                    Ok(match event {
+                        SdoClientEvent::Progress { done, total } => Flow::Done(Step::Progress(done, total)),
+                        SdoClientEvent::Uploaded { data, protocol, .. } => {
+                            Flow::Done(Step::Finished(Ok((data, protocol))))
+                        }
+                        SdoClientEvent::Downloaded { protocol, .. } => {
+                            Flow::Done(Step::Finished(Ok((Vec::new(), protocol))))
+                        }
+                        SdoClientEvent::Failed { error, .. } => Flow::Done(Step::Finished(Err(error))),
+                    })
+                })?;
             match step {
                 Ok(Step::Progress(done, total)) => progress(done, total),
                 Ok(Step::Finished(result)) => {
@@ -150,7 +153,7 @@ impl SdoSession {
                         after: self.timeout * 2 + WATCHDOG_SLACK,
                     }));
                 }
-                Err(Ended::Interrupted) => {
+                Err(Ended::Cancelled) => {
                     self.abort(abort::GENERAL_ERROR)?;
                     eprintln!(
                         "interrupted: the transfer of node {}, {} was aborted (0x08000000 sent to the device)",

@@ -2,7 +2,7 @@
 //! the operating system kept the period: on a non-real-time OS wakeups come late, and the consumers'
 //! synchronous PDOs inherit every late SYNC.
 //!
-//! It does not go through `master_io::Link::drive`, which waits in timed receives: the producer
+//! It does not go through `master_io::BusLink::drive`, which waits in timed receives: the producer
 //! takes no frames, and a sleep keeps the period far better (see [`drain`]).
 
 use canopener_can::Core;
