@@ -7,11 +7,17 @@
 //! bus. Time only moves when the driver calls [`Network::run_until`]; it then jumps from deadline to
 //! deadline, so a run is a pure function of its inputs.
 //!
-//! Two timings: [`Timing::Ideal`] delivers a frame at the instant it is sent (exact, readable traces in
-//! protocol tests), [`Timing::BitAccurate`] arbitrates and times every frame with [`BusEngine`] at a
-//! bit rate (what a real wire would allow).
+//! Three timings: [`Timing::Ideal`] delivers a frame at the instant it is sent (exact, readable traces
+//! in protocol tests), [`Timing::Delayed`] a fixed time later (round trips that take time, without
+//! arbitration), [`Timing::BitAccurate`] arbitrates and times every frame with [`BusEngine`] at a bit
+//! rate (what a real wire would allow).
+//!
+//! Faults of the wiring are part of the model: a station can be [disconnected](Network::disconnect)
+//! (an unplugged connector or a broken drop cable: it neither sends nor receives), and frames can be
+//! [lost](Network::lose_when) by a predicate (recorded as lost, delivered to nobody).
 
 use std::collections::VecDeque;
+use std::time::Duration;
 
 use canopener_can::{Bitrate, CanFrame, Core, Instant};
 
@@ -22,6 +28,9 @@ use crate::{BusConfig, BusEngine, BusStats, Port, SubmitError};
 pub enum Timing {
     /// No time at all: a frame reaches the other stations at the instant it is sent, in send order.
     Ideal,
+    /// Every frame reaches the other stations this long after it was sent, in send order, with no
+    /// arbitration.
+    Delayed(Duration),
     /// Arbitration and exact frame durations at this bit rate ([`BusEngine`]).
     BitAccurate(Bitrate),
 }
@@ -46,6 +55,8 @@ pub struct BusFrame {
     pub from: StationId,
     /// The frame.
     pub frame: CanFrame,
+    /// Whether the bus lost it ([`Network::lose_when`]): nobody received it.
+    pub lost: bool,
 }
 
 /// An event of a node, with when and where it happened.
@@ -76,12 +87,17 @@ pub struct Network<N: Core> {
     engine: Option<BusEngine>,
     now: Instant,
     stations: Vec<Station<N>>,
-    /// Frames sent on an ideal bus and not yet delivered, in send order.
-    ideal: VecDeque<(StationId, CanFrame)>,
+    /// Frames sent on an ideal or delayed bus and not yet delivered: when they arrive, in send order.
+    in_flight: VecDeque<(Instant, StationId, CanFrame)>,
+    delay: Duration,
     events: VecDeque<NodeEvent<N::Event>>,
     recording: Option<Vec<BusFrame>>,
     ideal_frames: u64,
+    lose: Option<LossFilter>,
 }
+
+/// Decides which frames the bus loses.
+type LossFilter = Box<dyn FnMut(&BusFrame) -> bool + Send>;
 
 impl<N: Core + std::fmt::Debug> std::fmt::Debug for Network<N> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -98,6 +114,7 @@ impl<N: Core + std::fmt::Debug> std::fmt::Debug for Network<N> {
 struct Station<N> {
     kind: StationKind<N>,
     port: Option<Port>,
+    connected: bool,
 }
 
 #[derive(Debug)]
@@ -107,27 +124,59 @@ enum StationKind<N> {
 }
 
 impl<N: Core> Network<N> {
-    /// Frames delivered at one instant on an ideal bus before the rest waits for the next call of
+    /// Frames delivered at one instant without bit timing before the rest waits for the next call of
     /// [`Network::run_until`]: a guard against two cores answering each other forever, which no correct
     /// core does, but a network must not hang its driver.
     pub const MAX_FRAMES_PER_INSTANT: usize = 100_000;
 
     /// An empty network at virtual time zero.
     pub fn new(timing: Timing) -> Network<N> {
-        let engine = match timing {
-            Timing::Ideal => None,
-            Timing::BitAccurate(bitrate) => Some(BusEngine::new(BusConfig { bitrate })),
+        let (engine, delay) = match timing {
+            Timing::Ideal => (None, Duration::ZERO),
+            Timing::Delayed(delay) => (None, delay),
+            Timing::BitAccurate(bitrate) => (Some(BusEngine::new(BusConfig { bitrate })), Duration::ZERO),
         };
         Network {
             timing,
             engine,
             now: Instant::ZERO,
             stations: Vec::new(),
-            ideal: VecDeque::new(),
+            in_flight: VecDeque::new(),
+            delay,
             events: VecDeque::new(),
             recording: None,
             ideal_frames: 0,
+            lose: None,
         }
+    }
+
+    /// Loses every frame `lose` says yes to from now on: it is recorded with `lost` set and nobody
+    /// receives it (a disturbed bus, a frame the sender's controller never got out).
+    pub fn lose_when(&mut self, lose: impl FnMut(&BusFrame) -> bool + Send + 'static) {
+        self.lose = Some(Box::new(lose));
+    }
+
+    /// Unplugs a station: until [`Network::reconnect`] it neither sends (its frames are dropped before
+    /// the bus) nor receives. A node keeps running its timers meanwhile, as a powered device behind a
+    /// broken cable does.
+    pub fn disconnect(&mut self, station: StationId) {
+        if let Some(station) = self.stations.get_mut(station.0) {
+            station.connected = false;
+        }
+    }
+
+    /// Plugs a station back in.
+    pub fn reconnect(&mut self, station: StationId) {
+        if let Some(station) = self.stations.get_mut(station.0) {
+            station.connected = true;
+        }
+    }
+
+    /// Whether a station is plugged in.
+    pub fn is_connected(&self, station: StationId) -> bool {
+        self.stations
+            .get(station.0)
+            .is_some_and(|station| station.connected)
     }
 
     /// The timing the network was made with.
@@ -240,7 +289,8 @@ impl<N: Core> Network<N> {
             StationKind::Tap(_) => None,
         });
         let engine = self.engine.as_ref().and_then(BusEngine::poll_timeout);
-        nodes.chain(engine).min()
+        let in_flight = self.in_flight.front().map(|(at, ..)| *at);
+        nodes.chain(engine).chain(in_flight).min()
     }
 
     /// Runs the network up to and including `until`: every frame sent, every timer and every frame
@@ -292,15 +342,25 @@ impl<N: Core> Network<N> {
 
     fn add(&mut self, kind: StationKind<N>) -> StationId {
         let port = self.engine.as_mut().map(BusEngine::attach);
-        self.stations.push(Station { kind, port });
+        self.stations.push(Station {
+            kind,
+            port,
+            connected: true,
+        });
         StationId(self.stations.len() - 1)
     }
 
     fn put_on_bus(&mut self, from: StationId, frame: CanFrame) -> Result<(), SubmitError> {
-        match (&mut self.engine, self.stations.get(from.0).and_then(|s| s.port)) {
+        let Some(station) = self.stations.get(from.0) else {
+            return Ok(());
+        };
+        if !station.connected {
+            return Ok(());
+        }
+        match (&mut self.engine, station.port) {
             (Some(engine), Some(port)) => engine.submit(self.now, port, frame),
             _ => {
-                self.ideal.push_back((from, frame));
+                self.in_flight.push_back((self.now + self.delay, from, frame));
                 Ok(())
             }
         }
@@ -329,10 +389,11 @@ impl<N: Core> Network<N> {
                 }
                 !deliveries.is_empty()
             } else {
-                match self.ideal.pop_front() {
-                    Some((from, frame)) => {
+                let now = self.now;
+                match self.in_flight.pop_front_if(|(at, ..)| *at <= now) {
+                    Some((at, from, frame)) => {
                         self.ideal_frames += 1;
-                        self.deliver(self.now, from, &frame);
+                        self.deliver(at, from, &frame);
                         true
                     }
                     None => false,
@@ -370,15 +431,21 @@ impl<N: Core> Network<N> {
     }
 
     fn deliver(&mut self, at: Instant, from: StationId, frame: &CanFrame) {
+        let mut seen = BusFrame {
+            at,
+            from,
+            frame: *frame,
+            lost: false,
+        };
+        seen.lost = self.lose.as_mut().is_some_and(|lose| lose(&seen));
         if let Some(recording) = &mut self.recording {
-            recording.push(BusFrame {
-                at,
-                from,
-                frame: *frame,
-            });
+            recording.push(seen);
+        }
+        if seen.lost {
+            return;
         }
         for (index, station) in self.stations.iter_mut().enumerate() {
-            if index == from.0 {
+            if index == from.0 || !station.connected {
                 continue;
             }
             match &mut station.kind {
@@ -524,5 +591,53 @@ mod tests {
         let echo = net.attach(Echo::new(1, 2, Duration::ZERO));
         assert_eq!(net.send(echo, frame(1, &[])), Err(SendError::NotATap(echo)));
         assert_eq!(net.take_received(echo), None);
+    }
+
+    #[test]
+    fn delayed_timing_takes_the_delay_each_way() {
+        let mut net = Network::new(Timing::Delayed(Duration::from_millis(1)));
+        net.attach(Echo::new(0x601, 0x581, Duration::from_millis(2)));
+        let tap = net.tap();
+        net.send(tap, frame(0x601, &[])).unwrap();
+        assert!(net.run_until(Instant::from_millis(10), Some(tap)).unwrap());
+        assert_eq!(
+            net.take_received(tap).map(|(at, _)| at),
+            Some(Instant::from_millis(4))
+        );
+    }
+
+    #[test]
+    fn an_unplugged_station_neither_sends_nor_receives_until_plugged_back() {
+        let mut net = Network::new(Timing::Ideal);
+        let echo = net.attach(Echo::new(0x601, 0x581, Duration::ZERO));
+        let tap = net.tap();
+        net.disconnect(echo);
+        assert!(!net.is_connected(echo));
+        net.send(tap, frame(0x601, &[])).unwrap();
+        assert!(!net.run_until(Instant::from_millis(1), Some(tap)).unwrap());
+        assert_eq!(net.node(echo).unwrap().heard, 0);
+        net.reconnect(echo);
+        net.send(tap, frame(0x601, &[])).unwrap();
+        assert!(net.run_until(Instant::from_millis(2), Some(tap)).unwrap());
+        assert_eq!(net.node(echo).unwrap().heard, 1);
+    }
+
+    #[test]
+    fn lost_frames_are_recorded_and_reach_nobody() {
+        let mut net = Network::new(Timing::Ideal);
+        let echo = net.attach(Echo::new(0x601, 0x581, Duration::ZERO));
+        let tap = net.tap();
+        net.record();
+        let mut count = 0;
+        net.lose_when(move |_| {
+            count += 1;
+            count == 1
+        });
+        net.send(tap, frame(0x601, &[])).unwrap();
+        net.send(tap, frame(0x601, &[])).unwrap();
+        net.settle().unwrap();
+        let lost: Vec<bool> = net.take_recording().iter().map(|f| f.lost).collect();
+        assert_eq!(lost, [true, false, false]);
+        assert_eq!(net.node(echo).unwrap().heard, 1);
     }
 }

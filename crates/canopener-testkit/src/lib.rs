@@ -2,6 +2,8 @@
 //!
 //! - [`trace`]: drives one sans-IO [`Core`](canopener_can::Core) on virtual time and records what it
 //!   sends and reports as a timestamped trace.
+//! - [`net`]: many cores on one simulated bus on virtual time (the runtime's network loop), every frame
+//!   recorded as a trace line; [`cores!`] makes one core type of several kinds.
 //! - [`frames`]: proptest strategies for frames a CANopen core meets.
 //! - [`corpus`]: where the EDS/XDD corpus is: the files vendored in the repository, and the optional
 //!   extended corpus next to the checkout.
@@ -10,4 +12,11 @@
 
 pub mod corpus;
 pub mod frames;
+pub mod net;
 pub mod trace;
+
+/// What [`cores!`] expands to refers to; not part of the API.
+#[doc(hidden)]
+pub mod __private {
+    pub use canopener_can::{CanFrame, Core, Instant};
+}

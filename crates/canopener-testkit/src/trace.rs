@@ -41,7 +41,8 @@ impl<C: Core> Debug for Trace<C> {
     }
 }
 
-fn stamp(now: Instant) -> String {
+/// `now` as `<ms>.<µs>` (`12.345`), the time stamp of trace lines.
+pub fn stamp(now: Instant) -> String {
     let micros = now.as_micros();
     format!("{}.{:03}", micros / 1000, micros % 1000)
 }
