@@ -293,6 +293,15 @@ impl<N: Core> Network<N> {
         nodes.chain(engine).chain(in_flight).min()
     }
 
+    /// Whether a frame is on its way: sent but not yet received by the other stations.
+    pub fn frames_in_flight(&self) -> bool {
+        !self.in_flight.is_empty()
+            || self
+                .engine
+                .as_ref()
+                .is_some_and(|engine| engine.poll_timeout().is_some())
+    }
+
     /// Runs the network up to and including `until`: every frame sent, every timer and every frame
     /// end due by then, in time order. With `stop_at` a tap, it returns as soon as that tap has a frame
     /// to take (the time is then that frame's arrival), so a driver can answer it. Returns whether it
@@ -310,15 +319,18 @@ impl<N: Core> Network<N> {
             };
             self.now = self.now.max(due);
             let now = self.now;
+            // Frames that arrive at this instant first, then the timers: a timer that expires as the
+            // awaited frame arrives sees the frame.
+            if let Some(engine) = &mut self.engine {
+                engine.handle_timeout(now);
+            }
+            self.exchange()?;
             for station in &mut self.stations {
                 if let StationKind::Node(node) = &mut station.kind
                     && node.poll_timeout().is_some_and(|at| at <= now)
                 {
                     node.handle_timeout(now);
                 }
-            }
-            if let Some(engine) = &mut self.engine {
-                engine.handle_timeout(now);
             }
         }
     }

@@ -1,11 +1,10 @@
 //! The LSS master against LSS-unconfigured `Device`s on one virtual bus: fastscan finds every
 //! device, gives it a node-ID, and the devices boot with it (CiA 305 with CiA 301 boot-up).
 
-use canopener_can::Core;
-use std::collections::VecDeque;
 use std::time::Duration;
 
-use canopener_can::{CanFrame, Instant};
+use canopener_bus_engine::network::{BusFrame, StationId, Timing};
+use canopener_can::Instant;
 use canopener_device::application::NoApplication;
 use canopener_device::device::{self, Device};
 use canopener_device::nmt_slave::NmtSlaveState;
@@ -13,6 +12,7 @@ use canopener_master::lss_master::{
     KnownParts, LssConfig, LssEvent, LssMaster, LssMode, LssService, LssServiceError, ScanPlan, node_id_range,
 };
 use canopener_od::ObjectKey;
+use canopener_testkit::net::Net;
 use canopener_wire::LssAddress;
 use canopener_wire::{LssAddressPart, NodeId};
 
@@ -50,108 +50,67 @@ fn node(raw: u8) -> NodeId {
     NodeId::new(raw).expect("node-ID")
 }
 
-/// Who sent a frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Sender {
-    Master,
-    Device(usize),
-}
-
-/// A virtual CAN bus: every frame anyone sends reaches every other participant one frame time
-/// later; timers run after the frames due at the same instant.
+/// The master and the devices on the test harness's virtual bus: every frame anyone sends reaches
+/// every other participant one frame time later; timers run after the frames due at the same instant.
 struct Bus {
-    now: Instant,
+    net: Net<Device>,
+    devices: Vec<StationId>,
     master: LssMaster,
-    devices: Vec<Device>,
-    in_flight: VecDeque<(Instant, Sender, CanFrame)>,
     /// Every frame delivered, with its delivery time and sender.
-    wire: Vec<(Instant, Sender, CanFrame)>,
+    wire: Vec<BusFrame>,
     events: Vec<LssEvent>,
 }
 
 impl Bus {
     fn new(devices: Vec<Device>) -> Bus {
-        let mut bus = Bus {
-            now: Instant::ZERO,
-            master: LssMaster::new(LssConfig::DEFAULT),
+        let mut net = Net::new(Timing::Delayed(FRAME_TIME));
+        let devices = devices
+            .into_iter()
+            .map(|mut dev| {
+                dev.boot(Instant::ZERO);
+                net.attach(dev)
+            })
+            .collect();
+        Bus {
+            net,
             devices,
-            in_flight: VecDeque::new(),
+            master: LssMaster::new(LssConfig::DEFAULT),
             wire: Vec::new(),
             events: Vec::new(),
-        };
-        for dev in &mut bus.devices {
-            dev.boot(Instant::ZERO);
-        }
-        bus.collect();
-        bus
-    }
-
-    /// Puts everything the participants want to send on the wire, and keeps the master's events.
-    fn collect(&mut self) {
-        let at = self.now + FRAME_TIME;
-        while let Some(frame) = self.master.poll_transmit() {
-            self.in_flight.push_back((at, Sender::Master, frame));
-        }
-        for (idx, dev) in self.devices.iter_mut().enumerate() {
-            while let Some(frame) = dev.poll_transmit() {
-                self.in_flight.push_back((at, Sender::Device(idx), frame));
-            }
-            while dev.poll_event().is_some() {}
-        }
-        while let Some(event) = self.master.poll_event() {
-            self.events.push(event);
         }
     }
 
-    fn next_due(&self) -> Option<Instant> {
-        let frame = self.in_flight.front().map(|(at, ..)| *at);
-        let timers = self.devices.iter().map(Device::poll_timeout);
-        [frame, self.master.poll_timeout()]
-            .into_iter()
-            .chain(timers)
-            .flatten()
-            .min()
+    fn now(&self) -> Instant {
+        self.net.now()
+    }
+
+    fn device(&self, index: usize) -> &Device {
+        self.net.node(self.devices[index])
     }
 
     /// Runs until the master is idle and nothing is in flight, or until `limit`.
     fn run(&mut self, limit: Duration) {
-        let limit = self.now + limit;
-        self.collect();
-        while self.master.running().is_some() || !self.in_flight.is_empty() {
-            let Some(due) = self.next_due() else { break };
-            assert!(due <= limit, "the bus did not settle before {limit}");
-            self.now = due;
-            while let Some((_, from, frame)) = self.in_flight.pop_front_if(|(at, ..)| *at <= due) {
-                self.wire.push((due, from, frame));
-                if from != Sender::Master {
-                    self.master.handle_frame(due, &frame);
-                }
-                for (idx, dev) in self.devices.iter_mut().enumerate() {
-                    if from != Sender::Device(idx) {
-                        dev.handle_frame(due, &frame);
-                    }
-                }
-            }
-            self.collect();
-            if self.master.poll_timeout().is_some_and(|at| at <= due) {
-                self.master.handle_timeout(due);
-            }
-            for dev in &mut self.devices {
-                if dev.poll_timeout().is_some_and(|at| at <= due) {
-                    dev.handle_timeout(due);
-                }
-            }
-            self.collect();
-        }
+        let limit = self.now() + limit;
+        let events = self
+            .net
+            .drive(&mut self.master, limit, |master, _| master.running().is_none());
+        assert!(
+            self.master.running().is_none(),
+            "the bus did not settle before {limit}"
+        );
+        self.events.extend(events);
+        self.net.events();
+        self.wire.extend(self.net.bus_frames());
     }
 
     /// The frames devices sent on CAN-IDs other than LSS, as `(device, frame)`.
     fn device_frames(&self) -> Vec<(usize, String)> {
         self.wire
             .iter()
-            .filter_map(|(_, from, frame)| match from {
-                Sender::Device(idx) if frame.id().as_raw() != 0x7E4 => Some((*idx, frame.to_string())),
-                _ => None,
+            .filter(|seen| seen.frame.id().as_raw() != 0x7E4)
+            .filter_map(|seen| {
+                let index = self.devices.iter().position(|dev| *dev == seen.from)?;
+                Some((index, seen.frame.to_string()))
             })
             .collect()
     }
@@ -181,7 +140,7 @@ fn fastscan_finds_three_unconfigured_devices_and_they_boot_with_the_node_ids_giv
     bus.run(Duration::from_secs(1));
     assert!(bus.wire.is_empty());
 
-    let start = bus.now;
+    let start = bus.now();
     let plan = ScanPlan {
         node_ids: node_id_range(node(0x20), node(0x2F)),
         store: true,
@@ -218,7 +177,8 @@ fn fastscan_finds_three_unconfigured_devices_and_they_boot_with_the_node_ids_giv
             (0, "722#00".to_owned())
         ]
     );
-    for (dev, raw) in bus.devices.iter().zip([0x22, 0x20, 0x21]) {
+    for (index, raw) in [0x22, 0x20, 0x21].into_iter().enumerate() {
+        let dev = bus.device(index);
         assert!(dev.is_configured());
         assert_eq!(dev.node_id(), node(raw));
         assert_eq!(dev.state(), NmtSlaveState::PreOperational);
@@ -237,10 +197,10 @@ fn fastscan_finds_three_unconfigured_devices_and_they_boot_with_the_node_ids_giv
     assert!(stats.received > answered, "{stats:?}");
     // The scan took the silence, plus 2 frame times and the 20 ms settle time per answered request.
     let expected = stats.silence + (FRAME_TIME * 2 + Duration::from_millis(20)) * answered as u32;
-    assert_eq!(bus.now - start, expected);
+    assert_eq!(bus.now() - start, expected);
 
     // Nobody is left unconfigured.
-    let now = bus.now;
+    let now = bus.now();
     bus.master.identify_non_configured(now).expect("identify");
     bus.run(Duration::from_secs(1));
     assert_eq!(
@@ -268,7 +228,7 @@ fn known_vendor_and_product_need_fewer_frames() {
             store: false,
             known,
         };
-        bus.master.scan_all(bus.now, plan).expect("scan starts");
+        bus.master.scan_all(bus.now(), plan).expect("scan starts");
         bus.run(Duration::from_secs(60));
         assert_eq!(
             bus.take_events(),
@@ -281,7 +241,7 @@ fn known_vendor_and_product_need_fewer_frames() {
             ]
         );
         assert_eq!(bus.device_frames(), [(0, "707#00".to_owned())]);
-        counts.push((bus.master.stats(), bus.now));
+        counts.push((bus.master.stats(), bus.now()));
     }
     let (full, full_time) = counts[0];
     let (matched, matched_time) = counts[1];
@@ -299,7 +259,8 @@ fn known_vendor_and_product_need_fewer_frames() {
 #[test]
 fn configuration_services_against_a_device() {
     fn step(bus: &mut Bus, service: &dyn Fn(&mut LssMaster, Instant)) -> Vec<LssEvent> {
-        service(&mut bus.master, bus.now);
+        let now = bus.now();
+        service(&mut bus.master, now);
         bus.run(Duration::from_secs(5));
         bus.take_events()
     }
@@ -390,5 +351,5 @@ fn configuration_services_against_a_device() {
         }]
     );
     assert_eq!(bus.device_frames(), [(0, "705#00".to_owned())]);
-    assert_eq!(bus.devices[0].node_id(), node(5));
+    assert_eq!(bus.device(0).node_id(), node(5));
 }

@@ -6,6 +6,7 @@
 use canopener_can::Core;
 use std::time::Duration;
 
+use canopener_bus_engine::network::StationId;
 use canopener_can::{CanFrame, Instant};
 use canopener_device::application::NoApplication;
 use canopener_device::device::Device;
@@ -14,6 +15,7 @@ use canopener_master::sdo_client::{
     DownloadMode, Protocol, SdoClient, SdoClientError, SdoClientEvent, SdoTransferError, UploadMode,
 };
 use canopener_od::{Access, DataType, DynamicOd, Entry, ObjectKey};
+use canopener_testkit::net::Net as TestNet;
 use proptest::prelude::*;
 
 const BASE: &str = concat!(
@@ -42,15 +44,13 @@ fn od() -> DynamicOd {
     DynamicOd::from_entries(entries.len(), entries).expect("dictionary with extras")
 }
 
-/// The client and the device on one virtual bus, with an optional frame filter.
+/// The client and the device on the test harness's virtual bus, with an optional frame filter.
 struct Net {
+    net: TestNet<Device>,
+    dev: StationId,
     client: SdoClient,
-    dev: Device,
-    now: Instant,
     /// Every frame on the bus as `"<ms> <frame>"`, dropped ones marked.
     trace: Vec<String>,
-    /// Returns true for a frame the bus loses.
-    lose: Box<dyn FnMut(&CanFrame) -> bool>,
 }
 
 impl Net {
@@ -62,17 +62,19 @@ impl Net {
         let mut dev = Device::new(od, 5, Box::new(NoApplication)).expect("device");
         dev.boot(Instant::ZERO);
         while dev.poll_transmit().is_some() {}
+        let mut net = TestNet::ideal();
+        let dev = net.attach(dev);
         Net {
-            client,
+            net,
             dev,
-            now: Instant::ZERO,
+            client,
             trace: Vec::new(),
-            lose: Box::new(|_| false),
         }
     }
 
-    fn losing(mut self, lose: impl FnMut(&CanFrame) -> bool + 'static) -> Net {
-        self.lose = Box::new(lose);
+    /// The bus loses every frame `lose` says yes to.
+    fn losing(mut self, mut lose: impl FnMut(&CanFrame) -> bool + Send + 'static) -> Net {
+        self.net.network_mut().lose_when(move |seen| lose(&seen.frame));
         self
     }
 
@@ -81,55 +83,27 @@ impl Net {
         &mut self,
         start: impl FnOnce(&mut SdoClient, Instant) -> Result<(), SdoClientError>,
     ) -> Vec<SdoClientEvent> {
-        start(&mut self.client, self.now).expect("transfer starts");
-        for _ in 0..1_000_000 {
-            let mut moved = false;
-            while let Some(frame) = self.client.poll_transmit() {
-                moved = true;
-                if self.deliver(&frame) {
-                    self.dev.handle_frame(self.now, &frame);
-                }
-            }
-            while let Some(frame) = self.dev.poll_transmit() {
-                moved = true;
-                if self.deliver(&frame) {
-                    self.client.handle_frame(self.now, &frame);
-                }
-            }
-            while self.dev.poll_event().is_some() {}
-            if !self.client.is_busy() {
-                while let Some(frame) = self.client.poll_transmit() {
-                    if self.deliver(&frame) {
-                        self.dev.handle_frame(self.now, &frame);
-                    }
-                }
-                return std::iter::from_fn(|| self.client.poll_event()).collect();
-            }
-            if !moved {
-                let due = [self.client.poll_timeout(), self.dev.poll_timeout()]
-                    .into_iter()
-                    .flatten()
-                    .min()
-                    .expect("a busy client always has a deadline");
-                assert!(due >= self.now, "deadline in the past");
-                self.now = due;
-                self.client.handle_timeout(self.now);
-                self.dev.handle_timeout(self.now);
-            }
+        start(&mut self.client, self.net.now()).expect("transfer starts");
+        let limit = self.net.now() + Duration::from_secs(3600);
+        let events = self
+            .net
+            .drive(&mut self.client, limit, |client, _| !client.is_busy());
+        assert!(!self.client.is_busy(), "the transfer did not end");
+        self.net.events();
+        for seen in self.net.bus_frames() {
+            let millis = seen.at.as_nanos() / 1_000_000;
+            let mark = if seen.lost { " (lost)" } else { "" };
+            self.trace.push(format!("{millis} {}{mark}", seen.frame));
         }
-        panic!("the transfer did not end");
+        events
     }
 
-    fn deliver(&mut self, frame: &CanFrame) -> bool {
-        let lost = (self.lose)(frame);
-        let millis = self.now.as_nanos() / 1_000_000;
-        let mark = if lost { " (lost)" } else { "" };
-        self.trace.push(format!("{millis} {frame}{mark}"));
-        !lost
+    fn dev_mut(&mut self) -> &mut Device {
+        self.net.node_mut(self.dev)
     }
 
     fn value(&self, key: ObjectKey) -> Vec<u8> {
-        self.dev.od().read(key).expect("readable").to_vec()
+        self.net.node(self.dev).od().read(key).expect("readable").to_vec()
     }
 }
 
@@ -379,8 +353,8 @@ fn block_upload_recovers_a_lost_last_segment_of_a_sub_block() {
 fn a_stopped_device_does_not_answer_and_the_client_times_out() {
     let mut net = Net::new(client().with_timeout(Duration::from_millis(500)));
     let stop = CanFrame::new(canopener_can::StandardId::ZERO, &[0x02, 0x05]).expect("NMT frame");
-    net.dev.handle_frame(Instant::ZERO, &stop);
-    while net.dev.poll_transmit().is_some() {}
+    net.dev_mut().handle_frame(Instant::ZERO, &stop);
+    while net.dev_mut().poll_transmit().is_some() {}
     let error = failure(&net.transfer(upload(STRING, UploadMode::Normal)));
     assert_eq!(
         error,

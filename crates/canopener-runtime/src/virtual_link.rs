@@ -107,6 +107,7 @@ impl<N: Core> Link for VirtualLink<N> {
     fn describe(&self) -> String {
         match self.network.timing() {
             Timing::Ideal => "simulated bus (ideal timing)".to_owned(),
+            Timing::Delayed(delay) => format!("simulated bus ({delay:?} per frame)"),
             Timing::BitAccurate(bitrate) => format!("simulated bus ({bitrate})"),
         }
     }

@@ -124,14 +124,15 @@ impl<N: Core> Net<N> {
         &mut self.network
     }
 
-    /// Runs `core` (outside the bus, on the tap) against the nodes until `done` says an event is the
-    /// last one wanted or `limit` comes; returns the core's events. The core's frames go out through
+    /// Runs `core` (outside the bus, on the tap) against the nodes until `done` says so or `limit`
+    /// comes; returns the core's events. `done` sees the core and its events so far, and is asked only
+    /// while no frame is on its way, so a run ends on a settled bus. The core's frames go out through
     /// the tap (and are recorded), frames the tap receives go to the core, its timers run when due.
     pub fn drive<C: Core>(
         &mut self,
         core: &mut C,
         limit: Instant,
-        mut done: impl FnMut(&C::Event) -> bool,
+        mut done: impl FnMut(&C, &[C::Event]) -> bool,
     ) -> Vec<C::Event> {
         let mut events = Vec::new();
         loop {
@@ -146,12 +147,9 @@ impl<N: Core> Net<N> {
                 // Its answers go out at the same instant, before time moves on.
                 continue;
             }
-            let mut finished = false;
-            while let Some(event) = core.poll_event() {
-                finished |= done(&event);
-                events.push(event);
-            }
-            if finished || self.now() >= limit {
+            events.extend(std::iter::from_fn(|| core.poll_event()));
+            let settled = !self.network.frames_in_flight();
+            if (settled && done(core, &events)) || self.now() >= limit {
                 while let Some(frame) = core.poll_transmit() {
                     self.send(frame);
                 }
