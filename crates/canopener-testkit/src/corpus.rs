@@ -227,6 +227,18 @@ fn vendored(kind: Kind, name: &str) -> PathBuf {
     path
 }
 
+/// The files of `kind` in `dir` (not below it), sorted: what the corpus would take from that directory.
+/// For tools that run over a directory a user names instead of the corpus.
+///
+/// # Panics
+/// When `dir` cannot be read.
+pub fn files_in(dir: &Path, kind: Kind) -> Vec<PathBuf> {
+    assert!(dir.is_dir(), "{} is not a directory", dir.display());
+    let mut paths: Vec<PathBuf> = list(dir, kind).into_iter().map(|(_, path)| path).collect();
+    paths.sort();
+    paths
+}
+
 fn list(dir: &Path, kind: Kind) -> Vec<(String, PathBuf)> {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Vec::new();
@@ -249,6 +261,7 @@ mod tests {
         assert!(Kind::Eds.holds(Path::new("b.dcf")));
         assert!(!Kind::Eds.holds(Path::new("MANIFEST.tsv")));
         assert!(Kind::Xdd.holds(Path::new("x.xpd")));
+        assert!(Kind::Xdd.holds(Path::new("x.XDC")));
         assert!(Kind::Xdd.holds(Path::new("x.nxdd")));
         assert!(!Kind::Xdd.holds(Path::new("x.eds")));
     }
@@ -284,6 +297,18 @@ mod tests {
         // Not vendored (no licence at its source): only the extended corpus can have it.
         let extended = "BLUESINK__canopentools__genslave__test.eds";
         assert_eq!(extended_file(Kind::Eds, extended), find(Kind::Eds, extended));
+    }
+
+    #[test]
+    fn a_directory_lists_its_files_of_one_kind_sorted() {
+        let eds = files_in(&vendored_root().join("eds"), Kind::Eds);
+        assert_eq!(
+            eds.len(),
+            Kind::Eds.vendored_count(),
+            "MANIFEST.tsv is not an EDS"
+        );
+        assert!(eds.is_sorted());
+        assert!(files_in(&vendored_root().join("eds"), Kind::Xdd).is_empty());
     }
 
     #[test]
