@@ -202,7 +202,7 @@ pub fn extended_file(kind: Kind, name: &str) -> Option<PathBuf> {
     );
     let Some(root) = extended_root() else {
         eprintln!(
-            "skipped: {name} is not vendored (its licence does not allow it, see corpus/README.md); \
+            "skipped: {name} is not vendored (no licence lets us redistribute it; see corpus/README.md); \
              set {CORPUS_ENV} to a corpus root holding it, or put the corpus at ../shared/corpus"
         );
         return None;
