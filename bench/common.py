@@ -29,12 +29,38 @@ def machine():
             "rustc": rustc, "date": time.strftime("%Y-%m-%d %H:%M")}
 
 
+CORPUS_EXTENSIONS = {"eds": (".eds", ".dcf"), "xdd": (".xdd", ".xdc", ".xpd", ".nxdd")}
+
+
+def corpus_files(kind="eds"):
+    """Every corpus file of `kind` ("eds" or "xdd"), sorted by name: the vendored files of corpus/ in the
+    repository, plus those only the extended corpus has (CANOPENER_CORPUS, else ../shared/corpus beside the
+    checkout when it exists). The same rules as canopener_testkit::corpus, which Python cannot call."""
+    roots = [ROOT / "corpus"]
+    extended = os.environ.get("CANOPENER_CORPUS")
+    if extended:
+        if not Path(extended).is_dir():
+            # A typo must not silently shrink a benchmark to the vendored files.
+            sys.exit(f"CANOPENER_CORPUS={extended} is not a directory; point it at a corpus root holding eds/ and "
+                     "xdd/, or unset it")
+        roots.append(Path(extended))
+    elif (ROOT.parent / "shared/corpus").is_dir():
+        roots.append(ROOT.parent / "shared/corpus")
+    by_name = {}
+    for root in roots:
+        directory = root / kind
+        if directory.is_dir():
+            for path in directory.iterdir():
+                if path.is_file() and path.suffix.lower() in CORPUS_EXTENSIONS[kind]:
+                    by_name.setdefault(path.name, path)  # the vendored copy first
+    return [by_name[name] for name in sorted(by_name)]
+
+
 def corpus_eds(name, script):
-    """A file of the shared EDS corpus (beside the checkout, or under CANOPENER_CORPUS); exits naming `script`."""
-    root = os.environ.get("CANOPENER_CORPUS")
-    path = (Path(root) if root else ROOT.parent / "shared/corpus") / "eds" / name
-    if not path.is_file():
-        sys.exit(f"{script}: {path} not found; set CANOPENER_CORPUS to the corpus root (the directory holding eds/)")
+    """One EDS of the corpus by name (see corpus_files); exits naming `script` when no corpus has it."""
+    path = next((path for path in corpus_files("eds") if path.name == name), None)
+    if path is None:
+        sys.exit(f"{script}: {name} is in neither corpus/eds nor the extended corpus (CANOPENER_CORPUS)")
     return path
 
 

@@ -3,11 +3,12 @@
 Usage (via bench/run.sh, i.e. cargo xtask bench): bench/eds_check.py [--quick] [--repeat N]
 
 Python canopen has no checker; importing a file is the least it must do to say anything about it, so its
-import time is the floor of any python-based check. Three comparisons, all on the 148-file corpus:
+import time is the floor of any python-based check. Three comparisons, all on the whole corpus
+(148 files with the extended corpus):
 
 1. per file, one thread each: canopener reads, loads and runs every built-in check (examples/check_timing)
    against python canopen's import_od of the same file; medians of N runs per file, summed over the corpus;
-2. the command a user runs: `canopener eds check CORPUS --format json -o /dev/null` (parallel, all cores)
+2. the command a user runs: `canopener eds check FILES --format json -o /dev/null` (parallel, all cores)
    against one python process that imports every file (interpreter start and `import canopen` included);
    median wall-clock time of N runs each;
 3. the same command pinned to one core (RAYON_NUM_THREADS=1), so parallelism is not credited as speed.
@@ -76,8 +77,7 @@ def main():
     need(CHECK_TIMING, "build it with `cargo build --release -p canopener-check --example check_timing`")
     need(CANOPENER, "build it with `cargo build --release -p canopener-cli --bin canopener`")
     eds_load.quiet_python_canopen()
-    directory = eds_load.corpus_dir()
-    paths = eds_load.corpus_files(directory)
+    paths = eds_load.corpus_files("eds")
     load_before = os.getloadavg()[0]
     eds_load.log(f"eds_check: canopener check_timing on {len(paths)} files, {repeat} runs each")
     done = subprocess.run([CHECK_TIMING, "--repeat", str(repeat), "--list", "-"],
@@ -99,7 +99,8 @@ def main():
     ratios = [r["python_import_us"] / r["canopener_check_us"] for r in rows if r["canopener_check_us"] > 0]
     eds_load.log("eds_check: whole commands")
     files = [str(p) for p in paths]
-    cli = [CANOPENER, "eds", "check", str(directory), "--format", "json", "-o", os.devnull]
+    # The files, not a directory: the corpus may span the vendored and the extended directory.
+    cli = [CANOPENER, "eds", "check", *files, "--format", "json", "-o", os.devnull]
     cli_time, _ = time_command(cli, repeat)
     one_core = dict(os.environ, RAYON_NUM_THREADS="1")
     cli_one_time, _ = time_command(cli, repeat, env=one_core)

@@ -10,8 +10,9 @@ Files python canopen cannot import are reported with the exception class: they a
 Throughput counts dictionary entries (objects plus sub-objects) as canopener's model holds them, the same
 number for both tools, so objects/s compares the speed of reading one and the same file.
 
-The corpus root (the directory holding eds/) defaults to ../shared/corpus next to the repository;
-CANOPENER_CORPUS overrides it. Results: bench-results/eds_load.md and bench-results/eds_load.json.
+The corpus is the vendored corpus/eds plus the extended corpus when present (CANOPENER_CORPUS, else
+../shared/corpus next to the repository; see bench/common.py). Results: bench-results/eds_load.md and
+bench-results/eds_load.json.
 """
 
 import gc
@@ -27,7 +28,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import machine  # noqa: E402  (shared with the other bench scripts)
+from common import corpus_files, machine  # noqa: E402  (shared with the other bench scripts)
 
 import canopen
 from canopen.objectdictionary import ODArray, ODRecord
@@ -63,19 +64,6 @@ def parse_args(argv):
         if repeat < 1:
             sys.exit("eds_load.py: --repeat needs a positive whole number")
     return repeat
-
-
-def corpus_dir():
-    root = os.environ.get("CANOPENER_CORPUS")
-    directory = (Path(root) if root else ROOT.parent / "shared/corpus") / "eds"
-    if not directory.is_dir():
-        sys.exit(f"eds_load.py: corpus directory {directory} not found; set CANOPENER_CORPUS to the corpus root "
-                 "(the directory holding eds/)")
-    return directory
-
-
-def corpus_files(directory):
-    return sorted(p for p in directory.iterdir() if p.is_file() and p.suffix.lower() in (".eds", ".dcf"))
 
 
 def timing_program():
@@ -300,7 +288,7 @@ def main():
     repeat = parse_args(sys.argv[1:])
     quiet_python_canopen()
     load_before = os.getloadavg()[0]
-    corpus = corpus_files(corpus_dir())
+    corpus = corpus_files("eds")
     log(f"eds_load: {len(corpus)} corpus files, synthetic {SYNTHETIC_OBJECTS} objects, {repeat} loads each")
     with tempfile.TemporaryDirectory(prefix="canopener-eds-load-") as tmp:
         synthetic = [(objects, *generate(Path(tmp), objects)) for objects in SYNTHETIC_OBJECTS]

@@ -14,13 +14,13 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import machine  # noqa: E402  (shared with the other bench scripts)
+from common import corpus_eds, machine  # noqa: E402  (shared with the other bench scripts)
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = ROOT / "target/release/canopener"
 LOAD = ROOT / "target/release/examples/hub_load"
 PEERS = ROOT / "crates/canopener-cli/tests/python"
-EDS = ROOT / "../shared/corpus/eds/canopen-python__canopen__test__sample.eds"
+EDS = corpus_eds("canopen-python__canopen__test__sample.eds", "run.py")
 PY = sys.executable
 QUICK = "--quick" in sys.argv
 RUNS = 1 if QUICK else 3

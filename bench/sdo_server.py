@@ -19,8 +19,7 @@ The physical limits at 1 Mbit/s assume zero turnaround time: 125-bit SDO frames 
 notes' typical SDO frame), and the exact lengths of the very frames of each transfer that the criterion bench
 prints (`canopener_can::bits`).
 
-EDS: CANopenNode-style `base.eds` of gocanopen in the corpus (../shared/corpus next to the repository, or
-CANOPENER_CORPUS): it has an UNSIGNED32 (2007h) and a DOMAIN (200Fh) that are writable, which both servers hold.
+EDS: CANopenNode-style `base.eds` of gocanopen in the corpus (corpus/eds, vendored): it has an UNSIGNED32 (2007h) and a DOMAIN (200Fh) that are writable, which both servers hold.
 Results: bench-results/sdo_server.json and bench-results/sdo_server.md.
 """
 

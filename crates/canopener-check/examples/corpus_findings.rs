@@ -2,15 +2,17 @@
 //! with up to N examples per code, so severities can be reviewed against real vendor files.
 //!
 //! `cargo run -p canopener-check --example corpus_findings -- [DIR] [--code CODE] [--examples N]`
-//! (DIR defaults to `../shared/corpus/eds` from the workspace root).
+//! (DIR defaults to the whole EDS corpus: the vendored `corpus/eds`, plus the extended corpus when
+//! present).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use canopener_check::Selection;
+use canopener_testkit::corpus::{self, Kind};
 
 fn main() {
-    let mut dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/corpus/eds"));
+    let mut dir: Option<PathBuf> = None;
     let mut only: Option<String> = None;
     let mut examples = 3usize;
     let mut args = std::env::args().skip(1);
@@ -18,19 +20,13 @@ fn main() {
         match arg.as_str() {
             "--code" => only = args.next(),
             "--examples" => examples = args.next().and_then(|n| n.parse().ok()).unwrap_or(3),
-            other => dir = PathBuf::from(other),
+            other => dir = Some(PathBuf::from(other)),
         }
     }
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| e.eq_ignore_ascii_case("eds") || e.eq_ignore_ascii_case("dcf"))
-        })
-        .collect();
-    paths.sort();
+    let paths: Vec<PathBuf> = match &dir {
+        Some(dir) => corpus::files_in(dir, Kind::Eds),
+        None => corpus::eds_files().into_iter().map(|file| file.path).collect(),
+    };
     let mut by_code: BTreeMap<String, (usize, usize, Vec<String>)> = BTreeMap::new();
     let mut severities: BTreeMap<String, String> = BTreeMap::new();
     for path in &paths {
@@ -61,7 +57,8 @@ fn main() {
             }
         }
     }
-    println!("{} files in {}", paths.len(), dir.display());
+    let source = dir.map_or_else(|| "the corpus".to_owned(), |dir| dir.display().to_string());
+    println!("{} files in {source}", paths.len());
     for (code, (count, files, samples)) in &by_code {
         println!(
             "{code} {:<7} {count:>5} findings in {files:>3} files",

@@ -8,31 +8,16 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use canopener_check::fix::{self, Edit, Fix};
 use canopener_check::{Context, Selection};
-
-const CORPUS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/corpus/eds");
+use canopener_testkit::corpus::{self, Kind};
 
 fn corpus() -> Vec<(String, Vec<u8>)> {
-    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(CORPUS)
-        .unwrap_or_else(|e| panic!("{CORPUS}: {e}"))
-        .filter_map(Result::ok)
-        .map(|entry| entry.path())
-        .filter(|path| {
-            path.extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| e.eq_ignore_ascii_case("eds") || e.eq_ignore_ascii_case("dcf"))
+    corpus::eds_files()
+        .into_iter()
+        .map(|file| {
+            let bytes = std::fs::read(&file.path).unwrap_or_else(|e| panic!("{}: {e}", file.path.display()));
+            (file.name, bytes)
         })
-        .map(|path| {
-            let name = path
-                .file_name()
-                .and_then(|n| n.to_str())
-                .unwrap_or_default()
-                .to_owned();
-            let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            (name, bytes)
-        })
-        .collect();
-    files.sort();
-    files
+        .collect()
 }
 
 fn no_extra(_: &Context<'_>) -> Vec<Fix> {
@@ -183,7 +168,11 @@ fn check_first_round(name: &str, bytes: &[u8]) -> Result<(), String> {
 #[test]
 fn fixing_the_corpus_is_safe_idempotent_and_keeps_untouched_lines() {
     let files = corpus();
-    assert!(files.len() > 100, "expected the corpus at {CORPUS}");
+    assert_eq!(
+        files.len(),
+        corpus::expected_count(Kind::Eds),
+        "every EDS/DCF file of the corpus"
+    );
     let mut per_code: BTreeMap<String, (usize, usize)> = BTreeMap::new();
     let mut failures = Vec::new();
     let (mut changed, mut errors_before, mut errors_after, mut skipped) = (0, 0, 0, 0);

@@ -29,10 +29,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 /// The EDS both sides of `bench/sdo_server.py` serve as well; it has an UNSIGNED32 and a DOMAIN that are
 /// writable, which python canopen's LocalNode and this device can both hold.
-const EDS: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/corpus/eds/samsamfire__gocanopen__pkg__od__base.eds"
-);
+const EDS: &str = "samsamfire__gocanopen__pkg__od__base.eds";
 const NODE: u8 = 0x22;
 /// 1018h:01 Vendor-ID, `DefaultValue=0x00000000` in the EDS.
 const VENDOR_ID: Multiplexer = Multiplexer::new(0x1018, 1);
@@ -85,7 +82,7 @@ struct Harness {
 
 impl Harness {
     fn booted() -> Harness {
-        let bytes = std::fs::read(EDS).expect("the corpus EDS (../shared/corpus next to the repository)");
+        let bytes = std::fs::read(canopener_testkit::corpus::eds(EDS)).expect("the corpus EDS");
         let eds = canopener_eds::load(&bytes).eds;
         let mut dev = Device::from_eds(&eds, NODE, Box::new(NoApplication)).expect("device");
         dev.boot(Instant::ZERO);

@@ -24,7 +24,7 @@ fn base_device(node: u8) -> Device {
 }
 
 fn ds301_device(node: u8) -> Device {
-    Device::from_eds(&eds(DS301), node, Box::new(NoApplication)).expect("device")
+    Device::from_eds(&eds(&*DS301), node, Box::new(NoApplication)).expect("device")
 }
 
 #[test]
@@ -509,7 +509,7 @@ fn error_behaviour_1029h_on_a_lost_heartbeat() {
         (1, NmtSlaveState::Operational),
         (2, NmtSlaveState::Stopped),
     ] {
-        let dev = device_with(DS301, 10, u8_array(0x1029, &[reaction, 1]));
+        let dev = device_with(&DS301, 10, u8_array(0x1029, &[reaction, 1]));
         let mut bus = Bus::booted(dev);
         bus.rx(0, "000#010A");
         bus.rx(1, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
@@ -530,11 +530,9 @@ fn error_behaviour_1029h_on_a_lost_heartbeat() {
 
 #[test]
 fn an_extension_adds_the_cia401_test_registers_to_a_real_cia401_eds_and_survives_a_new_node_id() {
-    const IO: &str = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__IO.eds"
-    );
-    let io = eds(IO);
+    let io = eds(canopener_testkit::corpus::eds(
+        "CANopenNode__CANopenNode__example__IO.eds",
+    ));
     let plain = Device::from_eds(&io, 5, Box::new(NoApplication)).expect("device");
     assert!(!plain.od().object(0x6000).is_empty(), "a CiA 401 EDS");
     assert!(

@@ -439,15 +439,15 @@ fn store_ignored() {
         bus.rx(2, &download(10, 0x1010, 1, b"save"));
         bus.rx(3, "000#810A");
     };
-    let (ok, bad) = both(DS301, 10, Fault::StoreIgnored, scenario);
+    let (ok, bad) = both(&DS301, 10, Fault::StoreIgnored, scenario);
     // Both confirm the save.
     assert_eq!(ok[2], "2.000 58A#6010100100000000");
     assert_eq!(bad[2], "2.000 58A#6010100100000000");
     // Only the correct device heartbeats at 500 ms after the reset.
-    let mut correct = Bus::booted(device(DS301, 10, FaultSet::none()));
+    let mut correct = Bus::booted(device(&DS301, 10, FaultSet::none()));
     scenario(&mut correct);
     correct.advance(600);
-    let mut faulty = Bus::booted(device(DS301, 10, Fault::StoreIgnored.into()));
+    let mut faulty = Bus::booted(device(&DS301, 10, Fault::StoreIgnored.into()));
     scenario(&mut faulty);
     faulty.advance(600);
     assert_eq!(correct.value(0x1017, 0), 500u16.to_le_bytes());
@@ -458,7 +458,7 @@ fn store_ignored() {
 
 #[test]
 fn sync_counter_missing() {
-    let (ok, bad) = both(DS301, 10, Fault::SyncCounterMissing, |bus| {
+    let (ok, bad) = both(&DS301, 10, Fault::SyncCounterMissing, |bus| {
         bus.rx(1, &download(10, 0x1019, 0, &[3]));
         bus.rx(2, &download(10, 0x1006, 0, &10_000u32.to_le_bytes()));
         bus.rx(3, &download(10, 0x1005, 0, &0x4000_0080u32.to_le_bytes()));
@@ -546,7 +546,7 @@ proptest::proptest! {
             .filter(|(i, _)| mask & (1 << i) != 0)
             .map(|(_, f)| f)
             .collect();
-        for (path, node) in [(BASE, 5), (DS301, 10)] {
+        for (path, node) in [(BASE, 5), (DS301.as_str(), 10)] {
             let mut bus = Bus::booted(device(path, node, faults));
             let mut t = 0;
             bus.rx(0, "000#0100");

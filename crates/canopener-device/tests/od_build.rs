@@ -4,28 +4,18 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+use canopener_testkit::corpus::{self, Kind};
+
 use canopener_device::od_build::{BuiltOd, NoteKind, build_od};
 use canopener_od::{Access, DataType, DynamicOd, ObjectKey};
 use proptest::prelude::*;
 
-const CORPUS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/corpus/eds");
-
 fn corpus_files() -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(CORPUS)
-        .expect("the corpus directory exists")
-        .map(|entry| entry.expect("readable directory entry").path())
-        .filter(|path| {
-            path.extension()
-                .and_then(|ext| ext.to_str())
-                .is_some_and(|ext| ext.eq_ignore_ascii_case("eds") || ext.eq_ignore_ascii_case("dcf"))
-        })
-        .collect();
-    files.sort();
-    files
+    corpus::eds_files().into_iter().map(|file| file.path).collect()
 }
 
 fn build_file(name: &str, node_id: u8) -> BuiltOd {
-    let bytes = std::fs::read(format!("{CORPUS}/{name}")).expect("corpus file");
+    let bytes = std::fs::read(corpus::eds(name)).expect("corpus file");
     build_od(&canopener_eds::load(&bytes).eds, node_id).expect("builds")
 }
 
@@ -79,7 +69,11 @@ fn check_sizes(built: &BuiltOd) -> Result<(), String> {
 #[test]
 fn every_corpus_file_builds() {
     let files = corpus_files();
-    assert_eq!(files.len(), 148, "corpus size changed");
+    assert_eq!(
+        files.len(),
+        corpus::expected_count(Kind::Eds),
+        "corpus size changed"
+    );
     let (mut entries, mut notes, mut noted_files) = (0, 0, 0);
     let mut by_kind: BTreeMap<String, usize> = BTreeMap::new();
     for path in &files {
@@ -146,7 +140,7 @@ fn limits_of_a_known_file_are_enforced_on_write() {
     assert_eq!(read(&built.od, 0x2000, 1), [127]);
 
     // [1600sub0] of a modm test EDS: rw UNSIGNED8 with HighLimit=8.
-    let mut modm = build_file("Javask__modm-canopen__examples__src__simple__test.eds", 5);
+    let mut modm = build_file("Javask__modm-canopen__examples__src__simple-linux__test.eds", 5);
     assert_eq!(abort(&mut modm.od, 0x1600, 0, &[9]), Err(0x0609_0031));
     assert_eq!(abort(&mut modm.od, 0x1600, 0, &[8]), Ok(()));
 }

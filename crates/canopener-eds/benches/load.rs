@@ -5,14 +5,13 @@
 //! dictionary entries (objects plus sub-objects, as the model holds them) per second, in
 //! `eds_load/bytes` in MB/s. The synthetic files come from `support/synthetic_eds.rs`, the same
 //! generator `examples/load_timing.rs --generate` uses for the side-by-side run against python
-//! canopen (`bench/eds_load.py`). The corpus root (the directory holding `eds/`) defaults to
-//! `../shared/corpus` next to the repository; `CANOPENER_CORPUS` overrides it. Without a corpus the
-//! corpus inputs are skipped with a message and the synthetic ones still run.
+//! canopen (`bench/eds_load.py`). The corpus files are vendored ones (`corpus/eds`), so every
+//! checkout measures them.
 
 use std::hint::black_box;
-use std::path::PathBuf;
 use std::time::Duration;
 
+use canopener_testkit::corpus;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 mod support {
@@ -30,7 +29,7 @@ use support::synthetic_eds::synthetic_eds;
 const CORPUS_FILES: [(&str, &str); 4] = [
     (
         "small_ros2_simple",
-        "ros-industrial__ros2_canopen__ressources__simple.eds",
+        "ros-industrial__ros2_canopen__canopen_core__test__simple.eds",
     ),
     (
         "quirky_python_sample",
@@ -52,12 +51,6 @@ struct Input {
     entries: u64,
 }
 
-fn corpus_root() -> PathBuf {
-    std::env::var_os("CANOPENER_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus"))
-}
-
 fn entries_of(bytes: &[u8]) -> u64 {
     let loaded = canopener_eds::load(bytes);
     let entries = loaded.eds.objects.len() + loaded.eds.objects.values().map(|o| o.subs.len()).sum::<usize>();
@@ -66,21 +59,14 @@ fn entries_of(bytes: &[u8]) -> u64 {
 
 fn inputs() -> Vec<Input> {
     let mut inputs = Vec::new();
-    let dir = corpus_root().join("eds");
     for (name, file) in CORPUS_FILES {
-        let path = dir.join(file);
-        match std::fs::read(&path) {
-            Ok(bytes) => inputs.push(Input {
-                name: name.to_owned(),
-                entries: entries_of(&bytes),
-                bytes,
-            }),
-            Err(e) => eprintln!(
-                "skipping corpus input {name}: cannot read {} ({e}); set CANOPENER_CORPUS to the corpus root \
-                 (the directory holding eds/)",
-                path.display()
-            ),
-        }
+        let path = corpus::eds(file);
+        let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        inputs.push(Input {
+            name: name.to_owned(),
+            entries: entries_of(&bytes),
+            bytes,
+        });
     }
     for objects in SYNTHETIC_OBJECTS {
         let eds = synthetic_eds(objects);

@@ -1,42 +1,25 @@
-//! Every file of the shared EDS corpus (`../shared/corpus/eds`, 148 real files from many vendors):
-//! loads without panicking, writes back byte-identical, and keeps its model through the writers.
+//! Every file of the EDS corpus (the vendored `corpus/eds`, plus the extended corpus when present: 148
+//! real files from many vendors): loads without panicking, writes back byte-identical, and keeps its
+//! model through the writers.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use canopener_eds::{dcf, diff, json, load, write};
-
-/// The corpus directory; `CANOPENER_CORPUS` overrides the default next to the repository.
-fn corpus_dir(kind: &str) -> PathBuf {
-    let root = std::env::var_os("CANOPENER_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus"));
-    let dir = root.join(kind);
-    assert!(
-        dir.is_dir(),
-        "corpus {} not found; set CANOPENER_CORPUS to the corpus root",
-        dir.display()
-    );
-    dir
-}
+use canopener_testkit::corpus::{self, Kind};
 
 fn corpus_files() -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(corpus_dir("eds"))
-        .expect("corpus directory is readable")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("eds") || e.eq_ignore_ascii_case("dcf"))
-        })
-        .collect();
-    files.sort();
-    files
+    corpus::eds_files().into_iter().map(|file| file.path).collect()
 }
 
 #[test]
 fn every_corpus_file_loads_and_round_trips_byte_identical() {
     let files = corpus_files();
-    assert_eq!(files.len(), 148, "the corpus has 148 EDS/DCF files");
+    assert_eq!(
+        files.len(),
+        corpus::expected_count(Kind::Eds),
+        "every EDS/DCF file of the corpus"
+    );
     let mut counts: BTreeMap<&'static str, usize> = BTreeMap::new();
     for path in &files {
         let bytes = std::fs::read(path).unwrap();

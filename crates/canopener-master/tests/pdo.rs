@@ -19,10 +19,7 @@ const BASE: &str = concat!(
     "/../canopener-check/test_data/checks/base.eds"
 );
 /// CANopenNode's CiA 401 example: eight mapping entries per PDO, dummies 0002h–0007h enabled.
-const IO: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__IO.eds"
-);
+const IO: &str = "CANopenNode__CANopenNode__example__IO.eds";
 
 fn eds(path: &str) -> canopener_eds::Eds {
     canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
@@ -182,8 +179,9 @@ fn mapping(texts: &[&str]) -> Vec<MappedObject> {
 #[test]
 fn tpdo_remapped_bit_by_bit_then_sent_by_its_event_timer() {
     let node = 0x0A;
-    let mut bench = Bench::booted(IO, node);
-    let io = eds(IO);
+    let io_path = canopener_testkit::corpus::eds(IO).display().to_string();
+    let mut bench = Bench::booted(&io_path, node);
+    let io = eds(&io_path);
     let current = bench.upload_u32(0x1800, 1);
     assert_eq!(current, 0x18A);
 

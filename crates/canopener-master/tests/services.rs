@@ -6,6 +6,7 @@
 //! (node 4; the only one with 100Ch/100Dh for node guarding).
 
 use canopener_can::Core;
+use std::sync::LazyLock;
 use std::time::Duration;
 
 use canopener_can::candump::parse_compact_frame;
@@ -27,14 +28,14 @@ const BASE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../canopener-check/test_data/checks/base.eds"
 );
-const DS301: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__DS301_profile.eds"
-);
-const SOCKET: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/corpus/eds/CANopenNode__CANopenSocket__canopend__objDict__CANopenSocket.eds"
-);
+static DS301: LazyLock<String> =
+    LazyLock::new(|| vendored("CANopenNode__CANopenNode__example__DS301_profile.eds"));
+static SOCKET: LazyLock<String> =
+    LazyLock::new(|| vendored("CANopenNode__CANopenSocket__canopend__objDict__CANopenSocket.eds"));
+
+fn vendored(name: &str) -> String {
+    canopener_testkit::corpus::eds(name).display().to_string()
+}
 
 /// A device from `path` with dictionary values set before power-on (`(index, sub, bytes)`).
 fn device(path: &str, node: u8, values: &[(u16, u8, &[u8])]) -> Device {
@@ -344,7 +345,7 @@ fn heartbeat_lost_when_the_device_stops_producing_or_is_unplugged() {
     let mut net = Net::new(
         vec![
             device(BASE, 5, &[(0x1017, 0, &hundred_ms)]),
-            device(DS301, 10, &[(0x1017, 0, &fifty_ms)]),
+            device(&DS301, 10, &[(0x1017, 0, &fifty_ms)]),
         ],
         ConsumerTime::Off,
     );
@@ -385,7 +386,7 @@ fn heartbeat_lost_when_the_device_stops_producing_or_is_unplugged() {
 fn guarding_a_device_configured_with_100ch_100dh() {
     let guard_ms = 100u16.to_le_bytes();
     let mut net = Net::new(
-        vec![device(SOCKET, 4, &[(0x100C, 0, &guard_ms), (0x100D, 0, &[3])])],
+        vec![device(&SOCKET, 4, &[(0x100C, 0, &guard_ms), (0x100D, 0, &[3])])],
         ConsumerTime::Off,
     );
     // This device starts operational on its own (1F80h bit 2 clear).
@@ -477,7 +478,7 @@ fn guarding_a_device_configured_with_100ch_100dh() {
 #[test]
 fn sync_producer_drives_the_device_sync_consumer() {
     use canopener_device::sync::SyncEvent as DeviceSync;
-    let mut net = Net::new(vec![device(DS301, 10, &[(0x1019, 0, &[5])])], ConsumerTime::Off);
+    let mut net = Net::new(vec![device(&DS301, 10, &[(0x1019, 0, &[5])])], ConsumerTime::Off);
     let config = SyncConfig {
         counter_overflow: Some(5),
         ..SyncConfig::new(Duration::from_millis(10))
@@ -525,7 +526,7 @@ fn time_producer_reaches_the_device_time_consumer() {
     use canopener_device::time_stamp::TimeEvent as DeviceTime;
     let consumer = 0x8000_0100u32.to_le_bytes();
     let mut net = Net::new(
-        vec![device(DS301, 10, &[(0x1012, 0, &consumer)])],
+        vec![device(&DS301, 10, &[(0x1012, 0, &consumer)])],
         ConsumerTime::Off,
     );
     // 2024-01-01 12:00:00.000 UTC.
@@ -577,7 +578,7 @@ fn faulty_heartbeats_are_reported() {
     let wrong_state =
         device(BASE, 5, &[(0x1017, 0, &hundred_ms)]).with_faults(FaultSet::from(Fault::HeartbeatStateWrong));
     let too_fast =
-        device(DS301, 10, &[(0x1017, 0, &hundred_ms)]).with_faults(FaultSet::from(Fault::HeartbeatTooFast));
+        device(&DS301, 10, &[(0x1017, 0, &hundred_ms)]).with_faults(FaultSet::from(Fault::HeartbeatTooFast));
     let mut net = Net::new(vec![wrong_state, too_fast], ConsumerTime::Learn);
     net.nmt(150, NmtCommand::StartRemoteNode, NmtTarget::Node(node(5)));
     net.advance(330);

@@ -2,18 +2,19 @@
 //! examples, and how long checking took, so a pack can be reviewed against real vendor files.
 //!
 //! `cargo run -p canopener-rules --example corpus_rules -- [DIR] [--pack PACK] [--code ID]
-//! [--examples N] [--fixes]` (DIR defaults to `../shared/corpus/eds` from the workspace root, PACK to
-//! the shipped `packs/seed-paper.toml`).
+//! [--examples N] [--fixes]` (DIR defaults to the whole EDS corpus: the vendored `corpus/eds`, plus
+//! the extended corpus when present; PACK to the shipped `packs/seed-paper.toml`).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use canopener_check::{Context, Selection};
+use canopener_testkit::corpus::{self, Kind};
 
 fn main() {
     let root = env!("CARGO_MANIFEST_DIR");
-    let mut dir = PathBuf::from(format!("{root}/../../../shared/corpus/eds"));
+    let mut dir: Option<PathBuf> = None;
     let mut pack_path = PathBuf::from(format!("{root}/packs/seed-paper.toml"));
     let mut only: Option<String> = None;
     let mut examples = 3usize;
@@ -25,22 +26,16 @@ fn main() {
             "--code" => only = args.next(),
             "--examples" => examples = args.next().and_then(|n| n.parse().ok()).unwrap_or(3),
             "--fixes" => show_fixes = true,
-            other => dir = PathBuf::from(other),
+            other => dir = Some(PathBuf::from(other)),
         }
     }
     let text = std::fs::read_to_string(&pack_path).unwrap_or_else(|e| panic!("{}: {e}", pack_path.display()));
     let pack = canopener_rules::parse_pack(&text, &pack_path.display().to_string())
         .unwrap_or_else(|e| panic!("{e}"));
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| e.eq_ignore_ascii_case("eds") || e.eq_ignore_ascii_case("dcf"))
-        })
-        .collect();
-    paths.sort();
+    let paths: Vec<PathBuf> = match dir {
+        Some(dir) => corpus::files_in(&dir, Kind::Eds),
+        None => corpus::eds_files().into_iter().map(|file| file.path).collect(),
+    };
     let selection = Selection {
         only: only.iter().cloned().collect(),
         ..Selection::default()

@@ -9,6 +9,8 @@
 //!   not need it otherwise.
 //!
 //! A file present in both is taken from the vendored corpus (they are byte-identical copies).
+//!
+//! `corpus/README.md` says where the files come from and why some are not vendored.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -26,6 +28,23 @@ pub enum Kind {
 }
 
 impl Kind {
+    /// How many files of this kind the repository vendors (the rows of `corpus/<kind>/MANIFEST.tsv`).
+    pub const fn vendored_count(self) -> usize {
+        match self {
+            Kind::Eds => 110,
+            Kind::Xdd => 20,
+        }
+    }
+
+    /// How many files of this kind the whole corpus holds: the vendored files plus those only the
+    /// extended corpus has.
+    pub const fn full_count(self) -> usize {
+        match self {
+            Kind::Eds => 148,
+            Kind::Xdd => 26,
+        }
+    }
+
     fn dir(self) -> &'static str {
         match self {
             Kind::Eds => "eds",
@@ -128,6 +147,17 @@ pub fn xdd_files() -> Vec<CorpusFile> {
     files(Kind::Xdd)
 }
 
+/// How many files [`files`] returns when the corpus is complete: every vendored file, and with an
+/// extended corpus the whole corpus. Tests over the whole corpus assert it, so that a file the locator
+/// lost fails them instead of shrinking them.
+pub fn expected_count(kind: Kind) -> usize {
+    if extended_root().is_some() {
+        kind.full_count()
+    } else {
+        kind.vendored_count()
+    }
+}
+
 /// The vendored files of `kind` only: what every checkout has.
 pub fn vendored_files(kind: Kind) -> Vec<CorpusFile> {
     files(kind).into_iter().filter(|file| file.vendored).collect()
@@ -159,6 +189,33 @@ pub fn xdd(name: &str) -> PathBuf {
     vendored(Kind::Xdd, name)
 }
 
+/// One file that only the extended corpus has, for the few tests built around a device that cannot be
+/// redistributed: `None` without an extended corpus, and the caller skips, saying so.
+///
+/// # Panics
+/// When there is an extended corpus and it lacks the file, or when the repository vendors the file
+/// (then the test must use [`eds`]/[`xdd`] and run everywhere).
+pub fn extended_file(kind: Kind, name: &str) -> Option<PathBuf> {
+    assert!(
+        !vendored_root().join(kind.dir()).join(name).is_file(),
+        "{name} is vendored: use corpus::eds/xdd so that every checkout runs the test"
+    );
+    let Some(root) = extended_root() else {
+        eprintln!(
+            "skipped: {name} is not vendored (no licence lets us redistribute it; see corpus/README.md); \
+             set {CORPUS_ENV} to a corpus root holding it, or put the corpus at ../shared/corpus"
+        );
+        return None;
+    };
+    let path = root.join(kind.dir()).join(name);
+    assert!(
+        path.is_file(),
+        "the extended corpus {} lacks {name}",
+        root.display()
+    );
+    Some(path)
+}
+
 fn vendored(kind: Kind, name: &str) -> PathBuf {
     let path = vendored_root().join(kind.dir()).join(name);
     assert!(
@@ -168,6 +225,18 @@ fn vendored(kind: Kind, name: &str) -> PathBuf {
         vendored_root().join(kind.dir()).join("MANIFEST.tsv").display()
     );
     path
+}
+
+/// The files of `kind` in `dir` (not below it), sorted: what the corpus would take from that directory.
+/// For tools that run over a directory a user names instead of the corpus.
+///
+/// # Panics
+/// When `dir` cannot be read.
+pub fn files_in(dir: &Path, kind: Kind) -> Vec<PathBuf> {
+    assert!(dir.is_dir(), "{} is not a directory", dir.display());
+    let mut paths: Vec<PathBuf> = list(dir, kind).into_iter().map(|(_, path)| path).collect();
+    paths.sort();
+    paths
 }
 
 fn list(dir: &Path, kind: Kind) -> Vec<(String, PathBuf)> {
@@ -192,6 +261,7 @@ mod tests {
         assert!(Kind::Eds.holds(Path::new("b.dcf")));
         assert!(!Kind::Eds.holds(Path::new("MANIFEST.tsv")));
         assert!(Kind::Xdd.holds(Path::new("x.xpd")));
+        assert!(Kind::Xdd.holds(Path::new("x.XDC")));
         assert!(Kind::Xdd.holds(Path::new("x.nxdd")));
         assert!(!Kind::Xdd.holds(Path::new("x.eds")));
     }
@@ -199,5 +269,51 @@ mod tests {
     #[test]
     fn the_workspace_root_holds_the_crates() {
         assert!(workspace_root().join("crates/canopener-testkit").is_dir());
+    }
+
+    #[test]
+    fn the_whole_corpus_is_every_vendored_file_and_with_the_extended_one_every_file() {
+        for kind in [Kind::Eds, Kind::Xdd] {
+            let all = files(kind);
+            assert_eq!(all.len(), expected_count(kind), "{kind:?}");
+            let vendored = vendored_files(kind);
+            assert_eq!(vendored.len(), kind.vendored_count(), "{kind:?}");
+            assert!(vendored.iter().all(|file| file.path.starts_with(vendored_root())));
+            if extended_root().is_none() {
+                assert_eq!(
+                    all, vendored,
+                    "{kind:?}: without an extended corpus only vendored files"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_named_file_is_found_where_it_is() {
+        let vendored = "CANopenNode__CANopenNode__example__IO.eds";
+        assert_eq!(find(Kind::Eds, vendored), Some(eds(vendored)));
+        assert!(eds(vendored).starts_with(vendored_root()));
+        assert_eq!(find(Kind::Eds, "no-such-file.eds"), None);
+        // Not vendored (no licence at its source): only the extended corpus can have it.
+        let extended = "BLUESINK__canopentools__genslave__test.eds";
+        assert_eq!(extended_file(Kind::Eds, extended), find(Kind::Eds, extended));
+    }
+
+    #[test]
+    fn a_directory_lists_its_files_of_one_kind_sorted() {
+        let eds = files_in(&vendored_root().join("eds"), Kind::Eds);
+        assert_eq!(
+            eds.len(),
+            Kind::Eds.vendored_count(),
+            "MANIFEST.tsv is not an EDS"
+        );
+        assert!(eds.is_sorted());
+        assert!(files_in(&vendored_root().join("eds"), Kind::Xdd).is_empty());
+    }
+
+    #[test]
+    #[should_panic(expected = "is not in the vendored corpus")]
+    fn a_test_cannot_ask_for_a_file_the_repository_does_not_vendor() {
+        eds("BLUESINK__canopentools__genslave__test.eds");
     }
 }

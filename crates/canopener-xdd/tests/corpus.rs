@@ -1,10 +1,11 @@
-//! The shared corpus: every CANopen XDD/XDC/XPD of `xdd/` loads (the POWERLINK file is refused),
+//! The corpus: every CANopen XDD/XDC/XPD of `xdd/` loads (the POWERLINK file is refused),
 //! every EDS/DCF of `eds/` survives EDS → XDD → EDS, and where a repository ships both an XDD and
 //! its EDS the two object dictionaries are compared (the differences are a snapshot: they are
 //! findings about those vendors' files).
 //!
-//! The corpus root is `CANOPENER_CORPUS` (holding `xdd/` and `eds/`), else `../shared/corpus` next to
-//! the repository.
+//! The files are the vendored `corpus/` plus the extended corpus when present (see
+//! `canopener_testkit::corpus`). The snapshots of the vendored files are always checked, those of the
+//! files only the extended corpus has (`*_extended`) when it is there.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -12,34 +13,8 @@ use std::path::{Path, PathBuf};
 
 use canopener_eds::diff::{diff, diff_objects};
 use canopener_eds::{Eds, ObjectListKind, Origin, Severity};
+use canopener_testkit::corpus::{self, CorpusFile, Kind};
 use canopener_xdd::{ObjectStyle, WriteOptions, XddCode, XddError, XddKind, XddLoaded, read, write};
-
-fn corpus_dir(kind: &str) -> PathBuf {
-    let root = std::env::var_os("CANOPENER_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/corpus"));
-    let dir = root.join(kind);
-    assert!(
-        dir.is_dir(),
-        "corpus {} not found; set CANOPENER_CORPUS to the corpus root (with xdd/ and eds/)",
-        dir.display()
-    );
-    dir
-}
-
-fn files(kind: &str, extensions: &[&str]) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(corpus_dir(kind))
-        .expect("corpus directory is readable")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)))
-        })
-        .collect();
-    files.sort();
-    files
-}
 
 fn name(path: &Path) -> String {
     path.file_name()
@@ -65,11 +40,25 @@ fn code_counts(loaded: &XddLoaded) -> String {
 
 #[test]
 fn every_canopen_xdd_of_the_corpus_loads_and_powerlink_is_refused() {
-    let files = files("xdd", &["xdd", "xdc", "xpd", "nxdd"]);
-    assert_eq!(files.len(), 26, "the XDD corpus has 26 files");
-    let mut report = String::new();
-    for path in &files {
+    let files = corpus::files(Kind::Xdd);
+    assert_eq!(
+        files.len(),
+        corpus::expected_count(Kind::Xdd),
+        "every XDD file of the corpus"
+    );
+    let (mut vendored, mut extended) = (String::new(), String::new());
+    for CorpusFile {
+        path,
+        vendored: is_vendored,
+        ..
+    } in &files
+    {
         let file = name(path);
+        let report = if *is_vendored {
+            &mut vendored
+        } else {
+            &mut extended
+        };
         match read(&read_file(path)) {
             Ok(loaded) => {
                 let subs: usize = loaded.eds.objects.values().map(|o| o.subs.len()).sum();
@@ -98,7 +87,10 @@ fn every_canopen_xdd_of_the_corpus_loads_and_powerlink_is_refused() {
             Err(e) => panic!("{file} does not load: {e}"),
         }
     }
-    insta::assert_snapshot!("xdd_corpus", report);
+    insta::assert_snapshot!("xdd_corpus", vendored);
+    if corpus::extended_root().is_some() {
+        insta::assert_snapshot!("xdd_corpus_extended", extended);
+    }
 }
 
 /// Whether the EDS gives no Granularity, which CiA 311 requires (the writer does not invent one).
@@ -111,8 +103,15 @@ fn lacks_granularity(eds: &Eds) -> bool {
 
 #[test]
 fn every_eds_of_the_corpus_survives_eds_to_xdd_to_eds() {
-    let files = files("eds", &["eds", "dcf"]);
-    assert_eq!(files.len(), 148, "the EDS corpus has 148 files");
+    let files: Vec<PathBuf> = corpus::files(Kind::Eds)
+        .into_iter()
+        .map(|file| file.path)
+        .collect();
+    assert_eq!(
+        files.len(),
+        corpus::expected_count(Kind::Eds),
+        "every EDS file of the corpus"
+    );
     let mut failures = Vec::new();
     let (mut objects, mut entries, mut bytes, mut with_object_side_channel) =
         (0usize, 0usize, 0usize, 0usize);
@@ -199,8 +198,9 @@ fn every_eds_of_the_corpus_survives_eds_to_xdd_to_eds() {
         }
     }
     println!(
-        "148 files, {objects} objects, {entries} objects and sub-objects, {bytes} bytes of XDD; {with_object_side_channel} files needed \
+        "{} files, {objects} objects, {entries} objects and sub-objects, {bytes} bytes of XDD; {with_object_side_channel} files needed \
          the side channel on some object; {:?} for load, both styles, read and diff ({} build)",
+        files.len(),
         started.elapsed(),
         if cfg!(debug_assertions) {
             "debug"
@@ -225,7 +225,7 @@ fn has_object_side_channel(xml: &str) -> bool {
 #[test]
 fn every_xdd_of_the_corpus_survives_xdd_to_model_to_xdd() {
     let mut failures = Vec::new();
-    for path in files("xdd", &["xdd", "xdc", "xpd", "nxdd"]) {
+    for CorpusFile { path, .. } in corpus::files(Kind::Xdd) {
         let Ok(first) = read(&read_file(&path)) else {
             continue;
         };
@@ -304,11 +304,27 @@ const PAIRS: &[(&str, &str)] = &[
 
 #[test]
 fn xdd_and_eds_shipped_together_describe_these_differences() {
-    let mut report = String::new();
+    let (mut vendored, mut extended) = (String::new(), String::new());
     for (xdd_file, eds_file) in PAIRS {
-        let xdd =
-            read(&read_file(&corpus_dir("xdd").join(xdd_file))).unwrap_or_else(|e| panic!("{xdd_file}: {e}"));
-        let eds = canopener_eds::load(&read_file(&corpus_dir("eds").join(eds_file))).eds;
+        let (Some(xdd_path), Some(eds_path)) = (
+            corpus::find(Kind::Xdd, xdd_file),
+            corpus::find(Kind::Eds, eds_file),
+        ) else {
+            assert!(
+                corpus::extended_root().is_none(),
+                "the extended corpus lacks {xdd_file} or {eds_file}"
+            );
+            continue;
+        };
+        let report = if xdd_path.starts_with(corpus::vendored_root())
+            && eds_path.starts_with(corpus::vendored_root())
+        {
+            &mut vendored
+        } else {
+            &mut extended
+        };
+        let xdd = read(&read_file(&xdd_path)).unwrap_or_else(|e| panic!("{xdd_file}: {e}"));
+        let eds = canopener_eds::load(&read_file(&eds_path)).eds;
         let disabled: Vec<String> = xdd
             .diagnostics
             .iter()
@@ -342,5 +358,8 @@ fn xdd_and_eds_shipped_together_describe_these_differences() {
             let _ = writeln!(report, "{line}");
         }
     }
-    insta::assert_snapshot!("vendor_pairs", report);
+    insta::assert_snapshot!("vendor_pairs", vendored);
+    if corpus::extended_root().is_some() {
+        insta::assert_snapshot!("vendor_pairs_extended", extended);
+    }
 }

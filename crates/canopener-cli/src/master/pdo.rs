@@ -668,10 +668,11 @@ pub(crate) mod testing {
         env!("CARGO_MANIFEST_DIR"),
         "/../canopener-check/test_data/checks/base.eds"
     );
-    pub(crate) const IO_EDS: &str = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__IO.eds"
-    );
+    pub(crate) static IO_EDS: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+        canopener_testkit::corpus::eds("CANopenNode__CANopenNode__example__IO.eds")
+            .display()
+            .to_string()
+    });
 
     pub(crate) fn eds(path: &str) -> canopener_eds::Eds {
         canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
@@ -850,7 +851,7 @@ mod tests {
 
     #[test]
     fn maps_a_tpdo_with_the_cia_301_procedure_as_a_frame_trace() {
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::Normal);
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::Normal);
         let mut request = request(Direction::Tpdo, 1, &["6000:01:8", "6401:01:16"]);
         request.config.transmission_type = Some(255);
         request.config.event_timer_ms = Some(100);
@@ -899,7 +900,7 @@ mod tests {
 
     #[test]
     fn a_refused_entry_stops_the_plan_and_says_what_state_the_pdo_is_in() {
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::Normal);
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::Normal);
         let request = request(Direction::Tpdo, 1, &["6000:01:8", "1017:00:16"]);
         assert_eq!(
             check(&mut node, &request),
@@ -949,7 +950,7 @@ mod tests {
 
     #[test]
     fn an_rpdo_is_mapped_through_1400h_and_1600h() {
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::Normal);
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::Normal);
         let mut request = request(Direction::Rpdo, 1, &["6200:01:8", "6200:02:8"]);
         request.config.transmission_type = Some(254);
         let lines = check(&mut node, &request);
@@ -972,7 +973,7 @@ mod tests {
     #[test]
     fn a_device_falling_silent_mid_plan_times_out_naming_the_step() {
         // Answers the COB-ID read and the first two writes, then nothing.
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::SilentAfter(3));
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::SilentAfter(3));
         let lines = check(&mut node, &request(Direction::Tpdo, 1, &["6000:01:8"]));
         assert_eq!(
             lines[2],
@@ -992,7 +993,7 @@ mod tests {
 
     #[test]
     fn garbage_instead_of_the_cob_id_aborts_before_anything_is_written() {
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::Garbage);
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::Garbage);
         let request = request(Direction::Tpdo, 1, &["6000:01:8"]);
         let err = request.read_cob_id(&mut node).expect_err("garbage");
         assert_eq!(err.exit_code(), 7);
@@ -1010,7 +1011,7 @@ mod tests {
 
     #[test]
     fn a_pdo_the_device_lacks_is_named() {
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::Normal);
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::Normal);
         let mut request = request(Direction::Tpdo, 9, &["6000:01:8"]);
         request.config.cob_id = Some(0x1A5);
         let err = request.read_cob_id(&mut node).expect_err("no TPDO9");
@@ -1083,7 +1084,7 @@ mod tests {
 
     #[test]
     fn the_json_report_has_every_step_and_the_failure() {
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::Normal);
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::Normal);
         let request = request(Direction::Tpdo, 1, &["1017:00:16"]);
         let current = request.read_cob_id(&mut node).unwrap().unwrap();
         let mut report = MapReport::new(&request, current, request.plan(current).unwrap());

@@ -651,8 +651,8 @@ mod tests {
 
     #[test]
     fn discovers_the_tpdos_the_eds_describes_from_the_device() {
-        let eds = eds(IO_EDS);
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::Normal);
+        let eds = eds(&IO_EDS);
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::Normal);
         // TPDO2: 6401h:01 and :02 on every SYNC; TPDO3 invalid.
         write(&mut node, 0x1801, 1, &0x8000_0285u32.to_le_bytes());
         write(&mut node, 0x1A01, 1, &0x6401_0110u32.to_le_bytes());
@@ -681,12 +681,12 @@ mod tests {
 
     #[test]
     fn offline_layouts_are_the_eds_values_and_match_a_fresh_device() {
-        let io = eds(IO_EDS);
+        let io = eds(&IO_EDS);
         let built = build_od(&io, 5).expect("od");
         let numbers = tpdo_numbers(&io);
         assert_eq!(numbers, [1, 2, 3, 4]);
         let offline: Vec<Found> = numbers.iter().map(|&n| from_od(&built.od, n)).collect();
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::Normal);
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::Normal);
         let online = discover(&mut node, 5, &numbers, |_| {}).unwrap().unwrap();
         let offline = layouts(offline, &io);
         assert_eq!(offline, layouts(online, &io));
@@ -707,7 +707,7 @@ mod tests {
 
     #[test]
     fn a_silent_device_ends_the_discovery_naming_the_object_and_the_wait() {
-        let mut node = VirtualNode::new(IO_EDS, Behaviour::SilentAfter(0));
+        let mut node = VirtualNode::new(&IO_EDS, Behaviour::SilentAfter(0));
         let err = discover(&mut node, 5, &[1, 2], |_| {}).expect_err("silent");
         assert_eq!(err.exit_code(), 7);
         assert_eq!(
@@ -735,7 +735,7 @@ mod tests {
     fn watched(mapping: &[MappedObject]) -> WatchedPdo {
         let layout = PdoLayout::new(mapping)
             .expect("layout")
-            .typed(eds_lookup(&eds(IO_EDS)));
+            .typed(eds_lookup(&eds(&IO_EDS)));
         match WatchedPdo::found(1, 0x185, Some(255), layout) {
             Found::Watch(pdo) => pdo,
             Found::Skip { reason, .. } => panic!("{reason}"),
@@ -820,7 +820,7 @@ mod tests {
 
     #[test]
     fn records_are_named_with_their_members_and_arrays_by_their_object() {
-        let eds = eds(IO_EDS);
+        let eds = eds(&IO_EDS);
         let mut lookup = eds_lookup(&eds);
         assert_eq!(
             lookup(0x1018, 1),

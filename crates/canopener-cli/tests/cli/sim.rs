@@ -5,7 +5,7 @@ use std::time::Instant;
 use crate::harness::{
     Background, NO_BUS, WAIT, base_eds, client, expect_frame, identify_unconfigured, json_lines, run_on, send,
 };
-use crate::support::{HubProc, workspace_root};
+use crate::support::{HubProc, corpus_eds};
 use crate::{run, stderr, stdout, temp_dir};
 
 #[test]
@@ -216,8 +216,7 @@ fn a_sim_made_time_producer_sends_the_wall_clock_time() {
     let hub = HubProc::start();
     let dir = temp_dir("sim-time");
     let mut bus = client(&hub);
-    let eds =
-        workspace_root().join("../shared/corpus/eds/CANopenNode__CANopenNode__example__DS301_profile.eds");
+    let eds = corpus_eds("CANopenNode__CANopenNode__example__DS301_profile.eds");
     let mut sim = Background::sim(&hub, &dir, "sim", &[eds.to_str().unwrap(), "--node-id", "7"]);
     let context = || sim.report();
     assert_eq!(expect_frame(&mut *bus, "707#", &context), "707#00");

@@ -23,16 +23,8 @@ pub(crate) fn script(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// The shared corpus of real EDS files, beside the checkout (see the developers' guide).
-pub(crate) fn corpus_eds(name: &str) -> PathBuf {
-    let path = workspace_root().join("../shared/corpus/eds").join(name);
-    assert!(
-        path.exists(),
-        "corpus file {} is missing; the shared corpus must sit beside the checkout",
-        path.display()
-    );
-    path
-}
+/// One vendored EDS of the corpus by name (`corpus/eds`).
+pub(crate) use canopener_testkit::corpus::eds as corpus_eds;
 
 /// The venv interpreter with python-can and canopen, or `None` when the caller opted out explicitly.
 ///

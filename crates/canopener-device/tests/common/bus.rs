@@ -1,6 +1,9 @@
 //! The virtual-time harness shared by the device and fault tests: a device on its own, time advanced
 //! by its deadlines, what it sends recorded as `"<ms>.<µs> <frame>"`.
 
+use std::path::Path;
+use std::sync::LazyLock;
+
 use canopener_can::Core;
 use canopener_can::candump::parse_compact_frame;
 use canopener_can::{CanFrame, Instant};
@@ -11,12 +14,13 @@ pub(crate) const BASE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../canopener-check/test_data/checks/base.eds"
 );
-pub(crate) const DS301: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/corpus/eds/CANopenNode__CANopenNode__example__DS301_profile.eds"
-);
+pub(crate) static DS301: LazyLock<String> = LazyLock::new(|| {
+    canopener_testkit::corpus::eds("CANopenNode__CANopenNode__example__DS301_profile.eds")
+        .display()
+        .to_string()
+});
 
-pub(crate) fn eds(path: &str) -> canopener_eds::model::Eds {
+pub(crate) fn eds(path: impl AsRef<Path>) -> canopener_eds::model::Eds {
     canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
 }
 
