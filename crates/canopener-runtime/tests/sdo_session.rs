@@ -11,7 +11,7 @@ use canopener_runtime::cancel::Cancel;
 use canopener_runtime::link::Link;
 use canopener_runtime::sdo_session::{Progress, SdoError, SdoSession, SessionError};
 use canopener_runtime::virtual_link::VirtualLink;
-use canopener_testkit::corpus::{self, Kind};
+use canopener_testkit::corpus;
 use canopener_wire::abort;
 
 /// CANopenNode's example I/O device: CiA 301 communication objects, and 1008h (a VISIBLE_STRING, so reading it
@@ -19,7 +19,7 @@ use canopener_wire::abort;
 const IO: &str = "CANopenNode__CANopenNode__example__IO.eds";
 
 fn device(node: u8) -> Device {
-    let path = corpus::find(Kind::Eds, IO).expect("the CANopenNode example I/O device of the corpus");
+    let path = corpus::eds(IO);
     let eds = canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds;
     let mut device = Device::from_eds(&eds, node, Box::new(NoApplication)).expect("device");
     device.boot(Instant::ZERO);
