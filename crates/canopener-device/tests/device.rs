@@ -17,7 +17,7 @@ use proptest::prelude::*;
 #[path = "common/bus.rs"]
 mod bus;
 
-use bus::{BASE, Bus, DS301, download, eds};
+use bus::{BASE, DS301, DeviceBus, booted, download, eds, ms};
 
 fn base_device(node: u8) -> Device {
     Device::from_eds(&eds(BASE), node, Box::new(NoApplication)).expect("device")
@@ -34,27 +34,27 @@ fn boot_up_then_heartbeats_at_the_1017h_period() {
         .od
         .set_value(ObjectKey::new(0x1017, 0), &100u16.to_le_bytes())
         .expect("1017h");
-    let mut bus = Bus::booted(Device::new(built.od, 5, Box::new(NoApplication)).expect("device"));
-    assert_eq!(bus.dev.state(), NmtSlaveState::PreOperational);
-    bus.advance(250);
+    let mut bus = booted(Device::new(built.od, 5, Box::new(NoApplication)).expect("device"));
+    assert_eq!(bus.core.state(), NmtSlaveState::PreOperational);
+    bus.advance(ms(250));
     assert_eq!(bus.sent(), ["0.000 705#00", "100.000 705#7F", "200.000 705#7F"]);
 }
 
 #[test]
 fn nmt_commands_through_frames() {
-    let mut bus = Bus::booted(base_device(5));
-    bus.rx(0, &download(5, 0x1017, 0, &50u16.to_le_bytes()));
-    bus.rx(10, "000#0105");
-    assert_eq!(bus.dev.state(), NmtSlaveState::Operational);
-    bus.rx(20, "000#0205");
-    assert_eq!(bus.dev.state(), NmtSlaveState::Stopped);
+    let mut bus = booted(base_device(5));
+    bus.rx(ms(0), &download(5, 0x1017, 0, &50u16.to_le_bytes()));
+    bus.rx(ms(10), "000#0105");
+    assert_eq!(bus.core.state(), NmtSlaveState::Operational);
+    bus.rx(ms(20), "000#0205");
+    assert_eq!(bus.core.state(), NmtSlaveState::Stopped);
     // SDO does not run in Stopped: no answer.
-    bus.rx(30, &download(5, 0x1017, 0, &60u16.to_le_bytes()));
-    bus.rx(40, "000#8000");
-    assert_eq!(bus.dev.state(), NmtSlaveState::PreOperational);
+    bus.rx(ms(30), &download(5, 0x1017, 0, &60u16.to_le_bytes()));
+    bus.rx(ms(40), "000#8000");
+    assert_eq!(bus.core.state(), NmtSlaveState::PreOperational);
     // A command for another node changes nothing.
-    bus.rx(45, "000#0106");
-    assert_eq!(bus.dev.state(), NmtSlaveState::PreOperational);
+    bus.rx(ms(45), "000#0106");
+    assert_eq!(bus.core.state(), NmtSlaveState::PreOperational);
     assert_eq!(
         bus.sent(),
         [
@@ -68,13 +68,13 @@ fn nmt_commands_through_frames() {
         ]
     );
     // Reset communication: 1017h goes back to its default 0, boot-up, no more heartbeats.
-    bus.rx(50, "000#8205");
-    bus.advance(500);
+    bus.rx(ms(50), "000#8205");
+    bus.advance(ms(500));
     assert_eq!(bus.sent(), ["50.000 705#00"]);
     assert_eq!(bus.value(0x1017, 0), [0, 0]);
-    bus.rx(600, "000#8105");
+    bus.rx(ms(600), "000#8105");
     assert_eq!(bus.sent(), ["600.000 705#00"]);
-    let events = bus.events();
+    let events = bus.take_events();
     assert!(events.contains(&DeviceEvent::Nmt(
         canopener_device::nmt_slave::NmtEvent::ResetApplication
     )));
@@ -82,18 +82,18 @@ fn nmt_commands_through_frames() {
 
 #[test]
 fn sdo_expedited_read_of_1018h_sub_1() {
-    let mut bus = Bus::booted(base_device(5));
-    bus.rx(1, "605#4018100100000000");
+    let mut bus = booted(base_device(5));
+    bus.rx(ms(1), "605#4018100100000000");
     assert_eq!(bus.sent(), ["0.000 705#00", "1.000 585#43181001BC0A0000"]);
 }
 
 #[test]
 fn sdo_write_to_1017h_changes_the_heartbeat_period() {
-    let mut bus = Bus::booted(base_device(5));
-    bus.rx(0, &download(5, 0x1017, 0, &100u16.to_le_bytes()));
-    bus.advance(250);
-    bus.rx(250, &download(5, 0x1017, 0, &20u16.to_le_bytes()));
-    bus.advance(300);
+    let mut bus = booted(base_device(5));
+    bus.rx(ms(0), &download(5, 0x1017, 0, &100u16.to_le_bytes()));
+    bus.advance(ms(250));
+    bus.rx(ms(250), &download(5, 0x1017, 0, &20u16.to_le_bytes()));
+    bus.advance(ms(300));
     assert_eq!(
         bus.sent(),
         [
@@ -106,7 +106,7 @@ fn sdo_write_to_1017h_changes_the_heartbeat_period() {
             "290.000 705#7F",
         ]
     );
-    assert!(bus.events().iter().any(|e| matches!(
+    assert!(bus.take_events().iter().any(|e| matches!(
         e,
         DeviceEvent::Sdo {
             server: 0x1200,
@@ -117,36 +117,36 @@ fn sdo_write_to_1017h_changes_the_heartbeat_period() {
 
 #[test]
 fn pdo_remapped_over_sdo_then_sent_on_sync() {
-    let mut bus = Bus::booted(base_device(5));
-    bus.dev
+    let mut bus = booted(base_device(5));
+    bus.core
         .od_mut()
         .set_value(ObjectKey::new(0x6200, 1), &[0x5A])
         .expect("6200h");
     // CiA 301 mapping procedure: invalidate, clear, map, count, type 1 (every SYNC), validate.
-    bus.rx(1, &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
-    bus.rx(2, &download(5, 0x1A00, 0, &[0]));
-    bus.rx(3, &download(5, 0x1A00, 1, &0x6200_0108u32.to_le_bytes()));
-    bus.rx(4, &download(5, 0x1A00, 0, &[1]));
-    bus.rx(5, &download(5, 0x1800, 2, &[1]));
-    bus.rx(6, &download(5, 0x1800, 1, &0x0000_0185u32.to_le_bytes()));
+    bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+    bus.rx(ms(2), &download(5, 0x1A00, 0, &[0]));
+    bus.rx(ms(3), &download(5, 0x1A00, 1, &0x6200_0108u32.to_le_bytes()));
+    bus.rx(ms(4), &download(5, 0x1A00, 0, &[1]));
+    bus.rx(ms(5), &download(5, 0x1800, 2, &[1]));
+    bus.rx(ms(6), &download(5, 0x1800, 1, &0x0000_0185u32.to_le_bytes()));
     let sent = bus.sent();
     assert_eq!(sent.len(), 7, "{sent:?}");
     assert!(sent[1..].iter().all(|s| s.contains(" 585#60")), "{sent:?}");
-    bus.rx(10, "000#0105");
-    bus.rx(20, "080#");
-    bus.rx(30, "080#");
+    bus.rx(ms(10), "000#0105");
+    bus.rx(ms(20), "080#");
+    bus.rx(ms(30), "080#");
     assert_eq!(bus.sent(), ["20.000 185#5A", "30.000 185#5A"]);
 }
 
 #[test]
 fn pdo_mapping_refusals_are_abort_codes() {
-    let mut bus = Bus::booted(base_device(5));
+    let mut bus = booted(base_device(5));
     // Mapping written while the TPDO is valid: 0601 0000h (CANopenNode, CCT set).
-    bus.rx(1, &download(5, 0x1A00, 1, &0x6200_0108u32.to_le_bytes()));
-    bus.rx(2, &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
-    bus.rx(3, &download(5, 0x1A00, 0, &[0]));
+    bus.rx(ms(1), &download(5, 0x1A00, 1, &0x6200_0108u32.to_le_bytes()));
+    bus.rx(ms(2), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+    bus.rx(ms(3), &download(5, 0x1A00, 0, &[0]));
     // 2000h is not mappable: 0604 0041h.
-    bus.rx(4, &download(5, 0x1A00, 1, &0x2000_0010u32.to_le_bytes()));
+    bus.rx(ms(4), &download(5, 0x1A00, 1, &0x2000_0010u32.to_le_bytes()));
     let sent = bus.sent();
     assert_eq!(sent[1], "1.000 585#80001A0100000106");
     assert_eq!(sent[4], "4.000 585#80001A0141000406");
@@ -175,47 +175,47 @@ impl Application for Recorder {
 fn rpdo_is_written_into_the_od_and_told_to_the_application() {
     let writes = Rc::new(RefCell::new(Vec::new()));
     let dev = Device::from_eds(&eds(BASE), 5, Box::new(Recorder(writes.clone()))).expect("device");
-    let mut bus = Bus::booted(dev);
+    let mut bus = booted(dev);
     // Not in Pre-operational.
-    bus.rx(1, "205#AB");
+    bus.rx(ms(1), "205#AB");
     assert_eq!(bus.value(0x6200, 1), [0]);
-    bus.rx(2, "000#0105");
-    bus.rx(3, "205#AB");
+    bus.rx(ms(2), "000#0105");
+    bus.rx(ms(3), "205#AB");
     assert_eq!(bus.value(0x6200, 1), [0xAB]);
     assert_eq!(*writes.borrow(), [ObjectKey::new(0x6200, 1)]);
     // Too short: not processed, EMCY 8210h with the communication error bit.
-    bus.rx(4, "205#");
+    bus.rx(ms(4), "205#");
     assert_eq!(
         bus.sent(),
         ["0.000 705#00", "2.000 185#00", "4.000 085#1082110100000000"]
     );
     // The right length again clears it: error reset EMCY.
-    bus.rx(5, "205#01");
+    bus.rx(ms(5), "205#01");
     assert_eq!(bus.sent(), ["5.000 085#0000000000000000"]);
 }
 
 #[test]
 fn application_change_sends_the_event_driven_tpdo() {
-    let mut bus = Bus::booted(base_device(5));
-    bus.rx(1, "000#0105");
-    bus.advance(1);
-    bus.dev
+    let mut bus = booted(base_device(5));
+    bus.rx(ms(1), "000#0105");
+    bus.advance(ms(1));
+    bus.core
         .od_mut()
         .set_value(ObjectKey::new(0x6000, 1), &[0x0F])
         .expect("6000h");
-    bus.dev
+    bus.core
         .app_changed(Instant::from_millis(2), &[ObjectKey::new(0x6000, 1)]);
-    bus.advance(3);
+    bus.advance(ms(3));
     assert_eq!(bus.sent(), ["0.000 705#00", "1.000 185#00", "2.000 185#0F"]);
 }
 
 #[test]
 fn emcy_when_a_consumed_heartbeat_is_lost() {
-    let mut bus = Bus::booted(ds301_device(10));
-    bus.rx(0, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
-    bus.rx(10, "703#05");
-    bus.advance(200);
-    bus.rx(300, "703#05");
+    let mut bus = booted(ds301_device(10));
+    bus.rx(ms(0), &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+    bus.rx(ms(10), "703#05");
+    bus.advance(ms(200));
+    bus.rx(ms(300), "703#05");
     assert_eq!(
         bus.sent(),
         [
@@ -229,7 +229,7 @@ fn emcy_when_a_consumed_heartbeat_is_lost() {
     assert_eq!(bus.value(0x1003, 0), [1]);
     // Error code in bits 15..0, the first two manufacturer bytes (the node-ID lost) above.
     assert_eq!(bus.value(0x1003, 1), 0x0003_8130u32.to_le_bytes());
-    let events = bus.events();
+    let events = bus.take_events();
     assert!(events.iter().any(|e| matches!(
         e,
         DeviceEvent::EmcySent {
@@ -242,23 +242,23 @@ fn emcy_when_a_consumed_heartbeat_is_lost() {
 
 #[test]
 fn device_check_refusals() {
-    let mut bus = Bus::booted(ds301_device(10));
+    let mut bus = booted(ds301_device(10));
     // 1016h: the same node twice, 0604 0043h.
-    bus.rx(1, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
-    bus.rx(2, &download(10, 0x1016, 2, &0x0003_0064u32.to_le_bytes()));
+    bus.rx(ms(1), &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+    bus.rx(ms(2), &download(10, 0x1016, 2, &0x0003_0064u32.to_le_bytes()));
     // 1014h with a restricted CAN-ID (after invalidating): 0609 0030h.
-    bus.rx(3, &download(10, 0x1014, 0, &0x8000_008Au32.to_le_bytes()));
-    bus.rx(4, &download(10, 0x1014, 0, &0x0000_0701u32.to_le_bytes()));
+    bus.rx(ms(3), &download(10, 0x1014, 0, &0x8000_008Au32.to_le_bytes()));
+    bus.rx(ms(4), &download(10, 0x1014, 0, &0x0000_0701u32.to_le_bytes()));
     // 1010h:01 without the signature: 0800 0020h.
-    bus.rx(5, &download(10, 0x1010, 1, b"wron"));
+    bus.rx(ms(5), &download(10, 0x1010, 1, b"wron"));
     // 1003h:01 with no error stored: 0800 0024h.
-    bus.rx(6, "60A#4003100100000000");
+    bus.rx(ms(6), "60A#4003100100000000");
     // 1003h:00 = 1: 0609 0030h.
-    bus.rx(7, &download(10, 0x1003, 0, &[1]));
+    bus.rx(ms(7), &download(10, 0x1003, 0, &[1]));
     // 1019h reserved value 1: 0609 0030h.
-    bus.rx(8, &download(10, 0x1019, 0, &[1]));
+    bus.rx(ms(8), &download(10, 0x1019, 0, &[1]));
     // 1012h with a 29-bit CAN-ID: 0609 0030h.
-    bus.rx(9, &download(10, 0x1012, 0, &0x2000_0100u32.to_le_bytes()));
+    bus.rx(ms(9), &download(10, 0x1012, 0, &0x2000_0100u32.to_le_bytes()));
     let sent = bus.sent();
     assert_eq!(
         sent[1..],
@@ -278,17 +278,17 @@ fn device_check_refusals() {
 
 #[test]
 fn store_keeps_a_value_over_reset_node_and_restore_reverts_it() {
-    let mut bus = Bus::booted(ds301_device(10));
-    bus.rx(1, &download(10, 0x1017, 0, &500u16.to_le_bytes()));
-    bus.rx(2, &download(10, 0x1010, 1, b"save"));
-    bus.rx(3, "000#810A");
+    let mut bus = booted(ds301_device(10));
+    bus.rx(ms(1), &download(10, 0x1017, 0, &500u16.to_le_bytes()));
+    bus.rx(ms(2), &download(10, 0x1010, 1, b"save"));
+    bus.rx(ms(3), "000#810A");
     assert_eq!(bus.value(0x1017, 0), 500u16.to_le_bytes());
     // 1010h:01 reads the capability, not the signature.
     assert_eq!(bus.value(0x1010, 1), 1u32.to_le_bytes());
-    bus.rx(4, &download(10, 0x1011, 1, b"load"));
+    bus.rx(ms(4), &download(10, 0x1011, 1, b"load"));
     // Restore takes effect at the next reset, not at once.
     assert_eq!(bus.value(0x1017, 0), 500u16.to_le_bytes());
-    bus.rx(5, "000#810A");
+    bus.rx(ms(5), "000#810A");
     assert_eq!(bus.value(0x1017, 0), [0, 0]);
     let sent = bus.sent();
     assert!(sent.contains(&"3.000 70A#00".to_string()), "{sent:?}");
@@ -297,35 +297,35 @@ fn store_keeps_a_value_over_reset_node_and_restore_reverts_it() {
 
 #[test]
 fn store_on_reset_communication_keeps_communication_parameters() {
-    let mut bus = Bus::booted(ds301_device(10));
-    bus.rx(1, &download(10, 0x1017, 0, &100u16.to_le_bytes()));
-    bus.rx(2, &download(10, 0x1010, 2, b"save"));
-    bus.rx(3, &download(10, 0x1017, 0, &0u16.to_le_bytes()));
-    bus.rx(4, "000#820A");
-    bus.advance(104);
+    let mut bus = booted(ds301_device(10));
+    bus.rx(ms(1), &download(10, 0x1017, 0, &100u16.to_le_bytes()));
+    bus.rx(ms(2), &download(10, 0x1010, 2, b"save"));
+    bus.rx(ms(3), &download(10, 0x1017, 0, &0u16.to_le_bytes()));
+    bus.rx(ms(4), "000#820A");
+    bus.advance(ms(104));
     let sent = bus.sent();
     assert_eq!(sent[sent.len() - 2..], ["4.000 70A#00", "104.000 70A#7F"]);
 }
 
 #[test]
 fn lss_configured_node_id_takes_effect_at_reset_communication() {
-    let mut bus = Bus::booted(base_device(5));
-    bus.rx(1, "7E5#0401000000000000");
-    bus.rx(2, "7E5#1120000000000000");
-    bus.rx(3, "7E5#0400000000000000");
-    assert_eq!(bus.dev.node_id().get(), 5);
-    bus.rx(4, "000#8205");
-    assert_eq!(bus.dev.node_id().get(), 0x20);
+    let mut bus = booted(base_device(5));
+    bus.rx(ms(1), "7E5#0401000000000000");
+    bus.rx(ms(2), "7E5#1120000000000000");
+    bus.rx(ms(3), "7E5#0400000000000000");
+    assert_eq!(bus.core.node_id().get(), 5);
+    bus.rx(ms(4), "000#8205");
+    assert_eq!(bus.core.node_id().get(), 0x20);
     assert_eq!(
         bus.sent(),
         ["0.000 705#00", "2.000 7E4#1100000000000000", "4.000 720#00"]
     );
     // The default SDO server and the $NODEID defaults follow the new node-ID.
-    bus.rx(5, "620#4018100100000000");
+    bus.rx(ms(5), "620#4018100100000000");
     assert_eq!(bus.sent(), ["5.000 5A0#43181001BC0A0000"]);
     assert_eq!(bus.value(0x1800, 1), 0x1A0u32.to_le_bytes());
     assert!(
-        bus.events()
+        bus.take_events()
             .iter()
             .any(|e| matches!(e, DeviceEvent::NodeIdChanged { .. }))
     );
@@ -352,22 +352,22 @@ proptest! {
         )
     ) {
         for dev in [base_device(5), ds301_device(10)] {
-            let mut bus = Bus::booted(dev);
+            let mut bus = booted(dev);
             let mut t = 0;
-            bus.rx(0, "000#0100");
+            bus.rx(ms(0), "000#0100");
             for (id, remote, data, dt) in &frames {
                 t += dt;
-                bus.advance(t);
+                bus.advance(ms(t));
                 let id = canopener_can::StandardId::new(*id).expect("11-bit");
                 let frame = if *remote {
                     CanFrame::remote(id, data.len() as u8).expect("dlc")
                 } else {
                     CanFrame::new(id, data).expect("<= 8")
                 };
-                bus.dev.handle_frame(bus.now, &frame);
+                bus.core.handle_frame(bus.now, &frame);
                 bus.drain();
             }
-            bus.advance(t + 5_000);
+            bus.advance(ms(t + 5_000));
         }
     }
 }
@@ -409,28 +409,28 @@ fn u8_array(index: u16, values: &[u8]) -> Vec<canopener_od::Entry> {
 #[test]
 fn unconfigured_device_is_silent_except_lss_until_fastscan_and_configuration() {
     let dev = Device::from_eds(&eds(BASE), device::UNCONFIGURED, Box::new(NoApplication)).expect("device");
-    let mut bus = Bus::booted(dev);
-    assert!(!bus.dev.is_configured());
+    let mut bus = booted(dev);
+    assert!(!bus.core.is_configured());
     // No boot-up, no heartbeat, no NMT, no SDO: the node has no node-ID (CiA 305).
-    bus.rx(10, "000#0100");
-    bus.rx(20, "601#4018100100000000");
-    bus.advance(5_000);
+    bus.rx(ms(10), "000#0100");
+    bus.rx(ms(20), "601#4018100100000000");
+    bus.advance(ms(5_000));
     assert_eq!(bus.sent(), Vec::<String>::new());
-    assert_eq!(bus.dev.state(), NmtSlaveState::Initialisation);
+    assert_eq!(bus.core.state(), NmtSlaveState::Initialisation);
     // Identify non-configured remote slave, and the fastscan probe, are answered.
-    bus.rx(5_001, "7E5#4C00000000000000");
-    bus.rx(5_002, "7E5#5100000000800000");
+    bus.rx(ms(5_001), "7E5#4C00000000000000");
+    bus.rx(ms(5_002), "7E5#5100000000800000");
     assert_eq!(
         bus.sent(),
         ["5001.000 7E4#5000000000000000", "5002.000 7E4#4F00000000000000"]
     );
     // Configuration: switch state global, configure node-ID 20h, store, back to waiting.
-    bus.rx(5_003, "7E5#0401000000000000");
-    bus.rx(5_004, "7E5#1120000000000000");
-    bus.rx(5_005, "7E5#1700000000000000");
-    bus.rx(5_006, "7E5#0400000000000000");
-    assert!(bus.dev.is_configured());
-    assert_eq!(bus.dev.node_id().get(), 0x20);
+    bus.rx(ms(5_003), "7E5#0401000000000000");
+    bus.rx(ms(5_004), "7E5#1120000000000000");
+    bus.rx(ms(5_005), "7E5#1700000000000000");
+    bus.rx(ms(5_006), "7E5#0400000000000000");
+    assert!(bus.core.is_configured());
+    assert_eq!(bus.core.node_id().get(), 0x20);
     assert_eq!(
         bus.sent(),
         [
@@ -439,12 +439,12 @@ fn unconfigured_device_is_silent_except_lss_until_fastscan_and_configuration() {
             "5006.000 720#00"
         ]
     );
-    assert!(bus.events().iter().any(|e| matches!(
+    assert!(bus.take_events().iter().any(|e| matches!(
         e,
         DeviceEvent::NodeIdChanged { from: None, to } if to.get() == 0x20
     )));
     // Now a node like any other: SDO on 620h/5A0h with the $NODEID defaults of node 20h.
-    bus.rx(5_010, "620#4018100100000000");
+    bus.rx(ms(5_010), "620#4018100100000000");
     assert_eq!(bus.sent(), ["5010.000 5A0#43181001BC0A0000"]);
     assert_eq!(bus.value(0x1800, 1), 0x1A0u32.to_le_bytes());
 }
@@ -460,14 +460,14 @@ fn unconfigured_start_needs_lss_and_a_serial_number_override_sets_the_lss_addres
         .expect("device")
         .with_value(ObjectKey::new(0x1018, 4), &0x0001_2345u32.to_le_bytes())
         .expect("serial");
-    let mut bus = Bus::booted(dev);
-    bus.rx(1, "7E5#0401000000000000");
-    bus.rx(2, "7E5#5D00000000000000");
+    let mut bus = booted(dev);
+    bus.rx(ms(1), "7E5#0401000000000000");
+    bus.rx(ms(2), "7E5#5D00000000000000");
     assert_eq!(bus.sent(), ["2.000 7E4#5D45230100000000"]);
     // The override survives the rebuilt defaults of the node-ID LSS gives.
-    bus.rx(3, "7E5#1107000000000000");
-    bus.rx(4, "7E5#0400000000000000");
-    bus.rx(5, "607#4018100400000000");
+    bus.rx(ms(3), "7E5#1107000000000000");
+    bus.rx(ms(4), "7E5#0400000000000000");
+    bus.rx(ms(5), "607#4018100400000000");
     assert_eq!(
         bus.sent(),
         [
@@ -492,14 +492,11 @@ fn nmt_startup_1f80h_bit_2_clear_makes_the_device_start_on_its_own() {
             &value.to_le_bytes(),
         );
         let dev = device_with(BASE, 5, vec![entry.expect("entry")]);
-        let bus = Bus::booted(dev);
-        assert_eq!(bus.dev.state(), state, "1F80h = {value:#x}");
+        let bus = booted(dev);
+        assert_eq!(bus.core.state(), state, "1F80h = {value:#x}");
     }
     // Without 1F80h the device waits for the NMT master.
-    assert_eq!(
-        Bus::booted(base_device(5)).dev.state(),
-        NmtSlaveState::PreOperational
-    );
+    assert_eq!(booted(base_device(5)).core.state(), NmtSlaveState::PreOperational);
 }
 
 #[test]
@@ -510,22 +507,22 @@ fn error_behaviour_1029h_on_a_lost_heartbeat() {
         (2, NmtSlaveState::Stopped),
     ] {
         let dev = device_with(&DS301, 10, u8_array(0x1029, &[reaction, 1]));
-        let mut bus = Bus::booted(dev);
-        bus.rx(0, "000#010A");
-        bus.rx(1, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
-        bus.rx(10, "703#05");
-        assert_eq!(bus.dev.state(), NmtSlaveState::Operational);
-        bus.advance(200);
-        assert_eq!(bus.dev.state(), after, "1029h sub 1 = {reaction}");
+        let mut bus = booted(dev);
+        bus.rx(ms(0), "000#010A");
+        bus.rx(ms(1), &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+        bus.rx(ms(10), "703#05");
+        assert_eq!(bus.core.state(), NmtSlaveState::Operational);
+        bus.advance(ms(200));
+        assert_eq!(bus.core.state(), after, "1029h sub 1 = {reaction}");
         assert!(bus.sent().iter().any(|f| f.ends_with("08A#3081110300000000")));
     }
     // Without 1029h the state stays.
-    let mut bus = Bus::booted(ds301_device(10));
-    bus.rx(0, "000#010A");
-    bus.rx(1, &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
-    bus.rx(10, "703#05");
-    bus.advance(200);
-    assert_eq!(bus.dev.state(), NmtSlaveState::Operational);
+    let mut bus = booted(ds301_device(10));
+    bus.rx(ms(0), "000#010A");
+    bus.rx(ms(1), &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+    bus.rx(ms(10), "703#05");
+    bus.advance(ms(200));
+    assert_eq!(bus.core.state(), NmtSlaveState::Operational);
 }
 
 #[test]
@@ -545,18 +542,18 @@ fn an_extension_adds_the_cia401_test_registers_to_a_real_cia401_eds_and_survives
             .map_err(|err| err.to_string())
     })
     .expect("device");
-    let mut bus = Bus::booted(extended);
+    let mut bus = booted(extended);
     for index in [0x2000, 0x2001, 0x2002] {
-        assert!(!bus.dev.od().object(index).is_empty(), "{index:04X}h added");
+        assert!(!bus.core.od().object(index).is_empty(), "{index:04X}h added");
     }
     // LSS gives node-ID 9: the power-on dictionary is rebuilt for it, the registers stay.
-    bus.rx(1, "7E5#0401000000000000");
-    bus.rx(2, "7E5#1109000000000000");
-    bus.rx(3, "7E5#0400000000000000");
-    bus.rx(4, "000#8205");
-    assert_eq!(bus.dev.node_id().get(), 9);
-    assert!(!bus.dev.od().object(0x2001).is_empty());
-    bus.rx(5, "609#4001200000000000");
+    bus.rx(ms(1), "7E5#0401000000000000");
+    bus.rx(ms(2), "7E5#1109000000000000");
+    bus.rx(ms(3), "7E5#0400000000000000");
+    bus.rx(ms(4), "000#8205");
+    assert_eq!(bus.core.node_id().get(), 9);
+    assert!(!bus.core.od().object(0x2001).is_empty());
+    bus.rx(ms(5), "609#4001200000000000");
     assert!(
         bus.sent().iter().any(|f| f.starts_with("5.000 589#4")),
         "2001h answered"
@@ -570,16 +567,16 @@ fn a_time_producer_sends_the_time_its_driver_gives() {
         millis: 0x0123_4567,
         days: 0x3A98,
     };
-    let mut bus = Bus::booted(ds301_device(10));
-    assert!(!bus.dev.is_time_producer(), "1012h = 100h: no producer");
-    assert!(bus.dev.produce_time(bus.now, time).is_err());
+    let mut bus = booted(ds301_device(10));
+    assert!(!bus.core.is_time_producer(), "1012h = 100h: no producer");
+    assert!(bus.core.produce_time(bus.now, time).is_err());
     // 1012h bit 30: this node produces TIME (CiA 301); TIME runs in Pre-operational.
-    bus.rx(1, &download(10, 0x1012, 0, &0x4000_0100u32.to_le_bytes()));
-    assert!(bus.dev.is_time_producer());
+    bus.rx(ms(1), &download(10, 0x1012, 0, &0x4000_0100u32.to_le_bytes()));
+    assert!(bus.core.is_time_producer());
     bus.sent();
-    bus.dev.produce_time(bus.now, time).expect("producer");
+    bus.core.produce_time(bus.now, time).expect("producer");
     assert_eq!(bus.sent(), ["1.000 100#67452301983A"]);
     // Stopped runs no TIME.
-    bus.rx(2, "000#020A");
-    assert!(bus.dev.produce_time(bus.now, time).is_err());
+    bus.rx(ms(2), "000#020A");
+    assert!(bus.core.produce_time(bus.now, time).is_err());
 }

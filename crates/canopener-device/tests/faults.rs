@@ -17,17 +17,7 @@ use canopener_od::ObjectKey;
 #[path = "common/bus.rs"]
 mod bus;
 
-use bus::{BASE, Bus, DS301, download, eds};
-
-impl Bus {
-    fn remote(&mut self, at_ms: u64, id: u16) {
-        self.advance(at_ms);
-        let id = canopener_can::StandardId::new(id).expect("11-bit");
-        let frame = CanFrame::remote(id, 1).expect("dlc");
-        self.dev.handle_frame(self.now, &frame);
-        self.drain();
-    }
-}
+use bus::{BASE, Bus, DS301, DeviceBus, booted, download, eds, ms};
 
 fn device(path: &str, node: u8, faults: FaultSet) -> Device {
     Device::from_eds(&eds(path), node, Box::new(NoApplication))
@@ -38,8 +28,8 @@ fn device(path: &str, node: u8, faults: FaultSet) -> Device {
 /// Runs `scenario` on a correct device and on one with `fault`; returns both traces.
 fn both(path: &str, node: u8, fault: Fault, scenario: impl Fn(&mut Bus)) -> (Vec<String>, Vec<String>) {
     let mut traces = [FaultSet::none(), FaultSet::from(fault)].map(|faults| {
-        let mut bus = Bus::booted(device(path, node, faults));
-        assert_eq!(bus.dev.faults(), faults);
+        let mut bus = booted(device(path, node, faults));
+        assert_eq!(bus.core.faults(), faults);
         scenario(&mut bus);
         bus.sent()
     });
@@ -67,14 +57,14 @@ fn every_fault_has_a_test_here() {
 
 #[test]
 fn no_boot_up() {
-    let (ok, bad) = base(Fault::NoBootUp, |bus| bus.rx(10, "000#8205"));
+    let (ok, bad) = base(Fault::NoBootUp, |bus| bus.rx(ms(10), "000#8205"));
     assert_eq!(ok, ["0.000 705#00", "10.000 705#00"]);
     assert_eq!(bad, Vec::<String>::new());
 }
 
 #[test]
 fn boot_up_wrong_id() {
-    let (ok, bad) = base(Fault::BootUpWrongId, |bus| bus.rx(10, "000#8105"));
+    let (ok, bad) = base(Fault::BootUpWrongId, |bus| bus.rx(ms(10), "000#8105"));
     assert_eq!(ok, ["0.000 705#00", "10.000 705#00"]);
     assert_eq!(bad, ["0.000 706#00", "10.000 706#00"]);
 }
@@ -82,12 +72,12 @@ fn boot_up_wrong_id() {
 #[test]
 fn heartbeat_state_wrong() {
     let (ok, bad) = base(Fault::HeartbeatStateWrong, |bus| {
-        bus.rx(0, &hb(100));
-        bus.advance(150);
-        bus.rx(150, "000#0105");
-        bus.advance(250);
-        bus.rx(260, "000#0205");
-        bus.advance(360);
+        bus.rx(ms(0), &hb(100));
+        bus.advance(ms(150));
+        bus.rx(ms(150), "000#0105");
+        bus.advance(ms(250));
+        bus.rx(ms(260), "000#0205");
+        bus.advance(ms(360));
     });
     let heartbeats = |trace: Vec<String>| -> Vec<String> {
         trace
@@ -122,8 +112,8 @@ fn heartbeat_state_wrong() {
 #[test]
 fn heartbeat_too_fast() {
     let (ok, bad) = base(Fault::HeartbeatTooFast, |bus| {
-        bus.rx(0, &hb(100));
-        bus.advance(250);
+        bus.rx(ms(0), &hb(100));
+        bus.advance(ms(250));
     });
     assert_eq!(ok[2..], ["100.000 705#7F", "200.000 705#7F"]);
     assert_eq!(
@@ -140,8 +130,8 @@ fn heartbeat_too_fast() {
 #[test]
 fn heartbeat_jitter() {
     let (ok, bad) = base(Fault::HeartbeatJitter, |bus| {
-        bus.rx(0, &hb(100));
-        bus.advance(450);
+        bus.rx(ms(0), &hb(100));
+        bus.advance(ms(450));
     });
     assert_eq!(
         ok[2..],
@@ -167,10 +157,10 @@ fn heartbeat_jitter() {
 fn guarding_and_heartbeat() {
     let (ok, bad) = base(Fault::GuardingAndHeartbeat, |bus| {
         // Guarding alone is answered by both.
-        bus.remote(1, 0x705);
-        bus.rx(2, &hb(100));
-        bus.remote(50, 0x705);
-        bus.remote(60, 0x705);
+        bus.rx(ms(1), "705#R1");
+        bus.rx(ms(2), &hb(100));
+        bus.rx(ms(50), "705#R1");
+        bus.rx(ms(60), "705#R1");
     });
     assert_eq!(ok, ["0.000 705#00", "1.000 705#7F", "2.000 585#6017100000000000"]);
     assert_eq!(
@@ -188,27 +178,27 @@ fn guarding_and_heartbeat() {
 #[test]
 fn ignores_nmt_stop() {
     let (ok, bad) = base(Fault::IgnoresNmtStop, |bus| {
-        bus.rx(1, "000#0205");
-        bus.rx(2, "605#4018100100000000");
-        bus.rx(3, "000#0200");
+        bus.rx(ms(1), "000#0205");
+        bus.rx(ms(2), "605#4018100100000000");
+        bus.rx(ms(3), "000#0200");
     });
     assert_eq!(ok, ["0.000 705#00"]);
     assert_eq!(bad, ["0.000 705#00", "2.000 585#43181001BC0A0000"]);
-    let mut stopped = Bus::booted(device(BASE, 5, FaultSet::none()));
-    stopped.rx(1, "000#0205");
-    assert_eq!(stopped.dev.state(), NmtSlaveState::Stopped);
-    let mut faulty = Bus::booted(device(BASE, 5, Fault::IgnoresNmtStop.into()));
-    faulty.rx(1, "000#0205");
-    assert_eq!(faulty.dev.state(), NmtSlaveState::PreOperational);
+    let mut stopped = booted(device(BASE, 5, FaultSet::none()));
+    stopped.rx(ms(1), "000#0205");
+    assert_eq!(stopped.core.state(), NmtSlaveState::Stopped);
+    let mut faulty = booted(device(BASE, 5, Fault::IgnoresNmtStop.into()));
+    faulty.rx(ms(1), "000#0205");
+    assert_eq!(faulty.core.state(), NmtSlaveState::PreOperational);
 }
 
 #[test]
 fn nmt_broadcast_ignored() {
     let (ok, bad) = base(Fault::NmtBroadcastIgnored, |bus| {
-        bus.rx(1, "000#0100");
-        bus.rx(2, "205#AB");
-        bus.rx(3, "000#0105");
-        bus.rx(4, "205#CD");
+        bus.rx(ms(1), "000#0100");
+        bus.rx(ms(2), "205#AB");
+        bus.rx(ms(3), "000#0105");
+        bus.rx(ms(4), "205#CD");
     });
     // Operational from the broadcast: the RPDO at 2 ms is taken, 6200h:01 = ABh (no frame).
     assert_eq!(ok, ["0.000 705#00", "1.000 185#00"]);
@@ -220,9 +210,9 @@ fn nmt_broadcast_ignored() {
 fn sdo_toggle_ignored() {
     let scenario = |bus: &mut Bus| {
         // Segmented download of 1017h, 2 bytes in two 1-byte segments, both with toggle 0.
-        bus.rx(1, "605#2117100002000000");
-        bus.rx(2, "605#0C64000000000000");
-        bus.rx(3, "605#0D00000000000000");
+        bus.rx(ms(1), "605#2117100002000000");
+        bus.rx(ms(2), "605#0C64000000000000");
+        bus.rx(ms(3), "605#0D00000000000000");
     };
     let (ok, bad) = base(Fault::SdoToggleIgnored, scenario);
     assert_eq!(
@@ -243,7 +233,7 @@ fn sdo_toggle_ignored() {
             "3.000 585#3000000000000000",
         ]
     );
-    let mut faulty = Bus::booted(device(BASE, 5, Fault::SdoToggleIgnored.into()));
+    let mut faulty = booted(device(BASE, 5, Fault::SdoToggleIgnored.into()));
     scenario(&mut faulty);
     assert_eq!(faulty.value(0x1017, 0), [0x64, 0]);
 }
@@ -251,15 +241,15 @@ fn sdo_toggle_ignored() {
 #[test]
 fn sdo_slow() {
     let scenario = |bus: &mut Bus| {
-        bus.rx(1, "605#4018100100000000");
-        bus.advance(1_000);
+        bus.rx(ms(1), "605#4018100100000000");
+        bus.advance(ms(1_000));
     };
     let (ok, bad) = base(Fault::SdoSlow, scenario);
     assert_eq!(ok, ["0.000 705#00", "1.000 585#43181001BC0A0000"]);
     assert_eq!(bad, ["0.000 705#00", "601.000 585#43181001BC0A0000"]);
     // The delay is configurable.
     let faults = FaultSet::from(Fault::SdoSlow).with_sdo_delay(Duration::from_millis(50));
-    let mut bus = Bus::booted(device(BASE, 5, faults));
+    let mut bus = booted(device(BASE, 5, faults));
     scenario(&mut bus);
     assert_eq!(bus.sent(), ["0.000 705#00", "51.000 585#43181001BC0A0000"]);
 }
@@ -267,8 +257,8 @@ fn sdo_slow() {
 #[test]
 fn sdo_expedited_size_wrong() {
     let (ok, bad) = base(Fault::SdoExpeditedSizeWrong, |bus| {
-        bus.rx(1, "605#4017100000000000");
-        bus.rx(2, "605#4018100100000000");
+        bus.rx(ms(1), "605#4017100000000000");
+        bus.rx(ms(2), "605#4018100100000000");
     });
     assert_eq!(
         ok[1..],
@@ -283,8 +273,8 @@ fn sdo_expedited_size_wrong() {
 #[test]
 fn wrong_abort_code() {
     let (ok, bad) = base(Fault::WrongAbortCode, |bus| {
-        bus.rx(1, "605#4000300000000000");
-        bus.rx(2, &download(5, 0x1000, 0, &[0, 0, 0, 0]));
+        bus.rx(ms(1), "605#4000300000000000");
+        bus.rx(ms(2), &download(5, 0x1000, 0, &[0, 0, 0, 0]));
     });
     assert_eq!(
         ok[1..],
@@ -299,8 +289,8 @@ fn wrong_abort_code() {
 #[test]
 fn sdo_bad_command_silent() {
     let (ok, bad) = base(Fault::SdoBadCommandSilent, |bus| {
-        bus.rx(1, "605#E000000000000000");
-        bus.rx(2, "605#4018100100000000");
+        bus.rx(ms(1), "605#E000000000000000");
+        bus.rx(ms(2), "605#4018100100000000");
     });
     assert_eq!(
         ok[1..],
@@ -313,10 +303,10 @@ fn sdo_bad_command_silent() {
 fn block_crc_wrong() {
     let scenario = |bus: &mut Bus| {
         // Block upload of 1018h:01 with CRC, protocol switch threshold 0.
-        bus.rx(1, "605#A41810017F000000");
-        bus.rx(2, "605#A300000000000000");
-        bus.rx(3, "605#A2017F0000000000");
-        bus.rx(4, "605#A100000000000000");
+        bus.rx(ms(1), "605#A41810017F000000");
+        bus.rx(ms(2), "605#A300000000000000");
+        bus.rx(ms(3), "605#A2017F0000000000");
+        bus.rx(ms(4), "605#A100000000000000");
     };
     let (ok, bad) = base(Fault::BlockCrcWrong, scenario);
     assert_eq!(ok.len(), 4, "{ok:?}");
@@ -331,16 +321,16 @@ fn block_crc_wrong() {
 
 #[test]
 fn limit_not_enforced() {
-    let scenario = |bus: &mut Bus| bus.rx(1, &download(5, 0x2000, 0, &2000u16.to_le_bytes()));
+    let scenario = |bus: &mut Bus| bus.rx(ms(1), &download(5, 0x2000, 0, &2000u16.to_le_bytes()));
     let (ok, bad) = base(Fault::LimitNotEnforced, scenario);
     assert_eq!(ok[1..], ["1.000 585#8000200031000906"]);
     assert_eq!(bad[1..], ["1.000 585#6000200000000000"]);
-    let mut faulty = Bus::booted(device(BASE, 5, Fault::LimitNotEnforced.into()));
+    let mut faulty = booted(device(BASE, 5, Fault::LimitNotEnforced.into()));
     scenario(&mut faulty);
     faulty.sent();
     assert_eq!(faulty.value(0x2000, 0), 2000u16.to_le_bytes());
     // Writes within the limits are unchanged.
-    faulty.rx(2, &download(5, 0x2000, 0, &500u16.to_le_bytes()));
+    faulty.rx(ms(2), &download(5, 0x2000, 0, &500u16.to_le_bytes()));
     assert_eq!(faulty.sent(), ["2.000 585#6000200000000000"]);
     assert_eq!(faulty.value(0x2000, 0), 500u16.to_le_bytes());
 }
@@ -348,14 +338,14 @@ fn limit_not_enforced() {
 #[test]
 fn unmappable_accepted() {
     let scenario = |bus: &mut Bus| {
-        bus.rx(1, &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
-        bus.rx(2, &download(5, 0x1A00, 0, &[0]));
-        bus.rx(3, &download(5, 0x1A00, 1, &0x2000_0010u32.to_le_bytes()));
+        bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1A00, 0, &[0]));
+        bus.rx(ms(3), &download(5, 0x1A00, 1, &0x2000_0010u32.to_le_bytes()));
     };
     let (ok, bad) = base(Fault::UnmappableAccepted, scenario);
     assert_eq!(ok[3], "3.000 585#80001A0141000406");
     assert_eq!(bad[3], "3.000 585#60001A0100000000");
-    let mut faulty = Bus::booted(device(BASE, 5, Fault::UnmappableAccepted.into()));
+    let mut faulty = booted(device(BASE, 5, Fault::UnmappableAccepted.into()));
     scenario(&mut faulty);
     assert_eq!(faulty.value(0x1A00, 1), 0x2000_0010u32.to_le_bytes());
 }
@@ -363,13 +353,13 @@ fn unmappable_accepted() {
 #[test]
 fn pdo_cob_id_unchecked() {
     let scenario = |bus: &mut Bus| {
-        bus.rx(1, &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
-        bus.rx(2, &download(5, 0x1800, 1, &0x0000_0701u32.to_le_bytes()));
+        bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1800, 1, &0x0000_0701u32.to_le_bytes()));
     };
     let (ok, bad) = base(Fault::PdoCobIdUnchecked, scenario);
     assert_eq!(ok[2], "2.000 585#8000180130000906");
     assert_eq!(bad[2], "2.000 585#6000180100000000");
-    let mut faulty = Bus::booted(device(BASE, 5, Fault::PdoCobIdUnchecked.into()));
+    let mut faulty = booted(device(BASE, 5, Fault::PdoCobIdUnchecked.into()));
     scenario(&mut faulty);
     assert_eq!(faulty.value(0x1800, 1), 0x701u32.to_le_bytes());
 }
@@ -377,10 +367,10 @@ fn pdo_cob_id_unchecked() {
 #[test]
 fn no_tpdo_rtr() {
     let (ok, bad) = base(Fault::NoTpdoRtr, |bus| {
-        bus.rx(1, "000#0105");
-        bus.remote(2, 0x185);
+        bus.rx(ms(1), "000#0105");
+        bus.rx(ms(2), "185#R1");
         // Node guarding (also a remote frame) still works.
-        bus.remote(3, 0x705);
+        bus.rx(ms(3), "705#R1");
     });
     assert_eq!(
         ok,
@@ -391,9 +381,9 @@ fn no_tpdo_rtr() {
 
 /// Operational, then an RPDO too short (EMCY 8210h) and one of the right length (error reset).
 fn rpdo_length_error(bus: &mut Bus) {
-    bus.rx(1, "000#0105");
-    bus.rx(2, "205#");
-    bus.rx(3, "205#01");
+    bus.rx(ms(1), "000#0105");
+    bus.rx(ms(2), "205#");
+    bus.rx(ms(3), "205#01");
 }
 
 #[test]
@@ -410,13 +400,13 @@ fn no_emcy() {
     );
     assert_eq!(bad, ["0.000 705#00", "1.000 185#00"]);
     // The error is still recorded.
-    let mut faulty = Bus::booted(device(BASE, 5, Fault::NoEmcy.into()));
-    faulty.rx(1, "000#0105");
-    faulty.rx(2, "205#");
+    let mut faulty = booted(device(BASE, 5, Fault::NoEmcy.into()));
+    faulty.rx(ms(1), "000#0105");
+    faulty.rx(ms(2), "205#");
     assert_eq!(faulty.value(0x1001, 0), [0x11]);
     assert!(
         !faulty
-            .events()
+            .take_events()
             .iter()
             .any(|e| matches!(e, DeviceEvent::EmcySent { .. }))
     );
@@ -435,21 +425,21 @@ fn emcy_no_error_reset() {
 #[test]
 fn store_ignored() {
     let scenario = |bus: &mut Bus| {
-        bus.rx(1, &download(10, 0x1017, 0, &500u16.to_le_bytes()));
-        bus.rx(2, &download(10, 0x1010, 1, b"save"));
-        bus.rx(3, "000#810A");
+        bus.rx(ms(1), &download(10, 0x1017, 0, &500u16.to_le_bytes()));
+        bus.rx(ms(2), &download(10, 0x1010, 1, b"save"));
+        bus.rx(ms(3), "000#810A");
     };
     let (ok, bad) = both(&DS301, 10, Fault::StoreIgnored, scenario);
     // Both confirm the save.
     assert_eq!(ok[2], "2.000 58A#6010100100000000");
     assert_eq!(bad[2], "2.000 58A#6010100100000000");
     // Only the correct device heartbeats at 500 ms after the reset.
-    let mut correct = Bus::booted(device(&DS301, 10, FaultSet::none()));
+    let mut correct = booted(device(&DS301, 10, FaultSet::none()));
     scenario(&mut correct);
-    correct.advance(600);
-    let mut faulty = Bus::booted(device(&DS301, 10, Fault::StoreIgnored.into()));
+    correct.advance(ms(600));
+    let mut faulty = booted(device(&DS301, 10, Fault::StoreIgnored.into()));
     scenario(&mut faulty);
-    faulty.advance(600);
+    faulty.advance(ms(600));
     assert_eq!(correct.value(0x1017, 0), 500u16.to_le_bytes());
     assert_eq!(faulty.value(0x1017, 0), [0, 0]);
     assert_eq!(correct.sent().last().map(String::as_str), Some("503.000 70A#7F"));
@@ -459,10 +449,10 @@ fn store_ignored() {
 #[test]
 fn sync_counter_missing() {
     let (ok, bad) = both(&DS301, 10, Fault::SyncCounterMissing, |bus| {
-        bus.rx(1, &download(10, 0x1019, 0, &[3]));
-        bus.rx(2, &download(10, 0x1006, 0, &10_000u32.to_le_bytes()));
-        bus.rx(3, &download(10, 0x1005, 0, &0x4000_0080u32.to_le_bytes()));
-        bus.advance(45);
+        bus.rx(ms(1), &download(10, 0x1019, 0, &[3]));
+        bus.rx(ms(2), &download(10, 0x1006, 0, &10_000u32.to_le_bytes()));
+        bus.rx(ms(3), &download(10, 0x1005, 0, &0x4000_0080u32.to_le_bytes()));
+        bus.advance(ms(45));
     });
     assert_eq!(
         ok[4..],
@@ -477,8 +467,8 @@ fn sync_counter_missing() {
 #[test]
 fn no_lss() {
     let (ok, bad) = base(Fault::NoLss, |bus| {
-        bus.rx(1, "7E5#0401000000000000");
-        bus.rx(2, "7E5#5E00000000000000");
+        bus.rx(ms(1), "7E5#0401000000000000");
+        bus.rx(ms(2), "7E5#5E00000000000000");
     });
     assert_eq!(ok[1..], ["2.000 7E4#5E05000000000000"]);
     assert_eq!(bad[1..], Vec::<String>::new());
@@ -488,11 +478,11 @@ fn no_lss() {
 fn lss_state_not_changed() {
     let scenario = |bus: &mut Bus| {
         // Switch state selective with 1018h of base.eds, then configure node-ID 20h.
-        bus.rx(1, "7E5#40BC0A0000000000");
-        bus.rx(2, "7E5#4101040000000000");
-        bus.rx(3, "7E5#4202000100000000");
-        bus.rx(4, "7E5#4300000000000000");
-        bus.rx(5, "7E5#1120000000000000");
+        bus.rx(ms(1), "7E5#40BC0A0000000000");
+        bus.rx(ms(2), "7E5#4101040000000000");
+        bus.rx(ms(3), "7E5#4202000100000000");
+        bus.rx(ms(4), "7E5#4300000000000000");
+        bus.rx(ms(5), "7E5#1120000000000000");
     };
     let (ok, bad) = base(Fault::LssStateNotChanged, scenario);
     assert_eq!(
@@ -502,8 +492,8 @@ fn lss_state_not_changed() {
     assert_eq!(bad[1..], Vec::<String>::new());
     // Switch state global is ignored as well.
     let (ok, bad) = base(Fault::LssStateNotChanged, |bus| {
-        bus.rx(1, "7E5#0401000000000000");
-        bus.rx(2, "7E5#1120000000000000");
+        bus.rx(ms(1), "7E5#0401000000000000");
+        bus.rx(ms(2), "7E5#1120000000000000");
     });
     assert_eq!(ok[1..], ["2.000 7E4#1100000000000000"]);
     assert_eq!(bad[1..], Vec::<String>::new());
@@ -511,16 +501,16 @@ fn lss_state_not_changed() {
 
 #[test]
 fn without_faults_nothing_changes() {
-    let mut plain = Bus::booted(Device::from_eds(&eds(BASE), 5, Box::new(NoApplication)).expect("device"));
-    let mut none = Bus::booted(device(BASE, 5, FaultSet::none()));
+    let mut plain = booted(Device::from_eds(&eds(BASE), 5, Box::new(NoApplication)).expect("device"));
+    let mut none = booted(device(BASE, 5, FaultSet::none()));
     for bus in [&mut plain, &mut none] {
-        bus.rx(0, &hb(100));
-        bus.rx(1, "000#0105");
-        bus.rx(2, "605#4018100100000000");
-        bus.advance(250);
+        bus.rx(ms(0), &hb(100));
+        bus.rx(ms(1), "000#0105");
+        bus.rx(ms(2), "605#4018100100000000");
+        bus.advance(ms(250));
     }
     assert_eq!(plain.sent(), none.sent());
-    assert!(plain.dev.faults().is_empty());
+    assert!(plain.core.faults().is_empty());
     let _ = (Instant::ZERO, ObjectKey::new(0, 0));
 }
 
@@ -547,25 +537,25 @@ proptest::proptest! {
             .map(|(_, f)| f)
             .collect();
         for (path, node) in [(BASE, 5), (DS301.as_str(), 10)] {
-            let mut bus = Bus::booted(device(path, node, faults));
+            let mut bus = booted(device(path, node, faults));
             let mut t = 0;
-            bus.rx(0, "000#0100");
+            bus.rx(ms(0), "000#0100");
             for (id, remote, data, dt) in &frames {
                 t += dt;
-                bus.advance(t);
+                bus.advance(ms(t));
                 let id = canopener_can::StandardId::new(*id).expect("11-bit");
                 let frame = if *remote {
                     CanFrame::remote(id, data.len() as u8).expect("dlc")
                 } else {
                     CanFrame::new(id, data).expect("<= 8")
                 };
-                bus.dev.handle_frame(bus.now, &frame);
+                bus.core.handle_frame(bus.now, &frame);
                 bus.drain();
             }
-            bus.advance(t + 5_000);
+            bus.advance(ms(t + 5_000));
             // Delayed frames drain: nothing is stuck in the fault layer.
             let until = bus.now.as_micros() / 1000 + 2_000;
-            bus.advance(until);
+            bus.advance(ms(until));
         }
     }
 }

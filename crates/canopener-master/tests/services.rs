@@ -5,23 +5,24 @@
 //! `DS301_profile.eds` (node 10; SYNC, TIME, 1019h) and CANopenSocket's `CANopenSocket.eds`
 //! (node 4; the only one with 100Ch/100Dh for node guarding).
 
-use canopener_can::Core;
 use std::sync::LazyLock;
 use std::time::Duration;
 
-use canopener_can::candump::parse_compact_frame;
-use canopener_can::{CanFrame, Instant};
+use canopener_bus_engine::network::{NodeEvent, StationId};
+use canopener_can::Instant;
 use canopener_device::application::NoApplication;
 use canopener_device::device::{Device, DeviceEvent};
 use canopener_device::faults::{Fault, FaultSet};
 use canopener_device::nmt_slave::NmtSlaveState;
 use canopener_device::od_build::build_od;
-use canopener_master::emcy_consumer::EmcyConsumer;
-use canopener_master::error_control::{ConsumerTime, GuardingConfig, NodeMonitor};
+use canopener_master::emcy_consumer::{EmcyConsumer, EmcyEvent};
+use canopener_master::error_control::{ConsumerTime, GuardingConfig, MonitorEvent, NodeMonitor};
 use canopener_master::nmt_master::{NmtMaster, NmtTarget, expected_state};
-use canopener_master::sync_producer::{SyncConfig, SyncProducer};
-use canopener_master::time_producer::TimeProducer;
+use canopener_master::sync_producer::{SyncConfig, SyncEvent, SyncProducer};
+use canopener_master::time_producer::{TimeEvent, TimeProducer};
 use canopener_od::ObjectKey;
+use canopener_testkit::net::Net as TestNet;
+use canopener_testkit::trace::stamp;
 use canopener_wire::{NmtCommand, NodeId};
 
 const BASE: &str = concat!(
@@ -54,11 +55,6 @@ fn node(raw: u8) -> NodeId {
     NodeId::new(raw).expect("node-ID")
 }
 
-fn stamp(now: Instant) -> String {
-    let micros = now.as_micros();
-    format!("{}.{:03}", micros / 1000, micros % 1000)
-}
-
 /// An expedited SDO download request to `node` as compact candump text.
 fn download(node: u8, index: u16, sub: u8, data: &[u8]) -> String {
     let command = 0x23 | ((4 - data.len() as u8) << 2);
@@ -69,25 +65,27 @@ fn download(node: u8, index: u16, sub: u8, data: &[u8]) -> String {
     format!("{:03X}#{hex}", 0x600 + u16::from(node))
 }
 
-/// Who put a frame on the bus.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Sender {
-    Device(usize),
-    Monitor,
-    Master,
+canopener_testkit::cores! {
+    /// Everyone on the bus: the devices and the master's service cores.
+    enum Party, PartyEvent {
+        Device(Device) => DeviceEvent,
+        Monitor(NodeMonitor) => MonitorEvent,
+        Emcy(EmcyConsumer) => EmcyEvent,
+        Sync(SyncProducer) => SyncEvent,
+        Time(TimeProducer) => TimeEvent,
+    }
 }
 
-/// A bus on virtual time: devices on one side, the master's cores on the other. Every frame
-/// reaches every party but its sender; an unplugged device neither sends nor receives.
+/// A bus on virtual time (the test harness's): devices on one side, the master's cores on the other.
+/// Every frame reaches every party but its sender; an unplugged device neither sends nor receives.
 struct Net {
-    now: Instant,
-    devices: Vec<Device>,
-    unplugged: Vec<bool>,
+    net: TestNet<Party>,
+    devices: Vec<StationId>,
+    monitor: StationId,
+    emcy: StationId,
+    time: StationId,
+    sync: Option<StationId>,
     nmt: NmtMaster,
-    monitor: NodeMonitor,
-    emcy: EmcyConsumer,
-    sync: Option<SyncProducer>,
-    time: TimeProducer,
     /// Frames on the bus as `"<ms>.<µs> <frame>"`.
     frames: Vec<String>,
     /// Monitor events as `"<ms>.<µs> <event>"` (`Display`).
@@ -99,137 +97,129 @@ struct Net {
 
 impl Net {
     fn new(devices: Vec<Device>, default_consumer: ConsumerTime) -> Net {
+        let mut net = TestNet::ideal();
+        let devices = devices
+            .into_iter()
+            .map(|mut dev| {
+                dev.boot(Instant::ZERO);
+                net.attach(Party::Device(dev))
+            })
+            .collect();
+        let monitor = net.attach(Party::Monitor(NodeMonitor::new(default_consumer)));
+        let emcy = net.attach(Party::Emcy(EmcyConsumer::new()));
+        let time = net.attach(Party::Time(TimeProducer::new()));
         let mut net = Net {
-            now: Instant::ZERO,
-            unplugged: vec![false; devices.len()],
+            net,
             devices,
-            nmt: NmtMaster::new(),
-            monitor: NodeMonitor::new(default_consumer),
-            emcy: EmcyConsumer::new(),
+            monitor,
+            emcy,
+            time,
             sync: None,
-            time: TimeProducer::new(),
+            nmt: NmtMaster::new(),
             frames: Vec::new(),
             monitored: Vec::new(),
             emcys: Vec::new(),
             device_events: Vec::new(),
         };
-        for dev in &mut net.devices {
-            dev.boot(Instant::ZERO);
-        }
-        net.exchange();
+        net.collect();
         net
     }
 
-    fn collect(&mut self) -> Vec<(Sender, CanFrame)> {
-        let mut res = Vec::new();
-        for (idx, dev) in self.devices.iter_mut().enumerate() {
-            while let Some(frame) = dev.poll_transmit() {
-                if !self.unplugged[idx] {
-                    res.push((Sender::Device(idx), frame));
+    fn now(&self) -> Instant {
+        self.net.now()
+    }
+
+    fn device(&self, index: usize) -> &Device {
+        match self.net.node(self.devices[index]) {
+            Party::Device(dev) => dev,
+            other => panic!("not a device: {other:?}"),
+        }
+    }
+
+    fn monitor(&self) -> &NodeMonitor {
+        match self.net.node(self.monitor) {
+            Party::Monitor(monitor) => monitor,
+            other => panic!("not the monitor: {other:?}"),
+        }
+    }
+
+    fn monitor_mut(&mut self) -> &mut NodeMonitor {
+        match self.net.node_mut(self.monitor) {
+            Party::Monitor(monitor) => monitor,
+            other => panic!("not the monitor: {other:?}"),
+        }
+    }
+
+    fn emcy(&self) -> &EmcyConsumer {
+        match self.net.node(self.emcy) {
+            Party::Emcy(emcy) => emcy,
+            other => panic!("not the EMCY consumer: {other:?}"),
+        }
+    }
+
+    fn time_mut(&mut self) -> &mut TimeProducer {
+        match self.net.node_mut(self.time) {
+            Party::Time(time) => time,
+            other => panic!("not the TIME producer: {other:?}"),
+        }
+    }
+
+    /// Puts `sync` on the bus, in place of the SYNC producer there was.
+    fn set_sync(&mut self, sync: SyncProducer) {
+        match self.sync {
+            Some(station) => *self.net.node_mut(station) = Party::Sync(sync),
+            None => self.sync = Some(self.net.attach(Party::Sync(sync))),
+        }
+    }
+
+    /// Unplugs device `index`, or plugs it back in.
+    fn plug(&mut self, index: usize, plugged: bool) {
+        let station = self.devices[index];
+        if plugged {
+            self.net.network_mut().reconnect(station);
+        } else {
+            self.net.network_mut().disconnect(station);
+        }
+    }
+
+    /// Takes what went over the bus and what the parties reported into the lists the tests read.
+    fn collect(&mut self) {
+        self.frames.extend(self.net.frames());
+        for NodeEvent { at, node, event } in self.net.events() {
+            let at = stamp(at);
+            match event {
+                PartyEvent::Monitor(event) => self.monitored.push(format!("{at} {event}")),
+                PartyEvent::Emcy(event) => self.emcys.push(format!("{at} {event}")),
+                PartyEvent::Device(event) => {
+                    if let Some(index) = self.devices.iter().position(|dev| *dev == node) {
+                        self.device_events.push((index, event));
+                    }
                 }
-            }
-            while let Some(event) = dev.poll_event() {
-                self.device_events.push((idx, event));
+                PartyEvent::Sync(_) | PartyEvent::Time(_) => {}
             }
         }
-        while let Some(frame) = self.monitor.poll_transmit() {
-            res.push((Sender::Monitor, frame));
-        }
-        while let Some(frame) = self.nmt.poll_transmit() {
-            res.push((Sender::Master, frame));
-        }
-        if let Some(sync) = &mut self.sync {
-            while let Some(frame) = sync.poll_transmit() {
-                res.push((Sender::Master, frame));
-            }
-        }
-        while let Some(frame) = self.time.poll_transmit() {
-            res.push((Sender::Master, frame));
-        }
-        res
-    }
-
-    /// Delivers every frame until nobody has anything to send at `now`.
-    fn exchange(&mut self) {
-        loop {
-            let frames = self.collect();
-            if frames.is_empty() {
-                break;
-            }
-            for (sender, frame) in frames {
-                self.deliver(sender, &frame);
-            }
-        }
-        let now = stamp(self.now);
-        while let Some(event) = self.monitor.poll_event() {
-            self.monitored.push(format!("{now} {event}"));
-        }
-        while let Some(event) = self.emcy.poll_event() {
-            self.emcys.push(format!("{now} {event}"));
-        }
-    }
-
-    fn deliver(&mut self, sender: Sender, frame: &CanFrame) {
-        self.frames.push(format!("{} {frame}", stamp(self.now)));
-        for (idx, dev) in self.devices.iter_mut().enumerate() {
-            if sender != Sender::Device(idx) && !self.unplugged[idx] {
-                dev.handle_frame(self.now, frame);
-            }
-        }
-        if sender != Sender::Monitor {
-            self.monitor.handle_frame(self.now, frame);
-        }
-        self.emcy.handle_frame(self.now, frame);
-    }
-
-    fn next_deadline(&self) -> Option<Instant> {
-        self.devices
-            .iter()
-            .filter_map(Device::poll_timeout)
-            .chain(self.monitor.poll_timeout())
-            .chain(self.sync.as_ref().and_then(SyncProducer::poll_timeout))
-            .chain(self.time.poll_timeout())
-            .min()
     }
 
     /// Runs every timer due up to and including `until_ms`, then sets the clock there.
     fn advance(&mut self, until_ms: u64) {
-        let until = Instant::from_millis(until_ms);
-        self.exchange();
-        while let Some(due) = self.next_deadline() {
-            if due > until {
-                break;
-            }
-            assert!(due >= self.now, "timer in the past");
-            self.now = due;
-            for dev in &mut self.devices {
-                if dev.poll_timeout().is_some_and(|at| at <= due) {
-                    dev.handle_timeout(due);
-                }
-            }
-            self.monitor.handle_timeout(due);
-            if let Some(sync) = &mut self.sync {
-                sync.handle_timeout(due);
-            }
-            self.time.handle_timeout(due);
-            self.exchange();
-        }
-        self.now = until;
+        self.net.advance(Instant::from_millis(until_ms));
+        self.collect();
     }
 
     /// Advances to `at_ms`, then sends `command` to `target`.
     fn nmt(&mut self, at_ms: u64, command: NmtCommand, target: NmtTarget) {
         self.advance(at_ms);
-        self.nmt.send(self.now, command, target);
-        self.exchange();
+        self.nmt.send(self.net.now(), command, target);
+        while let Some(frame) = self.nmt.poll_transmit() {
+            self.net.send(frame);
+        }
+        self.collect();
     }
 
     /// Advances to `at_ms`, then puts `text` on the bus as sent by the master tool.
     fn inject(&mut self, at_ms: u64, text: &str) {
-        self.advance(at_ms);
-        let frame = parse_compact_frame(text).expect("test frame");
-        self.deliver(Sender::Master, &frame);
-        self.exchange();
+        self.net.inject(Instant::from_millis(at_ms), text);
+        self.collect();
     }
 
     fn take_monitored(&mut self) -> Vec<String> {
@@ -273,9 +263,9 @@ fn nmt_commands_change_the_device_state_and_the_monitor_follows() {
     ];
     for (at, command, target, device_state) in steps {
         net.nmt(at, command, target);
-        assert_eq!(net.devices[0].state(), device_state, "after {command}");
+        assert_eq!(net.device(0).state(), device_state, "after {command}");
         assert_eq!(
-            net.monitor.state(node(5)),
+            net.monitor().state(node(5)),
             Some(expected_state(command)),
             "after {command}"
         );
@@ -333,7 +323,7 @@ fn nmt_commands_change_the_device_state_and_the_monitor_follows() {
             "650.000 node 5: heartbeat interval 100.000 ms",
         ]
     );
-    let status = net.monitor.status(node(5)).expect("heard");
+    let status = net.monitor().status(node(5)).expect("heard");
     assert_eq!(status.learned_period, Some(Duration::from_millis(100)));
     assert!(!status.heartbeat_lost);
 }
@@ -349,17 +339,17 @@ fn heartbeat_lost_when_the_device_stops_producing_or_is_unplugged() {
         ],
         ConsumerTime::Off,
     );
-    net.monitor
+    net.monitor_mut()
         .set_consumer_time(node(5), ConsumerTime::Fixed(Duration::from_millis(150)));
-    net.monitor
+    net.monitor_mut()
         .set_consumer_time(node(10), ConsumerTime::Fixed(Duration::from_millis(75)));
     // Node 5: 1017h = 0 over SDO after the heartbeat at 300 ms, back to 100 ms at 600 ms.
     net.inject(300, &download(5, 0x1017, 0, &[0, 0]));
     // Node 10: unplugged from 320 ms to 420 ms.
     net.advance(320);
-    net.unplugged[1] = true;
+    net.plug(1, false);
     net.advance(420);
-    net.unplugged[1] = false;
+    net.plug(1, true);
     net.inject(600, &download(5, 0x1017, 0, &hundred_ms));
     net.advance(750);
     let monitored = without_intervals(net.take_monitored());
@@ -377,7 +367,7 @@ fn heartbeat_lost_when_the_device_stops_producing_or_is_unplugged() {
         ]
     );
     assert!(net.frames.contains(&"300.000 585#6017100000000000".to_string()));
-    let status = net.monitor.status(node(5)).expect("heard");
+    let status = net.monitor().status(node(5)).expect("heard");
     assert!(!status.heartbeat_lost);
     assert_eq!(status.last_heard, Some(Instant::from_millis(700)));
 }
@@ -390,13 +380,14 @@ fn guarding_a_device_configured_with_100ch_100dh() {
         ConsumerTime::Off,
     );
     // This device starts operational on its own (1F80h bit 2 clear).
-    assert_eq!(net.devices[0].state(), NmtSlaveState::Operational);
+    assert_eq!(net.device(0).state(), NmtSlaveState::Operational);
     let config = GuardingConfig {
         guard_time: Duration::from_millis(100),
         life_time_factor: 3,
     };
-    net.monitor
-        .start_guarding(net.now, node(4), config)
+    let now = net.now();
+    net.monitor_mut()
+        .start_guarding(now, node(4), config)
         .expect("guarding");
     net.nmt(250, NmtCommand::EnterPreOperational, NmtTarget::Node(node(4)));
     net.nmt(350, NmtCommand::StartRemoteNode, NmtTarget::Node(node(4)));
@@ -436,9 +427,9 @@ fn guarding_a_device_configured_with_100ch_100dh() {
     );
     // Unplugged: no answers, so guarding is lost a life time after the last correct one. The
     // device loses life guarding too and falls back to pre-operational (1029h:01 = 0).
-    net.unplugged[0] = true;
+    net.plug(0, false);
     net.advance(750);
-    net.unplugged[0] = false;
+    net.plug(0, true);
     net.advance(850);
     assert_eq!(
         net.take_monitored(),
@@ -448,7 +439,7 @@ fn guarding_a_device_configured_with_100ch_100dh() {
             "800.000 node 4: OPERATIONAL -> PRE-OPERATIONAL",
         ]
     );
-    assert_eq!(net.devices[0].state(), NmtSlaveState::PreOperational);
+    assert_eq!(net.device(0).state(), NmtSlaveState::PreOperational);
     // The first request after the loss resumed the device's life guarding: error reset.
     assert_eq!(
         net.take_emcys(),
@@ -458,7 +449,7 @@ fn guarding_a_device_configured_with_100ch_100dh() {
     );
     net.take_frames();
     // The master stops guarding: the device's life guarding runs out 300 ms after the last request.
-    net.monitor.stop_guarding(node(4));
+    net.monitor_mut().stop_guarding(node(4));
     net.advance(1300);
     let emcys = net.take_emcys();
     assert_eq!(emcys.len(), 1, "{emcys:?}");
@@ -485,7 +476,7 @@ fn sync_producer_drives_the_device_sync_consumer() {
     };
     let mut sync = SyncProducer::new(config).expect("config");
     sync.start(Instant::from_millis(10));
-    net.sync = Some(sync);
+    net.set_sync(sync);
     net.advance(75);
     let counters: Vec<Option<u8>> = net
         .device_events
@@ -510,7 +501,7 @@ fn sync_producer_drives_the_device_sync_consumer() {
     // A producer without the counter: the device expects one (1019h = 5) and raises EMCY 8240h.
     let mut plain = SyncProducer::new(SyncConfig::new(Duration::from_millis(10))).expect("config");
     plain.start(Instant::from_millis(80));
-    net.sync = Some(plain);
+    net.set_sync(plain);
     net.advance(80);
     assert_eq!(
         net.take_emcys(),
@@ -531,8 +522,8 @@ fn time_producer_reaches_the_device_time_consumer() {
     );
     // 2024-01-01 12:00:00.000 UTC.
     let noon = canopener_wire::since_1984_from_unix_millis(1_704_110_400_000).expect("after 1984");
-    net.time.set_clock(Instant::from_millis(100), noon);
-    net.time
+    net.time_mut().set_clock(Instant::from_millis(100), noon);
+    net.time_mut()
         .start_periodic(Instant::from_millis(100), Duration::from_secs(1))
         .expect("clock set");
     net.advance(2100);
@@ -569,7 +560,7 @@ fn emcy_from_an_rpdo_length_error_and_its_reset() {
             "5.000 node 5: EMCY 0000h error reset or no error, error register 00h, manufacturer 00 00 00 00 00",
         ]
     );
-    assert_eq!(net.emcy.error_register(node(5)), Some(0));
+    assert_eq!(net.emcy().error_register(node(5)), Some(0));
 }
 
 #[test]

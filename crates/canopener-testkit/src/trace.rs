@@ -28,7 +28,7 @@ pub struct Trace<C: Core> {
     /// The virtual time.
     pub now: Instant,
     out: Vec<String>,
-    events: Vec<String>,
+    events: Vec<(Instant, C::Event)>,
 }
 
 impl<C: Core> Debug for Trace<C> {
@@ -36,7 +36,7 @@ impl<C: Core> Debug for Trace<C> {
         f.debug_struct("Trace")
             .field("now", &self.now)
             .field("out", &self.out)
-            .field("events", &self.events)
+            .field("events", &self.events.len())
             .finish_non_exhaustive()
     }
 }
@@ -61,12 +61,14 @@ where
         }
     }
 
-    fn drain(&mut self) {
+    /// Records what the core has sent and reported, at the current time (after a test fed the core
+    /// directly).
+    pub fn drain(&mut self) {
         while let Some(frame) = self.core.poll_transmit() {
             self.out.push(format!("{} {frame}", stamp(self.now)));
         }
         while let Some(event) = self.core.poll_event() {
-            self.events.push(format!("{} {event:?}", stamp(self.now)));
+            self.events.push((self.now, event));
         }
     }
 
@@ -116,8 +118,24 @@ where
         std::mem::take(&mut self.out)
     }
 
-    /// Takes the events reported so far.
+    /// Takes the events reported so far, as `"<ms>.<µs> <event:?>"` lines.
     pub fn events(&mut self) -> Vec<String> {
+        self.take_events_at()
+            .into_iter()
+            .map(|(at, event)| format!("{} {event:?}", stamp(at)))
+            .collect()
+    }
+
+    /// Takes the events reported so far.
+    pub fn take_events(&mut self) -> Vec<C::Event> {
+        self.take_events_at()
+            .into_iter()
+            .map(|(_, event)| event)
+            .collect()
+    }
+
+    /// Takes the events reported so far, with when they were reported.
+    pub fn take_events_at(&mut self) -> Vec<(Instant, C::Event)> {
         self.drain();
         std::mem::take(&mut self.events)
     }

@@ -1,14 +1,14 @@
-//! The virtual-time harness shared by the device and fault tests: a device on its own, time advanced
-//! by its deadlines, what it sends recorded as `"<ms>.<µs> <frame>"`.
+//! What the device and fault tests share: their fixture files and the testkit's virtual-time trace of
+//! one device (time advanced by its deadlines, what it sends recorded as `"<ms>.<µs> <frame>"`).
 
 use std::path::Path;
 use std::sync::LazyLock;
 
-use canopener_can::Core;
-use canopener_can::candump::parse_compact_frame;
-use canopener_can::{CanFrame, Instant};
-use canopener_device::device::{Device, DeviceEvent};
+use canopener_can::Instant;
+use canopener_device::device::Device;
 use canopener_od::ObjectKey;
+use canopener_testkit::trace::Trace;
+pub(crate) use canopener_testkit::trace::ms;
 
 pub(crate) const BASE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -24,72 +24,27 @@ pub(crate) fn eds(path: impl AsRef<Path>) -> canopener_eds::model::Eds {
     canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
 }
 
-/// Drives a device on virtual time and records what it sends as `"<ms>.<µs> <frame>"`.
-pub(crate) struct Bus {
-    pub(crate) dev: Device,
-    pub(crate) now: Instant,
-    pub(crate) out: Vec<String>,
-    pub(crate) events: Vec<DeviceEvent>,
+/// A device on virtual time with what it sends recorded as `"<ms>.<µs> <frame>"`: the shared
+/// single-core harness of `canopener-testkit`.
+pub(crate) type Bus = Trace<Device>;
+
+/// `dev` powered on at time zero (its boot-up message is the first frame of the trace).
+pub(crate) fn booted(mut dev: Device) -> Bus {
+    dev.boot(Instant::ZERO);
+    let mut bus = Trace::new(dev);
+    bus.drain();
+    bus
 }
 
-impl Bus {
-    pub(crate) fn booted(dev: Device) -> Bus {
-        let mut bus = Bus {
-            dev,
-            now: Instant::ZERO,
-            out: Vec::new(),
-            events: Vec::new(),
-        };
-        bus.dev.boot(Instant::ZERO);
-        bus.drain();
-        bus
-    }
+/// What the device tests ask of a traced device beyond frames and events.
+pub(crate) trait DeviceBus {
+    /// The value of `index`:`sub` in the device's object dictionary.
+    fn value(&self, index: u16, sub: u8) -> Vec<u8>;
+}
 
-    pub(crate) fn drain(&mut self) {
-        while let Some(frame) = self.dev.poll_transmit() {
-            let micros = self.now.as_micros();
-            self.out
-                .push(format!("{}.{:03} {frame}", micros / 1000, micros % 1000));
-        }
-        while let Some(event) = self.dev.poll_event() {
-            self.events.push(event);
-        }
-    }
-
-    pub(crate) fn advance(&mut self, until_ms: u64) {
-        let until = Instant::from_millis(until_ms);
-        self.drain();
-        while let Some(due) = self.dev.poll_timeout() {
-            if due > until {
-                break;
-            }
-            assert!(due >= self.now, "timer in the past");
-            self.now = due;
-            self.dev.handle_timeout(due);
-            self.drain();
-        }
-        self.now = until;
-    }
-
-    pub(crate) fn rx(&mut self, at_ms: u64, text: &str) {
-        self.advance(at_ms);
-        let frame: CanFrame = parse_compact_frame(text).expect("test frame");
-        self.dev.handle_frame(self.now, &frame);
-        self.drain();
-    }
-
-    pub(crate) fn sent(&mut self) -> Vec<String> {
-        self.drain();
-        std::mem::take(&mut self.out)
-    }
-
-    pub(crate) fn events(&mut self) -> Vec<DeviceEvent> {
-        self.drain();
-        std::mem::take(&mut self.events)
-    }
-
-    pub(crate) fn value(&self, index: u16, sub: u8) -> Vec<u8> {
-        self.dev
+impl DeviceBus for Bus {
+    fn value(&self, index: u16, sub: u8) -> Vec<u8> {
+        self.core
             .od()
             .read(ObjectKey::new(index, sub))
             .expect("readable")
