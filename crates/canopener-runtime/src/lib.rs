@@ -17,6 +17,9 @@
 //! - [`replay`]: playing recorded frames onto a bus with their recorded timing, scaled, or back to back.
 //! - [`send`]: sending a list of frames, repeated, with a gap.
 //! - [`generate`]: generating counting frames at a fixed rate or as fast as the bus takes them.
+//! - [`hub`]: the socketcand hub served in the foreground until cancelled, reporting its counters.
+//! - [`demo`]: the embedded CANopen session played and watched end to end, by default through an
+//!   in-process hub.
 
 #![warn(missing_docs)]
 
@@ -28,7 +31,9 @@ pub mod virtual_link;
 
 pub mod candump_file;
 pub mod capture;
+pub mod demo;
 pub mod generate;
+pub mod hub;
 mod pacing;
 pub mod replay;
 pub mod send;
