@@ -18,13 +18,3 @@ pub(crate) fn open_bus(arg: Option<&str>, command: &str) -> CliResult<Box<dyn Ca
     }
     Ok(open(&spec)?)
 }
-
-/// The interface name printed in monitor lines and written to candump logs for this bus.
-pub(crate) fn interface_name(spec: &BusSpec) -> String {
-    match spec {
-        BusSpec::Virtual { name, .. } => name.clone(),
-        BusSpec::Socketcand { bus, .. } => bus.clone(),
-        BusSpec::SocketCan { interface } => interface.clone(),
-        BusSpec::UdpMulticast { .. } => "udp".to_owned(),
-    }
-}

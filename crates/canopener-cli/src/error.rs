@@ -115,6 +115,13 @@ impl From<canopener_runtime::link::LinkError> for CliError {
     }
 }
 
+/// A candump log that cannot be read is the user's input failing (exit 3), whichever command reads it.
+impl From<canopener_runtime::candump_file::ReadLogError> for CliError {
+    fn from(err: canopener_runtime::candump_file::ReadLogError) -> CliError {
+        CliError::read_file(&err.path, err.source)
+    }
+}
+
 pub(crate) type CliResult<T = ()> = Result<T, CliError>;
 
 /// Wraps a write to stdout so that a closed pipe ends the command quietly.

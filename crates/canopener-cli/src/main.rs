@@ -10,6 +10,7 @@ mod cli;
 mod eds;
 mod error;
 mod master;
+mod output;
 mod sim;
 mod stop;
 

@@ -12,6 +12,14 @@
 //!   [`Core`](canopener_can::Core): [`link::BusLink`] on a transport and the wall clock,
 //!   [`virtual_link::VirtualLink`] on a simulated bus and virtual time, the same API for both.
 //! - [`sdo_session`]: blocking SDO transfers with progress and cancellation, on any link.
+//! - [`candump_file`]: candump logs on disk, read whole or written frame by frame.
+//! - [`capture`]: receiving live traffic for display, optionally into a candump log.
+//! - [`replay`]: playing recorded frames onto a bus with their recorded timing, scaled, or back to back.
+//! - [`send`]: sending a list of frames, repeated, with a gap.
+//! - [`generate`]: generating counting frames at a fixed rate or as fast as the bus takes them.
+//! - [`hub`]: the socketcand hub served in the foreground until cancelled, reporting its counters.
+//! - [`demo`]: the embedded CANopen session played and watched end to end, by default through an
+//!   in-process hub.
 
 #![warn(missing_docs)]
 
@@ -20,3 +28,14 @@ pub mod files;
 pub mod link;
 pub mod sdo_session;
 pub mod virtual_link;
+
+pub mod candump_file;
+pub mod capture;
+pub mod demo;
+pub mod generate;
+pub mod hub;
+mod pacing;
+pub mod replay;
+pub mod send;
+#[cfg(test)]
+mod test_support;

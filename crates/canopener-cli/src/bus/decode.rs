@@ -3,14 +3,14 @@
 use std::io::Write;
 
 use canopener_can::candump::parse_log;
+use canopener_runtime::candump_file::read_log;
 
 use crate::bus::args::DecodeArgs;
 use crate::bus::monitor::Monitor;
-use crate::bus::replay::read_log_text;
 use crate::error::{CliError, CliResult, stdout_error};
 
 pub(crate) fn run(args: DecodeArgs) -> CliResult {
-    let text = read_log_text(&args.file)?;
+    let text = read_log(&args.file)?;
     let (records, errors) = parse_log(&text);
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());

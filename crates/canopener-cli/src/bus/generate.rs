@@ -1,8 +1,7 @@
 //! `canopener bus gen`: generate counting frames at a fixed rate or as fast as the bus takes them.
 
-use std::time::{Duration, Instant};
-
-use canopener_can::{CanFrame, CanId};
+use canopener_can::CanId;
+use canopener_runtime::generate::{GenerateError, Generator, generate};
 
 use crate::bus::args::GenArgs;
 use crate::bus_open::open_bus;
@@ -10,59 +9,42 @@ use crate::error::{CliError, CliResult};
 use crate::stop::StopFlag;
 
 pub(crate) fn run(args: GenArgs) -> CliResult {
-    let id = parse_hex_id(&args.id)?;
-    if args.dlc > 8 {
-        return Err(CliError::Usage(format!(
-            "--dlc {} is above 8, the classical CAN maximum",
-            args.dlc
-        )));
-    }
-    if !args.rate.is_finite() || args.rate < 0.0 {
-        return Err(CliError::Usage(format!(
-            "--rate {} must be a non-negative number of frames/s",
-            args.rate
-        )));
-    }
-    if args.count.is_none() && args.duration.is_none() {
-        return Err(CliError::Usage(
-            "give --count N or --duration D (or both), so the generator knows when to stop".into(),
-        ));
-    }
+    let generator = Generator {
+        id: parse_hex_id(&args.id)?,
+        dlc: args.dlc,
+        rate: args.rate,
+        count: args.count,
+        duration: args.duration,
+    };
+    generator.validate().map_err(|err| generate_error(err, &args))?;
     let stop = StopFlag::install()?;
     let mut bus = open_bus(args.bus.spec.as_deref(), "bus gen")?;
-    let interval = (args.rate > 0.0).then(|| Duration::from_secs_f64(1.0 / args.rate));
-    let started = Instant::now();
-    let mut sent: u64 = 0;
-    let mut data = [0u8; 8];
-    while !stop.is_set() {
-        if args.count.is_some_and(|count| sent >= count)
-            || args
-                .duration
-                .is_some_and(|duration| started.elapsed() >= duration)
-        {
-            break;
-        }
-        if let Some(interval) = interval {
-            // Absolute schedule: a late wake-up is caught up instead of lowering the average rate.
-            let due = started + interval.mul_f64(sent as f64);
-            let now = Instant::now();
-            if due > now {
-                std::thread::sleep(due - now);
-            }
-        }
-        data[..4].copy_from_slice(&(sent as u32).to_le_bytes());
-        data[4..].copy_from_slice(&((sent >> 32) as u32).to_le_bytes());
-        let frame = CanFrame::new(id, &data[..usize::from(args.dlc)])
-            .map_err(|err| CliError::Internal(anyhow::anyhow!("building a generated frame: {err}")))?;
-        bus.send(&frame)?;
-        sent += 1;
-    }
-    let elapsed = started.elapsed().as_secs_f64();
+    let summary = generate(&mut *bus, &generator, &stop.token()).map_err(|err| generate_error(err, &args))?;
     eprintln!(
-        "sent {sent} frames in {elapsed:.3} s ({:.0} frames/s)",
-        if elapsed > 0.0 { sent as f64 / elapsed } else { 0.0 }
+        "sent {} frames in {:.3} s ({:.0} frames/s)",
+        summary.sent,
+        summary.elapsed.as_secs_f64(),
+        summary.frames_per_second()
     );
     Ok(())
+}
+
+/// The generator's refusals in terms of the options the user gave.
+fn generate_error(err: GenerateError, args: &GenArgs) -> CliError {
+    match err {
+        GenerateError::DlcTooLarge(_) => CliError::Usage(format!(
+            "--dlc {} is above 8, the classical CAN maximum",
+            args.dlc
+        )),
+        GenerateError::BadRate(_) => CliError::Usage(format!(
+            "--rate {} must be a non-negative number of frames/s",
+            args.rate
+        )),
+        GenerateError::Endless => CliError::Usage(
+            "give --count N or --duration D (or both), so the generator knows when to stop".into(),
+        ),
+        GenerateError::Bus(err) => CliError::Bus(err),
+    }
 }
 
 /// `123` is a standard id; 8 digits or a value above 0x7FF is an extended id.

@@ -1,13 +1,11 @@
 //! `canopener bus replay`: play a candump log onto a bus, keeping its timing unless told otherwise.
 
 use std::path::Path;
-use std::time::{Duration, Instant};
 
-use canopener_can::CanFrame;
-use canopener_can::candump::{LogEvent, LogRecord, parse_log};
+use canopener_can::candump::{LogRecord, parse_log};
+use canopener_runtime::candump_file::read_log;
+use canopener_runtime::replay::{Pace, frames_of, replay};
 use indicatif::{ProgressBar, ProgressStyle};
-
-use canopener_transport::CanBus;
 
 use crate::bus::args::ReplayArgs;
 use crate::bus_open::open_bus;
@@ -18,13 +16,17 @@ use crate::stop::StopFlag;
 const MAX_LISTED_ERRORS: usize = 10;
 
 pub(crate) fn run(args: ReplayArgs) -> CliResult {
-    if !(args.speed.is_finite() && args.speed > 0.0) {
-        return Err(CliError::Usage(format!(
-            "--speed {} must be a number above 0 (2 = twice as fast)",
-            args.speed
-        )));
-    }
-    let text = read_log_text(&args.file)?;
+    let pace = if args.no_timing {
+        Pace::BACK_TO_BACK
+    } else {
+        Pace::recorded(args.speed).map_err(|_| {
+            CliError::Usage(format!(
+                "--speed {} must be a number above 0 (2 = twice as fast)",
+                args.speed
+            ))
+        })?
+    };
+    let text = read_log(&args.file)?;
     let records = load_records(&args.file, &text, args.skip_invalid)?;
     let (frames, error_frames) = frames_of(records, args.interface.as_deref());
     if error_frames > 0 {
@@ -50,90 +52,22 @@ pub(crate) fn run(args: ReplayArgs) -> CliResult {
             .unwrap_or_else(|_| ProgressStyle::default_bar())
             .progress_chars("=> "),
     );
-    let started = Instant::now();
-    let speed = (!args.no_timing).then_some(args.speed);
-    let mut sent = 0u64;
-    for _ in 0..args.loops {
-        if stop.is_set() {
-            break;
+    let summary = replay(&mut *bus, &frames, pace, args.loops, &stop.token(), |sent| {
+        if sent.is_multiple_of(64) {
+            progress.set_position(sent);
         }
-        sent += send_timed(&mut *bus, &frames, speed, &stop, |in_loop| {
-            if in_loop.is_multiple_of(64) {
-                progress.set_position(sent + in_loop);
-            }
-        })?;
-    }
+    })?;
     progress.finish_and_clear();
-    let elapsed = started.elapsed().as_secs_f64();
-    eprintln!("replayed {sent} of {total} frames in {elapsed:.3} s");
+    eprintln!(
+        "replayed {} of {total} frames in {:.3} s",
+        summary.sent,
+        summary.elapsed.as_secs_f64()
+    );
     Ok(())
 }
 
-/// The frames of `records` (only those recorded on `interface`, if given) and how many error frames were
-/// left out.
-pub(crate) fn frames_of(
-    records: Vec<(usize, LogRecord)>,
-    interface: Option<&str>,
-) -> (Vec<(canopener_can::Instant, CanFrame)>, usize) {
-    let mut frames = Vec::with_capacity(records.len());
-    let mut error_frames = 0;
-    for (_, record) in records {
-        if interface.is_some_and(|wanted| wanted != record.interface) {
-            continue;
-        }
-        match record.event {
-            LogEvent::Frame(frame) => frames.push((record.timestamp, frame)),
-            LogEvent::ErrorFrame { .. } => error_frames += 1,
-        }
-    }
-    (frames, error_frames)
-}
-
-/// Sends `frames` in order, keeping their recorded gaps divided by `speed`, or back to back when `speed` is
-/// `None`. The schedule is absolute (start + offset), so a late wake-up is caught up rather than
-/// accumulated. Returns how many frames were sent before the end or a stop request; `on_sent` gets the
-/// running count.
-pub(crate) fn send_timed(
-    bus: &mut dyn CanBus,
-    frames: &[(canopener_can::Instant, CanFrame)],
-    speed: Option<f64>,
-    stop: &StopFlag,
-    mut on_sent: impl FnMut(u64),
-) -> CliResult<u64> {
-    let Some((first, _)) = frames.first() else {
-        return Ok(0);
-    };
-    let start = Instant::now();
-    let mut sent = 0;
-    for (timestamp, frame) in frames {
-        if stop.is_set() {
-            break;
-        }
-        if let Some(speed) = speed {
-            sleep_until(
-                start + timestamp.saturating_duration_since(*first).div_f64(speed),
-                stop,
-            );
-        }
-        bus.send(frame)?;
-        sent += 1;
-        on_sent(sent);
-    }
-    Ok(sent)
-}
-
-pub(crate) fn read_log_text(path: &Path) -> CliResult<String> {
-    let bytes = std::fs::read(path).map_err(|err| CliError::read_file(path, err))?;
-    // candump logs are ASCII; a stray non-UTF-8 byte becomes U+FFFD and its line is reported by the parser.
-    Ok(String::from_utf8_lossy(&bytes).into_owned())
-}
-
 /// Parses the log; unreadable lines are an error unless `skip_invalid`, and then they are listed as warnings.
-pub(crate) fn load_records(
-    path: &Path,
-    text: &str,
-    skip_invalid: bool,
-) -> CliResult<Vec<(usize, LogRecord)>> {
+fn load_records(path: &Path, text: &str, skip_invalid: bool) -> CliResult<Vec<(usize, LogRecord)>> {
     let (records, errors) = parse_log(text);
     if errors.is_empty() {
         return Ok(records);
@@ -160,16 +94,5 @@ pub(crate) fn load_records(
             path.display(),
             errors.len()
         )))
-    }
-}
-
-fn sleep_until(due: Instant, stop: &StopFlag) {
-    // Sleep in slices so that Ctrl-C during a long recorded gap is honoured promptly.
-    loop {
-        let now = Instant::now();
-        if now >= due || stop.is_set() {
-            return;
-        }
-        std::thread::sleep((due - now).min(Duration::from_millis(100)));
     }
 }

@@ -1,8 +1,8 @@
 //! `canopener bus send`: put frames given on the command line onto a bus.
 
-use std::thread;
-
 use canopener_can::candump::parse_compact_frame;
+use canopener_runtime::cancel::Cancel;
+use canopener_runtime::send::send_frames;
 
 use crate::bus::args::SendArgs;
 use crate::bus_open::open_bus;
@@ -25,15 +25,8 @@ pub(crate) fn run(args: SendArgs) -> CliResult {
         })
         .collect::<CliResult<Vec<_>>>()?;
     let mut bus = open_bus(args.bus.spec.as_deref(), "bus send")?;
-    let mut first = true;
-    for _ in 0..args.repeat {
-        for frame in &frames {
-            if !first && !args.gap.is_zero() {
-                thread::sleep(args.gap);
-            }
-            first = false;
-            bus.send(frame)?;
-        }
-    }
+    // No Ctrl-C handler: `bus send` has always ended at once on a signal, like any short shell command,
+    // so its token is never cancelled.
+    send_frames(&mut *bus, &frames, args.repeat, args.gap, &Cancel::new())?;
     Ok(())
 }

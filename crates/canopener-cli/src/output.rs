@@ -1,0 +1,14 @@
+//! Writing to the terminal: whole blocks of text at once, flushed, with a closed pipe (`| head`) mapped to
+//! the quiet error that ends a command successfully.
+
+use std::io::Write;
+
+use crate::error::{CliResult, stdout_error};
+
+/// Writes `text` to stdout under one lock and flushes it, so it appears at once even when stdout is a pipe.
+pub(crate) fn print_stdout(text: &str) -> CliResult {
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(stdout_error)
+}
