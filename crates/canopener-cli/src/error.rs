@@ -128,3 +128,27 @@ pub(crate) type CliResult<T = ()> = Result<T, CliError>;
 pub(crate) fn stdout_error(source: io::Error) -> CliError {
     CliError::output("writing to stdout", source)
 }
+
+/// Simulated devices that cannot start: a file or state file the user gave is invalid input (exit 3),
+/// node-IDs that do not fit together are a usage error (exit 2), a state directory that cannot be
+/// created an output error (exit 5), a failing bus a bus error (exit 4).
+impl From<canopener_runtime::simulator::error::SimError> for CliError {
+    fn from(err: canopener_runtime::simulator::error::SimError) -> CliError {
+        use canopener_runtime::simulator::error::SimError;
+        use canopener_runtime::state_store::StateStoreError;
+        match err {
+            SimError::NodeIdAbove127 { .. } => CliError::Usage(format!("{err}; start --node-id lower")),
+            SimError::InvalidNodeId { .. } | SimError::NodeIdClash { .. } => CliError::Usage(err.to_string()),
+            SimError::StateStore(StateStoreError::CreateDir { dir, source }) => {
+                CliError::output(format!("creating the state directory {}", dir.display()), source)
+            }
+            SimError::Bus(err) => CliError::Bus(err),
+            SimError::Link(err) => err.into(),
+            SimError::Read { .. }
+            | SimError::NoObjects { .. }
+            | SimError::Build { .. }
+            | SimError::Serial { .. }
+            | SimError::StateStore(_) => CliError::InvalidInput(err.to_string()),
+        }
+    }
+}

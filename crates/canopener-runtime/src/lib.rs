@@ -20,6 +20,9 @@
 //! - [`hub`]: the socketcand hub served in the foreground until cancelled, reporting its counters.
 //! - [`demo`]: the embedded CANopen session played and watched end to end, by default through an
 //!   in-process hub.
+//! - [`simulator`]: simulated devices from EDS/DCF files, in-process on a virtual bus
+//!   ([`simulator::simulation::Simulation`]) or on a real bus in real time ([`simulator::host::SimHost`]).
+//! - [`state_store`]: the files in which simulated devices keep what they store across runs.
 
 #![warn(missing_docs)]
 
@@ -27,6 +30,8 @@ pub mod cancel;
 pub mod files;
 pub mod link;
 pub mod sdo_session;
+pub mod simulator;
+pub mod state_store;
 pub mod virtual_link;
 
 pub mod candump_file;

@@ -1,6 +1,7 @@
-//! `canopener sim --state-dir DIR`: what a real device keeps in non-volatile memory, in files per
-//! simulated device, so that it survives restarts of the simulator: saved parameters (1010h "save",
-//! 1011h "load") and the LSS configuration (CiA 305 store configuration: node-ID and bit rate).
+//! The state directory of simulated devices (`canopener sim --state-dir DIR`): what a real device keeps
+//! in non-volatile memory, in files per simulated device, so that it survives restarts of the simulator:
+//! saved parameters (CiA 301 §7.5.2.13 1010h "save", §7.5.2.14 1011h "load") and the LSS configuration
+//! (CiA 305 store configuration: node-ID and bit rate).
 //!
 //! A device whose node-ID is fixed (a DCF's, or `--node-id`) keeps its parameters in
 //! `DIR/node-NNN.params` (NNN in decimal). A device that gets its node-ID by LSS is known by its LSS
@@ -10,7 +11,7 @@
 //! A `.params` file is plain text, one saved entry per line, `GROUP INDEX SUB HEX`: the group (`communication`, `application`,
 //! `manufacturer`), the index and sub-index in hex, and the value's little-endian bytes in hex (nothing for
 //! an empty value). Lines starting with `#` are comments. Every change rewrites the whole file atomically
-//! (`output_file::write_atomic`), so a crash leaves the old or the new state, never half of one.
+//! ([`write_atomic`]), so a crash leaves the old or the new state, never half of one.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -22,46 +23,81 @@ use canopener_od::ObjectKey;
 use canopener_wire::LssAddress;
 use canopener_wire::NodeId;
 
-use crate::error::{CliError, CliResult};
-use canopener_runtime::files::write_atomic;
+use crate::files::write_atomic;
+
+/// Why a state file could not be opened. Writing later is reported to the device (it answers the
+/// 1010h write or the LSS store with an error), not here.
+#[derive(Debug, thiserror::Error)]
+pub enum StateStoreError {
+    /// The state directory could not be created.
+    #[error("creating the state directory {}: {source}", dir.display())]
+    CreateDir {
+        /// The directory.
+        dir: PathBuf,
+        /// The operating system's reason.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A state file exists but could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's reason.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A state file does not say what this store writes.
+    #[error("{}:{line}: {message}; fix or delete the file to {remedy}", path.display())]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// The 1-based line.
+        line: usize,
+        /// What is wrong with the line.
+        message: String,
+        /// What deleting the file leads to (`start from the defaults`, `start unconfigured`).
+        remedy: &'static str,
+    },
+}
 
 /// A [`ParameterStore`] backed by one file.
 #[derive(Debug)]
-pub(crate) struct FileStore {
+pub struct FileStore {
     path: PathBuf,
     groups: BTreeMap<ParameterGroup, Snapshot>,
 }
 
 impl FileStore {
-    /// The store of node `node_id` in `dir` (created if missing), with what its file holds. A file that
-    /// does not parse is invalid input (exit 3), named with the line.
-    pub(crate) fn open(dir: &Path, node_id: u8) -> CliResult<FileStore> {
+    /// The store of node `node_id` in `dir` (created if missing), with what its file holds; a file that
+    /// does not parse is refused, naming the line.
+    pub fn open(dir: &Path, node_id: u8) -> Result<FileStore, StateStoreError> {
         FileStore::open_named(dir, &format!("node-{node_id:03}"))
     }
 
     /// The store of the device with LSS address `address` in `dir`.
-    pub(crate) fn open_lss(dir: &Path, address: &LssAddress) -> CliResult<FileStore> {
+    pub fn open_lss(dir: &Path, address: &LssAddress) -> Result<FileStore, StateStoreError> {
         FileStore::open_named(dir, &lss_stem(address))
     }
 
-    fn open_named(dir: &Path, stem: &str) -> CliResult<FileStore> {
+    fn open_named(dir: &Path, stem: &str) -> Result<FileStore, StateStoreError> {
         create_state_dir(dir)?;
         let path = dir.join(format!("{stem}.params"));
         let groups = match std::fs::read_to_string(&path) {
-            Ok(text) => parse(&text).map_err(|(line, message)| {
-                CliError::InvalidInput(format!(
-                    "{}:{line}: {message}; fix or delete the file to start from the defaults",
-                    path.display()
-                ))
+            Ok(text) => parse(&text).map_err(|(line, message)| StateStoreError::Corrupt {
+                path: path.clone(),
+                line,
+                message,
+                remedy: "start from the defaults",
             })?,
             Err(err) if err.kind() == std::io::ErrorKind::NotFound => BTreeMap::new(),
-            Err(err) => return Err(CliError::read_file(&path, err)),
+            Err(source) => return Err(StateStoreError::Read { path, source }),
         };
         Ok(FileStore { path, groups })
     }
 
     /// The file this store writes.
-    pub(crate) fn path(&self) -> &Path {
+    pub fn path(&self) -> &Path {
         &self.path
     }
 
@@ -99,7 +135,7 @@ impl ParameterStore for FileStore {
 /// The LSS configuration a device stored (CiA 305 store configuration), in `DIR/lss-ADDRESS.lss`:
 /// lines `node-id N` (decimal, or `none` for unconfigured) and `bit-timing TABLE INDEX`.
 #[derive(Debug)]
-pub(crate) struct LssFile {
+pub struct LssFile {
     path: PathBuf,
     node_id: Option<NodeId>,
     bit_timing: Option<BitTiming>,
@@ -107,8 +143,8 @@ pub(crate) struct LssFile {
 
 impl LssFile {
     /// The stored LSS configuration of the device with LSS address `address` (none stored yet if the
-    /// file does not exist). A file that does not parse is invalid input (exit 3), named with the line.
-    pub(crate) fn open(dir: &Path, address: &LssAddress) -> CliResult<LssFile> {
+    /// file does not exist); a file that does not parse is refused, naming the line.
+    pub fn open(dir: &Path, address: &LssAddress) -> Result<LssFile, StateStoreError> {
         create_state_dir(dir)?;
         let path = dir.join(format!("{}.lss", lss_stem(address)));
         let mut file = LssFile {
@@ -119,7 +155,12 @@ impl LssFile {
         let text = match std::fs::read_to_string(&file.path) {
             Ok(text) => text,
             Err(err) if err.kind() == std::io::ErrorKind::NotFound => return Ok(file),
-            Err(err) => return Err(CliError::read_file(&file.path, err)),
+            Err(source) => {
+                return Err(StateStoreError::Read {
+                    path: file.path,
+                    source,
+                });
+            }
         };
         for (number, line) in (1..).zip(text.lines()) {
             let line = line.trim();
@@ -157,7 +198,7 @@ impl LssFile {
     }
 
     /// The node-ID stored, if any.
-    pub(crate) fn node_id(&self) -> Option<NodeId> {
+    pub fn node_id(&self) -> Option<NodeId> {
         self.node_id
     }
 }
@@ -183,11 +224,13 @@ impl LssStorage for LssFile {
     }
 }
 
-fn bad_lss_line(path: &Path, line: usize, message: &str) -> CliError {
-    CliError::InvalidInput(format!(
-        "{}:{line}: {message}; fix or delete the file to start unconfigured",
-        path.display()
-    ))
+fn bad_lss_line(path: &Path, line: usize, message: &str) -> StateStoreError {
+    StateStoreError::Corrupt {
+        path: path.to_owned(),
+        line,
+        message: message.to_owned(),
+        remedy: "start unconfigured",
+    }
 }
 
 fn lss_stem(address: &LssAddress) -> String {
@@ -197,9 +240,11 @@ fn lss_stem(address: &LssAddress) -> String {
     )
 }
 
-fn create_state_dir(dir: &Path) -> CliResult {
-    std::fs::create_dir_all(dir)
-        .map_err(|err| CliError::output(format!("creating the state directory {}", dir.display()), err))
+fn create_state_dir(dir: &Path) -> Result<(), StateStoreError> {
+    std::fs::create_dir_all(dir).map_err(|source| StateStoreError::CreateDir {
+        dir: dir.to_owned(),
+        source,
+    })
 }
 
 fn group_name(group: ParameterGroup) -> &'static str {
@@ -294,7 +339,7 @@ mod tests {
     use super::*;
 
     fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("canopener-sim-store-{name}-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("canopener-state-store-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         dir
     }
@@ -336,7 +381,7 @@ mod tests {
     }
 
     #[test]
-    fn a_corrupt_file_is_invalid_input_naming_the_line() {
+    fn a_corrupt_file_is_refused_naming_the_line() {
         let dir = temp_dir("corrupt");
         std::fs::create_dir_all(&dir).unwrap();
         for (text, needle) in [
@@ -351,7 +396,7 @@ mod tests {
         ] {
             std::fs::write(dir.join("node-007.params"), text).unwrap();
             let err = FileStore::open(&dir, 7).unwrap_err();
-            assert_eq!(err.exit_code(), 3);
+            assert!(matches!(err, StateStoreError::Corrupt { .. }), "{err:?}");
             assert!(err.to_string().contains(needle), "{err}");
         }
         let _ = std::fs::remove_dir_all(&dir);
