@@ -1,8 +1,8 @@
 //! A new front end in fifty lines: two simulated devices from an EDS on a 1 Mbit/s virtual bus, and
 //! the identity object 1018h of both read through SDO sessions.
 //!
-//! `cargo run -p canopener-runtime --example read_identity [EDS]`; without an argument it takes
-//! CANopenNode's example I/O device from the corpus.
+//! `cargo run -p canopener-runtime --example read_identity [EDS]`; without an argument it takes a real
+//! vendor's device from the corpus: Sevcon's Gen4 motor controller (vendor-ID 1Eh).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -13,7 +13,7 @@ use canopener_runtime::sdo_session::SdoSession;
 use canopener_runtime::simulator::simulation::Simulation;
 use canopener_testkit::corpus::{self, Kind};
 
-const DEFAULT_EDS: &str = "CANopenNode__CANopenNode__example__IO.eds";
+const DEFAULT_EDS: &str = "brtiberio__Sevcon_gen4__Gen4.eds";
 const NODES: [u8; 2] = [5, 6];
 const IDENTITY: [(u8, &str); 4] = [
     (1, "vendor-ID"),
