@@ -269,9 +269,7 @@ impl Confirmation {
                         let why = if interrupted {
                             Unconfirmed::Interrupted
                         } else if old_heartbeats == 0 {
-                            Unconfirmed::NoStateAfterBootUp {
-                                within: self.timeout,
-                            }
+                            Unconfirmed::NoStateAfterBootUp { within: self.timeout }
                         } else {
                             Unconfirmed::NoFurtherHeartbeat {
                                 last: state,
@@ -396,10 +394,7 @@ mod tests {
             outcome.unconfirmed.unwrap().to_string(),
             "no heartbeat or boot-up message from it within 1000 ms"
         );
-        assert_eq!(
-            conf.outcomes(true)[0].unconfirmed,
-            Some(Unconfirmed::Interrupted)
-        );
+        assert_eq!(conf.outcomes(true)[0].unconfirmed, Some(Unconfirmed::Interrupted));
     }
 
     #[test]

@@ -49,7 +49,8 @@ pub fn is_absent(error: &SdoTransferError) -> bool {
     matches!(
         error,
         SdoTransferError::AbortedByServer {
-            code: canopener_wire::abort::OBJECT_DOES_NOT_EXIST | canopener_wire::abort::SUB_INDEX_DOES_NOT_EXIST
+            code: canopener_wire::abort::OBJECT_DOES_NOT_EXIST
+                | canopener_wire::abort::SUB_INDEX_DOES_NOT_EXIST
         }
     )
 }
@@ -69,7 +70,9 @@ impl Field<u64> {
     /// An UNSIGNEDn of `width` bytes from a read.
     pub fn unsigned(read: Result<Vec<u8>, SdoTransferError>, width: usize) -> Field<u64> {
         match read {
-            Ok(data) => unsigned(&data, width).map_or_else(|err| Field::Failed(err.to_string()), Field::Value),
+            Ok(data) => {
+                unsigned(&data, width).map_or_else(|err| Field::Failed(err.to_string()), Field::Value)
+            }
             Err(err) if is_absent(&err) => Field::Absent,
             Err(err) => Field::Failed(err.to_string()),
         }
@@ -278,17 +281,29 @@ mod tests {
         assert!(!is_absent(&silent));
         assert!(matches!(Field::unsigned(Err(silent), 2), Field::Failed(_)));
         assert_eq!(Field::unsigned(Ok(vec![100, 0]), 2), Field::Value(100));
-        assert_eq!(Field::text(Ok(b"sim\0\0".to_vec())), Field::Value("sim".to_owned()));
-        assert_eq!(Field::text(Ok(vec![1, 2])), Field::Failed("not text: 01 02".to_owned()));
+        assert_eq!(
+            Field::text(Ok(b"sim\0\0".to_vec())),
+            Field::Value("sim".to_owned())
+        );
+        assert_eq!(
+            Field::text(Ok(vec![1, 2])),
+            Field::Failed("not text: 01 02".to_owned())
+        );
         assert_eq!(Field::text(Err(absent)), Field::Absent);
     }
 
     #[test]
     fn heartbeats_of_the_node_give_its_state_or_the_bad_byte() {
         let frame = |text: &str| canopener_can::candump::parse_compact_frame(text).unwrap();
-        assert_eq!(heartbeat_state(&frame("705#05"), 5), Some(Ok(NmtState::Operational)));
+        assert_eq!(
+            heartbeat_state(&frame("705#05"), 5),
+            Some(Ok(NmtState::Operational))
+        );
         // The toggle bit of a node guarding answer does not change the state.
-        assert_eq!(heartbeat_state(&frame("705#FF"), 5), Some(Ok(NmtState::PreOperational)));
+        assert_eq!(
+            heartbeat_state(&frame("705#FF"), 5),
+            Some(Ok(NmtState::PreOperational))
+        );
         assert_eq!(heartbeat_state(&frame("705#42"), 5), Some(Err(0x42)));
         assert_eq!(heartbeat_state(&frame("706#05"), 5), None);
         assert_eq!(heartbeat_state(&frame("705#0505"), 5), None);

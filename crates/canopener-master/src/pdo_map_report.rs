@@ -51,7 +51,10 @@ impl MapReport {
             mapping_index: config.mapping_index().unwrap_or(config.direction.mapping_base()),
             current_cob_id,
             config: config.clone(),
-            steps: writes.into_iter().map(|write| (write, StepOutcome::NotRun)).collect(),
+            steps: writes
+                .into_iter()
+                .map(|write| (write, StepOutcome::NotRun))
+                .collect(),
         }
     }
 
@@ -185,7 +188,10 @@ impl MapReport {
                 direction: self.pdo.direction,
             }),
             (Some(entry), abort::OBJECT_DOES_NOT_EXIST | abort::SUB_INDEX_DOES_NOT_EXIST) => {
-                Some(StepHint::NoSuchEntry { entry, sub: write.sub })
+                Some(StepHint::NoSuchEntry {
+                    entry,
+                    sub: write.sub,
+                })
             }
             (_, abort::PDO_LENGTH_EXCEEDED) => Some(StepHint::TooLong),
             (
@@ -223,4 +229,3 @@ pub enum StepHint {
     /// in pre-operational).
     DeviceState,
 }
-

@@ -121,7 +121,10 @@ pub fn expedited_value(ty: ValueType, data: &[u8], protocol: Protocol) -> (&[u8]
             Some(format!(
                 "the device sent {} bytes for a {ty} of {len}; the rest ({}) is taken as padding",
                 data.len(),
-                data[len..].iter().map(|byte| format!("{byte:02X}")).collect::<String>()
+                data[len..]
+                    .iter()
+                    .map(|byte| format!("{byte:02X}"))
+                    .collect::<String>()
             )),
         ),
         _ => (data, None),
