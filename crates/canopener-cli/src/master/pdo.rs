@@ -118,19 +118,13 @@ impl MapRequest {
                     })
             })
             .transpose()?;
-        Ok(MapRequest {
-            node,
-            config: PdoConfig {
-                direction,
-                number,
-                cob_id,
-                transmission_type: args.transmission_type,
-                inhibit_time_100us: args.inhibit,
-                event_timer_ms: args.event_timer,
-                sync_start: args.sync_start,
-                mapping,
-            },
-        })
+        let mut config = PdoConfig::new(direction, number, mapping);
+        config.cob_id = cob_id;
+        config.transmission_type = args.transmission_type;
+        config.inhibit_time_100us = args.inhibit;
+        config.event_timer_ms = args.event_timer;
+        config.sync_start = args.sync_start;
+        Ok(MapRequest { node, config })
     }
 
     /// Refuses what the planner refuses whatever the device holds. Only a missing COB-ID of a PDO
