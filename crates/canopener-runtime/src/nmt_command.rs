@@ -1,6 +1,6 @@
 //! Sending one NMT module control command (CiA 301 §7.2.8.3.1) and, if asked, waiting for the nodes to
 //! confirm it with their error control messages: the wait of
-//! [`Confirmation`](canopener_master::nmt_confirmation::Confirmation) on a link.
+//! [`Confirmation`] on a link.
 
 use std::time::Duration;
 
