@@ -24,12 +24,12 @@ use canopener_wire::{LssAddress, NodeId};
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::{LssAddressArgs, LssConfigureArgs, LssInquireArgs, LssScanArgs, MasterArgs};
 use crate::master::link::open_link;
 use crate::master::node_list::parse_node_list;
 use crate::master::output::{millis, spinner};
+use crate::output::print_stdout;
 
 const CONFIGURE_EXAMPLE: &str =
     "canopener lss configure --vendor 0x2F7 --product 0x1 --revision 0x10 --serial 0x12345 --node-id 5";

@@ -12,11 +12,11 @@ use canopener_wire::{NmtCommand, NodeId};
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult};
 use crate::master::args::{NmtArgs, NmtVerb};
 use crate::master::link::open_link;
 use crate::master::output::{millis, state_key};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: NmtArgs) -> CliResult {
     let target = parse_target(&args.target)?;

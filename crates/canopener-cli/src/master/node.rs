@@ -17,12 +17,13 @@ use canopener_wire::error_register_text;
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::{print_stdout, read_input};
+use crate::eds::input::read_input;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::{NodeInfoArgs, NodeScanArgs};
 use crate::master::link::{checked_timeout, open_link, open_session};
 use crate::master::node_list::parse_node_list;
 use crate::master::output::{millis, print_json, session_error};
+use crate::output::print_stdout;
 
 pub(crate) fn info(args: NodeInfoArgs) -> CliResult {
     let eds = match &args.eds {

@@ -14,11 +14,12 @@ use canopener_runtime::node_dump::{DumpError, dcf_time, read_entries, write_dcf}
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::{print_stdout, read_input};
+use crate::eds::input::read_input;
 use crate::error::{CliError, CliResult};
 use crate::master::args::NodeDumpArgs;
 use crate::master::link::open_session;
 use crate::master::output::{count_bar, millis, output_error, print_json, refuse_existing, session_error};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: NodeDumpArgs) -> CliResult {
     if args.output.is_none() && args.master.format == OutputFormat::Json {

@@ -14,8 +14,8 @@ use canopener_wire::NmtState;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
-use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult, exit_code};
+use crate::output::print_stdout;
 
 /// One JSON object on a line of stdout.
 pub(crate) fn print_json(value: &serde_json::Value) -> CliResult {

@@ -16,11 +16,11 @@ use canopener_wire::NodeId;
 use serde_json::{Value, json};
 
 use crate::args::OutputFormat;
-use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::PdoMapArgs;
 use crate::master::link::open_session;
 use crate::master::output::session_error;
+use crate::output::print_stdout;
 
 pub(crate) fn map(args: PdoMapArgs) -> CliResult {
     let request = MapRequest::from_args(&args)?;

@@ -22,11 +22,12 @@ use canopener_runtime::sdo_session::SdoError;
 use serde_json::{Value, json};
 
 use crate::args::OutputFormat;
-use crate::eds::input::{print_stdout, read_input};
+use crate::eds::input::read_input;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::PdoWatchArgs;
 use crate::master::link::{open_link, open_session};
 use crate::master::output::{count_bar, hex_bytes, millis, session_error, spread_json};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: PdoWatchArgs) -> CliResult {
     let input = read_input(&args.eds)?;

@@ -18,7 +18,6 @@ use canopener_runtime::sdo_session::Progress;
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult};
 use crate::master::args::{SdoDownloadArgs, SdoReadArgs, SdoUploadArgs, SdoWriteArgs};
 use crate::master::link::open_session;
@@ -26,6 +25,7 @@ use crate::master::output::{
     ByteProgress, json_value, kbytes_per_s, millis, object_name, output_error, print_json, raw_hex,
     refuse_existing, sdo_error,
 };
+use crate::output::print_stdout;
 
 pub(crate) fn read(args: SdoReadArgs) -> CliResult {
     let example = "canopener sdo read --node 5 1018 1";

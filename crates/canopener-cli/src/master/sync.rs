@@ -12,11 +12,11 @@ use canopener_runtime::sync_producer::{SyncLimits, run as produce};
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult};
 use crate::master::args::SyncArgs;
 use crate::master::link::open_link;
 use crate::master::output::{millis, spinner, spread_json};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: SyncArgs) -> CliResult {
     if args.count == Some(0) {

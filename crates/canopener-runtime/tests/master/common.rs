@@ -8,7 +8,7 @@ use canopener_device::application::NoApplication;
 use canopener_device::device::Device;
 use canopener_od::ObjectKey;
 use canopener_runtime::virtual_link::VirtualLink;
-use canopener_testkit::corpus::{self, Kind};
+use canopener_testkit::corpus;
 
 /// CANopenNode's example I/O device: CiA 301 communication objects, four TPDOs, 1008h as text.
 pub(crate) const IO_EDS: &str = "CANopenNode__CANopenNode__example__IO.eds";
@@ -24,7 +24,7 @@ pub(crate) fn eds(name: &str) -> canopener_eds::Eds {
     let path = if name.starts_with('/') {
         std::path::PathBuf::from(name)
     } else {
-        corpus::find(Kind::Eds, name).expect("an EDS of the corpus")
+        corpus::eds(name)
     };
     canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
 }
