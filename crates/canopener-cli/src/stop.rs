@@ -30,10 +30,6 @@ impl StopFlag {
         Ok(StopFlag(flag.clone()))
     }
 
-    pub(crate) fn is_set(&self) -> bool {
-        self.0.is_cancelled()
-    }
-
     /// The token to hand to the runtime's loops.
     pub(crate) fn token(&self) -> Cancel {
         self.0.clone()

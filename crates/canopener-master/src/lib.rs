@@ -7,13 +7,23 @@
 //!
 //! The cores share the frame codecs of `canopener-wire` with the device side, but no state.
 
+pub mod dcf_dump;
 pub mod emcy_consumer;
 pub mod error_control;
+pub mod heartbeat_core;
 pub mod lss_master;
+pub mod nmt_confirmation;
 pub mod nmt_master;
+pub mod node_info;
+pub mod node_scan;
 pub mod pdo_config;
 pub mod pdo_decode;
+pub mod pdo_map_report;
+pub mod pdo_watch;
 pub mod sdo_client;
+pub mod statistics;
 pub mod sync_producer;
+pub mod sync_stats;
 pub mod time_producer;
 pub mod value;
+pub mod value_typing;

@@ -278,6 +278,20 @@ impl fmt::Display for MappedObject {
 }
 
 impl PdoConfig {
+    /// The PDO `number` of `direction` with `mapping`, every parameter left as the device has it.
+    pub fn new(direction: Direction, number: u16, mapping: Vec<MappedObject>) -> PdoConfig {
+        PdoConfig {
+            direction,
+            number,
+            cob_id: None,
+            transmission_type: None,
+            inhibit_time_100us: None,
+            event_timer_ms: None,
+            sync_start: None,
+            mapping,
+        }
+    }
+
     /// The PDO's name, e.g. `TPDO1`.
     pub const fn name(&self) -> PdoName {
         PdoName {
@@ -515,19 +529,14 @@ mod tests {
     }
 
     fn tpdo(number: u16, mapping: &[(u16, u8, u8)]) -> PdoConfig {
-        PdoConfig {
-            direction: Direction::Tpdo,
+        PdoConfig::new(
+            Direction::Tpdo,
             number,
-            cob_id: None,
-            transmission_type: None,
-            inhibit_time_100us: None,
-            event_timer_ms: None,
-            sync_start: None,
-            mapping: mapping
+            mapping
                 .iter()
                 .map(|&(i, s, b)| MappedObject::new(i, s, b))
                 .collect(),
-        }
+        )
     }
 
     fn rpdo(number: u16, mapping: &[(u16, u8, u8)]) -> PdoConfig {

@@ -997,6 +997,16 @@ fn length_number(text: &str) -> Option<u64> {
     address_number(text, true)
 }
 
+/// An object entry as messages name it: `1018h:01`.
+pub fn entry_label(index: u16, sub: u8) -> String {
+    format!("{index:04X}h:{sub:02X}")
+}
+
+/// A value's little-endian bytes as one hex number, most significant first: `80000185`.
+pub fn hex_value(data: &[u8]) -> String {
+    data.iter().rev().map(|byte| format!("{byte:02X}")).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use proptest::prelude::*;

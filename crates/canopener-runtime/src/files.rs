@@ -61,6 +61,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8], backup: bool) -> Result<(), Write
     result
 }
 
+/// Reads a whole file given as input (a firmware image to download, ...).
+pub fn read(path: &Path) -> io::Result<Vec<u8>> {
+    fs::read(path)
+}
+
 /// `FILE.bak` next to `FILE`.
 pub fn backup_path(path: &Path) -> PathBuf {
     let mut name = path.as_os_str().to_owned();

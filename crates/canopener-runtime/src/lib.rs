@@ -23,15 +23,28 @@
 //! - [`simulator`]: simulated devices from EDS/DCF files, in-process on a virtual bus
 //!   ([`simulator::simulation::Simulation`]) or on a real bus in real time ([`simulator::host::SimHost`]).
 //! - [`state_store`]: the files in which simulated devices keep what they store across runs.
+//! - The master procedures on a link, each the library form of a master command: [`node_info`],
+//!   [`node_scan`], [`node_dump`], [`nmt_command`] (with confirmation), [`lss_session`], [`pdo_map`],
+//!   [`pdo_watch`], [`sync_producer`] and [`heartbeat_watch`]. Their pure parts (plans, reports,
+//!   statistics) are `canopener-master`'s.
 
 #![warn(missing_docs)]
 
 pub mod cancel;
 pub mod files;
+pub mod heartbeat_watch;
 pub mod link;
+pub mod lss_session;
+pub mod nmt_command;
+pub mod node_dump;
+pub mod node_info;
+pub mod node_scan;
+pub mod pdo_map;
+pub mod pdo_watch;
 pub mod sdo_session;
 pub mod simulator;
 pub mod state_store;
+pub mod sync_producer;
 pub mod virtual_link;
 
 pub mod candump_file;

@@ -57,6 +57,14 @@ pub trait Link {
 
     /// The bus, for messages (`socketcand://127.0.0.1:29536/can0`, `virtual bus (1 Mbit/s)`).
     fn describe(&self) -> String;
+
+    /// Waits until `until` (or until cancelled) discarding what arrives, for a producer that only
+    /// sends (SYNC): it must keep reading, since a hub drops a client that stops, but has no frame to
+    /// wait for. A link may wait more precisely here than in [`Link::recv_until`].
+    fn idle_until(&mut self, until: Instant) -> Result<(), LinkError> {
+        while self.recv_until(until)?.is_some() {}
+        Ok(())
+    }
 }
 
 impl<L: Link + ?Sized> Link for &mut L {
@@ -78,6 +86,10 @@ impl<L: Link + ?Sized> Link for &mut L {
 
     fn describe(&self) -> String {
         (**self).describe()
+    }
+
+    fn idle_until(&mut self, until: Instant) -> Result<(), LinkError> {
+        (**self).idle_until(until)
     }
 }
 
@@ -236,5 +248,19 @@ impl Link for BusLink {
 
     fn describe(&self) -> String {
         self.bus.spec().to_string()
+    }
+
+    /// Takes what has arrived without waiting, then sleeps: a receive with a timeout is no way to
+    /// wait precisely, since a socket timeout is rounded up to the kernel's tick (4 or 10 ms), far
+    /// coarser than a SYNC period, while a sleep is precise to tens of microseconds.
+    fn idle_until(&mut self, until: Instant) -> Result<(), LinkError> {
+        loop {
+            while self.recv_one(Duration::ZERO)?.is_some() {}
+            let now = self.now();
+            if now >= until || self.is_cancelled() {
+                return Ok(());
+            }
+            std::thread::sleep(until.saturating_duration_since(now).min(MAX_WAIT));
+        }
     }
 }

@@ -38,8 +38,13 @@ pub enum SdoError {
     #[error(transparent)]
     Transfer(#[from] SdoTransferError),
     /// The link was cancelled; the running transfer was aborted on the bus with 0800 0000h.
-    #[error("cancelled: the transfer was aborted (0x08000000 sent to the device)")]
-    Cancelled,
+    #[error("cancelled: the transfer of {index:04X}h:{sub:02X} was aborted (0x08000000 sent to the device)")]
+    Cancelled {
+        /// The object of the transfer.
+        index: u16,
+        /// Its sub-index.
+        sub: u8,
+    },
     /// The transfer could not start (index 0, a transfer already running, data too long, ...).
     #[error(transparent)]
     Start(#[from] SdoClientError),
@@ -133,7 +138,7 @@ impl<L: Link> SdoSession<L> {
     ) -> Result<Transfer, SdoError> {
         let now = self.link.now();
         self.client.upload(now, index, sub, mode)?;
-        self.run(progress)
+        self.run(index, sub, progress)
     }
 
     /// Writes `data` to `index`:`sub` (CiA 301 §7.2.4.3.3, §7.2.4.3.9 with [`DownloadMode::Block`]).
@@ -147,7 +152,7 @@ impl<L: Link> SdoSession<L> {
     ) -> Result<Transfer, SdoError> {
         let now = self.link.now();
         self.client.download(now, index, sub, data, mode)?;
-        self.run(progress)
+        self.run(index, sub, progress)
     }
 
     /// Reads `index`:`sub` with an initiate SDO upload and returns the value.
@@ -162,7 +167,7 @@ impl<L: Link> SdoSession<L> {
             .map(drop)
     }
 
-    fn run(&mut self, progress: &mut dyn FnMut(Progress)) -> Result<Transfer, SdoError> {
+    fn run(&mut self, index: u16, sub: u8, progress: &mut dyn FnMut(Progress)) -> Result<Transfer, SdoError> {
         enum Step {
             Progress(Progress),
             Finished(Result<(Vec<u8>, Protocol), SdoTransferError>),
@@ -210,7 +215,7 @@ impl<L: Link> SdoSession<L> {
                 }
                 Err(Ended::Cancelled) => {
                     self.abort(abort::GENERAL_ERROR)?;
-                    return Err(SdoError::Cancelled);
+                    return Err(SdoError::Cancelled { index, sub });
                 }
             }
         }

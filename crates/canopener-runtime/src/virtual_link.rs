@@ -104,6 +104,14 @@ impl<N: Core> Link for VirtualLink<N> {
         self.cancel.is_cancelled()
     }
 
+    fn idle_until(&mut self, until: Instant) -> Result<(), LinkError> {
+        if !self.is_cancelled() {
+            self.network.run_until(until, None)?;
+        }
+        while self.network.take_received(self.tap).is_some() {}
+        Ok(())
+    }
+
     fn describe(&self) -> String {
         match self.network.timing() {
             Timing::Ideal => "simulated bus (ideal timing)".to_owned(),

@@ -138,7 +138,16 @@ fn a_cancelled_link_aborts_the_transfer_on_the_bus() {
             &mut |_| {},
         )
         .unwrap_err();
-    assert!(matches!(error, SdoError::Cancelled), "{error}");
+    assert!(
+        matches!(
+            error,
+            SdoError::Cancelled {
+                index: 0x2000,
+                sub: 0
+            }
+        ),
+        "{error}"
+    );
     let lines = bus_lines(&mut link);
     assert_eq!(lines.len(), 2, "{lines:?}");
     assert_eq!(lines[1], "0 605#8000200000000008");

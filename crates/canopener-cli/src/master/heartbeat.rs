@@ -1,29 +1,26 @@
 //! `canopener heartbeat watch`: the NMT state and heartbeat timing of every node, live (CiA 301
-//! §7.2.8.3.2.2 heartbeat, §7.2.8.3.3 boot-up), through `NodeMonitor`, with the EMCYs the nodes send
-//! (§7.2.7, `EmcyConsumer`).
-//!
-//! Also home of [`HeartbeatCore`], the monitor with every single heartbeat reported, which `nmt
-//! --confirm` uses too, and of the node-list syntax (`1-10,20`) of `--nodes` and `lss scan --assign`.
+//! §7.2.8.3.2.2 heartbeat, §7.2.8.3.3 boot-up), with the EMCYs the nodes send (§7.2.7), watched by
+//! `canopener_runtime::heartbeat_watch`; this module reads the options and prints the events and the
+//! summary.
 
-use canopener_can::Core;
-use std::collections::{BTreeMap, BTreeSet, VecDeque};
-use std::io::Write;
+use std::collections::{BTreeMap, BTreeSet};
 use std::time::Duration;
 
-use canopener_can::{CanFrame, CanId, Instant};
-use canopener_master::emcy_consumer::{EmcyConsumer, EmcyEvent};
-use canopener_master::error_control::{ConsumerTime, GuardingConfig, MonitorEvent, NodeMonitor};
-use canopener_wire::{ERROR_CONTROL_BASE, NmtState, NodeId};
+use canopener_master::emcy_consumer::EmcyEvent;
+use canopener_master::error_control::{ConsumerTime, GuardingConfig, GuardingConfigError, MonitorEvent};
+use canopener_master::heartbeat_core::{HeardKind, NodeStats};
+use canopener_runtime::heartbeat_watch::{WatchConfig, watch as watch_nodes};
+use canopener_runtime::link::LinkError;
+use canopener_wire::NodeId;
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::error::{CliError, CliResult, stdout_error};
+use crate::error::{CliError, CliResult};
 use crate::master::args::HeartbeatWatchArgs;
-use canopener_runtime::link::{Ended, Flow, Link, drive};
-
 use crate::master::link::open_link;
 use crate::master::node_list::parse_node_list;
-use crate::master::sync::Spread;
+use crate::master::output::{millis, spread_json, state_key};
+use crate::output::print_stdout;
 
 pub(crate) fn watch(args: HeartbeatWatchArgs) -> CliResult {
     let consumer = match args.consumer_time {
@@ -55,50 +52,28 @@ pub(crate) fn watch(args: HeartbeatWatchArgs) -> CliResult {
         })
         .transpose()?
         .unwrap_or_default();
-    let guarding = GuardingConfig {
-        guard_time: args.guard_time,
-        life_time_factor: args.life_time_factor,
+    let config = WatchConfig {
+        consumer,
+        guarded,
+        guarding: GuardingConfig {
+            guard_time: args.guard_time,
+            life_time_factor: args.life_time_factor,
+        },
+        only,
+        duration: args.duration,
     };
     let mut link = open_link(args.master.bus.spec.as_deref(), "heartbeat watch")?;
-    let mut monitor = NodeMonitor::new(consumer);
-    let started = link.now();
-    for node in guarded {
-        monitor.start_guarding(started, node, guarding).map_err(|err| {
-            CliError::Usage(format!(
-                "{err}; e.g. `canopener heartbeat watch --guard 5 --guard-time 200ms --life-time-factor 3`"
-            ))
-        })?;
-    }
-    let mut core = HeartbeatCore::new(monitor);
-    let deadline = args.duration.map(|duration| started + duration);
     let format = args.master.format;
-    let mut stats: BTreeMap<NodeId, NodeStats> = BTreeMap::new();
-    let stdout = std::io::stdout();
-    let ended = drive::<_, _, _, CliError>(&mut link, &mut core, deadline, |_, heard| {
-        let node = heard.node();
-        if only.as_ref().is_some_and(|only| !only.contains(&node)) {
-            return Ok(Flow::<()>::Continue);
+    let summary = watch_nodes::<_, WatchError>(&mut link, config, |at, kind| {
+        if let Some(line) = event_line(format, at, kind) {
+            print_stdout(&format!("{line}\n"))?;
         }
-        stats.entry(node).or_default().record(&heard.kind);
-        if let Some(line) = event_line(format, heard.at - started, &heard.kind) {
-            let mut out = stdout.lock();
-            writeln!(out, "{line}")
-                .and_then(|()| out.flush())
-                .map_err(stdout_error)?;
-        }
-        Ok(Flow::Continue)
-    })?;
-    // Neither the deadline nor Ctrl-C is a failure of a watch: both end it as asked.
-    let _: Result<(), Ended> = ended;
-    let elapsed = link.now() - started;
-    for (node, status) in core.monitor().nodes() {
-        if let Some(stats) = stats.get_mut(&node) {
-            stats.state = status.state;
-            stats.lost_now = status.heartbeat_lost;
-        }
-    }
-    print_summary(format, elapsed, &stats)?;
-    let lost: Vec<String> = stats
+        Ok(())
+    })
+    .map_err(CliError::from)?;
+    print_stdout(&summary_text(format, summary.elapsed, &summary.nodes))?;
+    let lost: Vec<String> = summary
+        .nodes
         .iter()
         .filter(|(_, stats)| stats.losses > 0)
         .map(|(node, stats)| format!("node {node} ({}×)", stats.losses))
@@ -112,160 +87,38 @@ pub(crate) fn watch(args: HeartbeatWatchArgs) -> CliResult {
     Ok(())
 }
 
-/// [`NodeMonitor`] as a driver core that also reports each heartbeat by itself: `MonitorEvent`
-/// reports changes and intervals, but confirming an NMT command and counting heartbeats need every
-/// one, with the time it arrived.
+/// What can end a watch early: the bus, stdout, or guarding options the monitor refuses.
 #[derive(Debug)]
-pub(crate) struct HeartbeatCore {
-    monitor: NodeMonitor,
-    emcy: EmcyConsumer,
-    heard: VecDeque<Heard>,
+enum WatchError {
+    Cli(CliError),
+    Guarding(GuardingConfigError),
 }
 
-/// Something the monitor or a heartbeat told, with its receive time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Heard {
-    pub(crate) at: Instant,
-    pub(crate) kind: HeardKind,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum HeardKind {
-    /// An event of the monitor.
-    Monitor(MonitorEvent),
-    /// A heartbeat carrying a known state other than boot-up (reported after the monitor's events
-    /// for the same frame).
-    Heartbeat { node: NodeId, state: NmtState },
-    /// An emergency message (or a malformed frame on an EMCY CAN-ID): a watcher wants to see why a
-    /// node changed state or stopped, and devices say it with EMCY (CiA 301 §7.2.7).
-    Emcy(EmcyEvent),
-}
-
-impl Heard {
-    pub(crate) fn node(&self) -> NodeId {
-        match self.kind {
-            HeardKind::Monitor(event) => event.node(),
-            HeardKind::Heartbeat { node, .. } => node,
-            HeardKind::Emcy(event) => event.node(),
-        }
+impl From<LinkError> for WatchError {
+    fn from(err: LinkError) -> WatchError {
+        WatchError::Cli(err.into())
     }
 }
 
-impl HeartbeatCore {
-    pub(crate) fn new(monitor: NodeMonitor) -> HeartbeatCore {
-        HeartbeatCore {
-            monitor,
-            emcy: EmcyConsumer::new(),
-            heard: VecDeque::new(),
-        }
-    }
-
-    pub(crate) fn monitor(&self) -> &NodeMonitor {
-        &self.monitor
-    }
-
-    fn drain_monitor(&mut self, at: Instant) {
-        while let Some(event) = self.monitor.poll_event() {
-            self.heard.push_back(Heard {
-                at,
-                kind: HeardKind::Monitor(event),
-            });
-        }
+impl From<GuardingConfigError> for WatchError {
+    fn from(err: GuardingConfigError) -> WatchError {
+        WatchError::Guarding(err)
     }
 }
 
-impl Core for HeartbeatCore {
-    type Event = Heard;
-
-    fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
-        self.monitor.handle_frame(now, frame);
-        self.drain_monitor(now);
-        self.emcy.handle_frame(now, frame);
-        while let Some(event) = self.emcy.poll_event() {
-            self.heard.push_back(Heard {
-                at: now,
-                kind: HeardKind::Emcy(event),
-            });
-        }
-        if let Some((node, state)) = heartbeat_of(frame) {
-            self.heard.push_back(Heard {
-                at: now,
-                kind: HeardKind::Heartbeat { node, state },
-            });
-        }
-    }
-
-    fn handle_timeout(&mut self, now: Instant) {
-        self.monitor.handle_timeout(now);
-        self.drain_monitor(now);
-    }
-
-    fn poll_transmit(&mut self) -> Option<CanFrame> {
-        self.monitor.poll_transmit()
-    }
-
-    fn poll_event(&mut self) -> Option<Heard> {
-        self.heard.pop_front()
-    }
-
-    fn poll_timeout(&self) -> Option<Instant> {
-        self.monitor.poll_timeout()
+impl From<CliError> for WatchError {
+    fn from(err: CliError) -> WatchError {
+        WatchError::Cli(err)
     }
 }
 
-/// The node and state of a heartbeat frame (CiA 301 §7.2.8.3.2.2): one byte on 700h + node-ID
-/// holding a state other than boot-up. Anything else is not one.
-fn heartbeat_of(frame: &CanFrame) -> Option<(NodeId, NmtState)> {
-    let CanId::Standard(id) = frame.id() else {
-        return None;
-    };
-    let node = id
-        .as_raw()
-        .checked_sub(ERROR_CONTROL_BASE)
-        .and_then(|raw| u8::try_from(raw).ok())
-        .and_then(NodeId::new)?;
-    if frame.is_remote() {
-        return None;
-    }
-    let &[byte] = frame.data() else { return None };
-    NmtState::from_raw(byte)
-        .filter(|state| *state != NmtState::BootUp)
-        .map(|state| (node, state))
-}
-
-/// The lower-case CiA 301 name of a state, as JSON output writes it.
-pub(crate) fn state_key(state: NmtState) -> &'static str {
-    match state {
-        NmtState::BootUp => "boot-up",
-        NmtState::Stopped => "stopped",
-        NmtState::Operational => "operational",
-        NmtState::PreOperational => "pre-operational",
-    }
-}
-
-/// What the watch saw of one node.
-#[derive(Debug, Default)]
-struct NodeStats {
-    state: Option<NmtState>,
-    heartbeats: u64,
-    boot_ups: u64,
-    periods: Vec<Duration>,
-    losses: u64,
-    lost_now: bool,
-    emcys: u64,
-}
-
-impl NodeStats {
-    fn record(&mut self, kind: &HeardKind) {
-        match *kind {
-            HeardKind::Heartbeat { .. } => self.heartbeats += 1,
-            HeardKind::Monitor(MonitorEvent::BootUp { .. }) => self.boot_ups += 1,
-            HeardKind::Monitor(MonitorEvent::Interval { period, .. }) => self.periods.push(period),
-            HeardKind::Monitor(MonitorEvent::HeartbeatLost { .. } | MonitorEvent::GuardingLost { .. }) => {
-                self.losses += 1;
-            }
-            HeardKind::Monitor(_) => {}
-            HeardKind::Emcy(_) => self.emcys += 1,
+impl From<WatchError> for CliError {
+    fn from(err: WatchError) -> CliError {
+        match err {
+            WatchError::Cli(err) => err,
+            WatchError::Guarding(err) => CliError::Usage(format!(
+                "{err}; e.g. `canopener heartbeat watch --guard 5 --guard-time 200ms --life-time-factor 3`"
+            )),
         }
     }
 }
@@ -340,21 +193,19 @@ fn event_json(event: &MonitorEvent) -> serde_json::Value {
     }
 }
 
-fn print_summary(format: OutputFormat, elapsed: Duration, stats: &BTreeMap<NodeId, NodeStats>) -> CliResult {
-    let mut out = std::io::stdout().lock();
-    let text = match format {
+fn summary_text(format: OutputFormat, elapsed: Duration, stats: &BTreeMap<NodeId, NodeStats>) -> String {
+    match format {
         OutputFormat::Json => {
             let nodes: Vec<_> = stats
                 .iter()
                 .map(|(node, stats)| {
-                    let spread = Spread::of(&stats.periods);
                     json!({
                         "node": node.get(),
                         "state": stats.state.map(state_key),
                         "lost": stats.lost_now,
                         "heartbeats": stats.heartbeats,
                         "boot_ups": stats.boot_ups,
-                        "period_ms": spread.map(|spread| spread.json()),
+                        "period_ms": stats.period_spread().map(|spread| spread_json(&spread)),
                         "losses": stats.losses,
                         "emcys": stats.emcys,
                     })
@@ -363,10 +214,7 @@ fn print_summary(format: OutputFormat, elapsed: Duration, stats: &BTreeMap<NodeI
             json!({"event": "summary", "duration_ms": millis(elapsed), "nodes": nodes}).to_string() + "\n"
         }
         OutputFormat::Text => summary_table(elapsed, stats),
-    };
-    out.write_all(text.as_bytes())
-        .and_then(|()| out.flush())
-        .map_err(stdout_error)
+    }
 }
 
 fn summary_table(elapsed: Duration, stats: &BTreeMap<NodeId, NodeStats>) -> String {
@@ -387,7 +235,7 @@ fn summary_table(elapsed: Duration, stats: &BTreeMap<NodeId, NodeStats>) -> Stri
         if stats.lost_now {
             state.push_str(" (lost)");
         }
-        let period = Spread::of(&stats.periods).map_or_else(
+        let period = stats.period_spread().map_or_else(
             || "-".to_owned(),
             |spread| {
                 format!(
@@ -411,78 +259,13 @@ fn summary_table(elapsed: Duration, stats: &BTreeMap<NodeId, NodeStats>) -> Stri
     text
 }
 
-/// Milliseconds with microsecond resolution, for output.
-pub(crate) fn millis(duration: Duration) -> f64 {
-    (duration.as_micros() as f64) / 1000.0
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use canopener_can::candump::parse_compact_frame;
+    use canopener_wire::NmtState;
 
     fn node(raw: u8) -> NodeId {
         NodeId::new(raw).unwrap()
-    }
-
-    fn feed(core: &mut HeartbeatCore, ms: u64, frame: &str) -> Vec<String> {
-        let frame = parse_compact_frame(frame).unwrap();
-        core.handle_frame(Instant::from_millis(ms), &frame);
-        std::iter::from_fn(|| core.poll_event())
-            .map(|heard| format!("{} {:?}", heard.at.as_micros() / 1000, heard.kind))
-            .collect()
-    }
-
-    #[test]
-    fn every_heartbeat_is_reported_after_the_monitor_events_of_its_frame() {
-        let mut core = HeartbeatCore::new(NodeMonitor::new(ConsumerTime::Off));
-        assert_eq!(
-            feed(&mut core, 0, "705#00"),
-            ["0 Monitor(BootUp { node: NodeId(5) })"]
-        );
-        assert_eq!(
-            feed(&mut core, 100, "705#7F"),
-            [
-                "100 Monitor(StateChanged { node: NodeId(5), from: Some(BootUp), to: PreOperational })",
-                "100 Heartbeat { node: NodeId(5), state: PreOperational }",
-            ]
-        );
-        assert_eq!(
-            feed(&mut core, 200, "705#7F"),
-            [
-                "200 Monitor(Interval { node: NodeId(5), period: 100ms })",
-                "200 Heartbeat { node: NodeId(5), state: PreOperational }",
-            ]
-        );
-        // Garbage on the error control CAN-ID is reported by the monitor and is no heartbeat.
-        assert_eq!(
-            feed(&mut core, 250, "705#0505"),
-            ["250 Monitor(Malformed { node: NodeId(5), dlc: 2 })"]
-        );
-        assert_eq!(
-            feed(&mut core, 260, "705#42"),
-            ["260 Monitor(UnknownState { node: NodeId(5), byte: 66 })"]
-        );
-        assert!(feed(&mut core, 270, "705#R").is_empty());
-        assert!(feed(&mut core, 280, "185#05").is_empty());
-        assert!(feed(&mut core, 290, "700#05").is_empty(), "700h is no node's");
-    }
-
-    #[test]
-    fn a_lost_heartbeat_is_timed_by_the_monitor() {
-        let mut core = HeartbeatCore::new(NodeMonitor::new(ConsumerTime::Fixed(Duration::from_millis(150))));
-        feed(&mut core, 0, "70A#05");
-        assert_eq!(core.poll_timeout(), Some(Instant::from_millis(150)));
-        core.handle_timeout(Instant::from_millis(150));
-        let heard = core.poll_event().unwrap();
-        assert_eq!(heard.at, Instant::from_millis(150));
-        assert_eq!(
-            heard.kind,
-            HeardKind::Monitor(MonitorEvent::HeartbeatLost {
-                node: node(10),
-                after: Duration::from_millis(150)
-            })
-        );
     }
 
     #[test]

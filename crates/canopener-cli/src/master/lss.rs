@@ -1,4 +1,6 @@
-//! `canopener lss scan|configure|inquire`: layer setting services (CiA 305) through `LssMaster`.
+//! `canopener lss scan|configure|inquire`: layer setting services (CiA 305) through
+//! `canopener_runtime::lss_session`, which runs the sequences; this module reads the options and
+//! prints the devices and the advice.
 //!
 //! Timing: `--timeout` is the LSS response timeout. LSS commands do not take the 1 s SDO default of
 //! the other master commands: fastscan pays a whole timeout on every step no device answers (about
@@ -6,36 +8,28 @@
 //! `canopener_master::lss_master`). The settle time after a first answer stays 20 ms, or the timeout
 //! when that is shorter.
 //!
-//! `lss scan` without `--assign` lists the unconfigured devices without giving them node-IDs: each
-//! device fastscan finds stays in LSS configuration state, where CiA 305 slaves take no part in
-//! fastscan, so the next fastscan finds the next device; at the end one switch state global sends
-//! all back to waiting. A device found twice (one that answers fastscan in configuration state
-//! against CiA 305) ends the listing with a warning instead of looping.
+//! `lss scan` without `--assign` lists the unconfigured devices without giving them node-IDs (see
+//! `canopener_runtime::lss_session` for how); a device found twice ends the listing with a warning.
 
 use std::collections::BTreeSet;
-use std::io::{IsTerminal, Write};
 use std::time::Duration;
 
-use canopener_can::{CanFrame, Instant, StandardId};
-use canopener_master::lss_master::{
-    KnownParts, LssCommandError, LssConfig, LssEvent, LssMaster, LssMode, LssService, ScanError, ScanPlan,
+use canopener_master::lss_master::{KnownParts, LssConfig, ScanError, ScanPlan};
+use canopener_runtime::link::{BusLink, Link};
+use canopener_runtime::lss_session::{
+    Found, LssError, LssSession, MAX_LISTED, PARTS, ScanOutcome, node_id_text,
 };
 use canopener_wire::lss::UNCONFIGURED_NODE_ID;
-use canopener_wire::{LSS_MASTER_TO_SLAVE_ID, LssAddress, LssAddressPart, LssRequest, NodeId};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use canopener_wire::{LssAddress, NodeId};
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::error::{CliError, CliResult, stdout_error};
+use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::{LssAddressArgs, LssConfigureArgs, LssInquireArgs, LssScanArgs, MasterArgs};
-use crate::master::heartbeat::millis;
-use canopener_runtime::link::{BusLink, Ended, Flow, Link, drive};
-
 use crate::master::link::open_link;
 use crate::master::node_list::parse_node_list;
-
-/// More devices than this in one listing means something answers that is no CiA 305 slave.
-const MAX_LISTED: usize = 1024;
+use crate::master::output::{millis, spinner};
+use crate::output::print_stdout;
 
 const CONFIGURE_EXAMPLE: &str =
     "canopener lss configure --vendor 0x2F7 --product 0x1 --revision 0x10 --serial 0x12345 --node-id 5";
@@ -44,19 +38,40 @@ const INQUIRE_EXAMPLE: &str =
 
 pub(crate) fn scan(args: LssScanArgs) -> CliResult {
     let node_ids = args.assign.as_deref().map(parse_assign).transpose()?;
-    let mut session = Session::open(&args.master, "lss scan")?;
-    let started = session.link.now();
-    let progress = spinner();
-    let mut printer = Printer::new(args.master.format);
+    let mut session = open_session(&args.master, "lss scan")?;
+    let started = session.link_mut().now();
+    let progress = spinner("{spinner} LSS fastscan {elapsed}: {msg}");
+    progress.set_message("0 found");
+    progress.enable_steady_tick(Duration::from_millis(100));
+    let format = args.master.format;
+    let mut count = 0;
+    let mut on_found = |device: &Found| -> CliResult {
+        count += 1;
+        progress.set_message(format!("{count} found"));
+        print_found(format, device)
+    };
     let result = match node_ids {
-        Some(node_ids) => scan_all(&mut session, &progress, &mut printer, node_ids, args.store),
-        None => list_all(&mut session, &progress, &mut printer),
+        Some(node_ids) => {
+            let plan = ScanPlan {
+                node_ids,
+                store: args.store,
+                known: KnownParts::NONE,
+            };
+            session
+                .scan_all::<CliError>(plan, &mut on_found)
+                .and_then(|started| {
+                    started.map_err(|err| {
+                        CliError::Usage(format!("{err}; e.g. `canopener lss scan --assign 10-20`"))
+                    })
+                })
+        }
+        None => session.list_all::<CliError>(&mut on_found),
     };
     progress.finish_and_clear();
-    let elapsed = session.link.now() - started;
+    let elapsed = session.link_mut().now().saturating_duration_since(started);
     let (found, outcome) = result?;
-    let stats = session.master.stats();
-    let timeout = session.master.config().timeout;
+    let stats = session.stats();
+    let timeout = session.config().timeout;
     let assigned = args.assign.is_some();
     match args.master.format {
         OutputFormat::Json => {
@@ -87,9 +102,9 @@ pub(crate) fn scan(args: LssScanArgs) -> CliResult {
                 "frames_received": stats.received,
                 "timeouts": stats.timeouts,
                 "timeout_ms": millis(timeout),
-                "ignored_frames": session.ignored,
+                "ignored_frames": session.ignored(),
             });
-            print(&format!("{value}\n"))?;
+            print_stdout(&format!("{value}\n"))?;
         }
         OutputFormat::Text => {
             let mut text = format!(
@@ -107,20 +122,20 @@ pub(crate) fn scan(args: LssScanArgs) -> CliResult {
                      `canopener lss scan --assign 10-20` or `canopener lss configure`.\n",
                 );
             }
-            print(&text)?;
+            print_stdout(&text)?;
         }
     }
-    if session.ignored > 0 {
+    if session.ignored() > 0 {
         eprintln!(
             "warning: {} frames on 7E4h answered nothing the LSS master asked and were ignored",
-            session.ignored
+            session.ignored()
         );
     }
     match outcome {
         ScanOutcome::Complete => Ok(()),
         ScanOutcome::Interrupted => {
             eprintln!("interrupted: the scan is incomplete");
-            Err(CliError::Exit(crate::error::exit_code::INTERRUPTED))
+            Err(CliError::Exit(exit_code::INTERRUPTED))
         }
         ScanOutcome::Repeated(address) => {
             eprintln!(
@@ -167,13 +182,19 @@ pub(crate) fn configure(args: LssConfigureArgs) -> CliResult {
         })?),
     };
     let bit_timing = args.bitrate.map(bit_timing_index).transpose()?;
-    let mut session = Session::open(&args.master, "lss configure")?;
-    let timeout_ms = session.master.config().timeout.as_millis();
-    select(&mut session, address)?;
-    let steps = configure_selected(&mut session, &address, node_id, bit_timing, args.store);
-    session.back_to_waiting()?;
-    let previous = steps?;
-    session.warn_extra_answers();
+    let mut session = open_session(&args.master, "lss configure")?;
+    let timeout_ms = session.config().timeout.as_millis();
+    session.select(address).map_err(lss_error)?;
+    let steps = session.configure_selected(&address, node_id, bit_timing, args.store);
+    session.back_to_waiting().map_err(lss_error)?;
+    let previous = steps.map_err(lss_error)?;
+    if session.extra_answers() > 0 {
+        eprintln!(
+            "warning: {} answers came from a second device: more than one device is in LSS configuration \
+             state, for example two with the same LSS address",
+            session.extra_answers()
+        );
+    }
     let new_raw = node_id.map_or(UNCONFIGURED_NODE_ID, NodeId::get);
     let effect = match previous {
         Some(UNCONFIGURED_NODE_ID) if node_id.is_some() => {
@@ -200,7 +221,7 @@ pub(crate) fn configure(args: LssConfigureArgs) -> CliResult {
                 "effect": effect,
                 "timeout_ms": timeout_ms,
             });
-            print(&format!("{value}\n"))
+            print_stdout(&format!("{value}\n"))
         }
         OutputFormat::Text => {
             let mut text = format!("configured the device with {address}\n");
@@ -219,31 +240,40 @@ pub(crate) fn configure(args: LssConfigureArgs) -> CliResult {
                 text.push_str("  stored in the device\n");
             }
             text.push_str(&format!("{effect}\n"));
-            print(&text)
+            print_stdout(&text)
         }
     }
 }
 
 pub(crate) fn inquire(args: LssInquireArgs) -> CliResult {
     let address = parse_address(&args.address, INQUIRE_EXAMPLE)?;
-    let mut session = Session::open(&args.master, "lss inquire")?;
-    let timeout_ms = session.master.config().timeout.as_millis();
+    let mut session = open_session(&args.master, "lss inquire")?;
+    let timeout_ms = session.config().timeout.as_millis();
     match address {
-        Some(address) => select(&mut session, address)?,
-        None => {
-            session.service(|master, _| master.switch_state_global(LssMode::Configuration))?;
-        }
+        Some(address) => session.select(address),
+        None => session.select_all(),
     }
-    let answers = inquire_selected(&mut session, address.is_none());
-    session.back_to_waiting()?;
-    let (found, node_id) = answers?;
-    let several = session.extra_answers > 0;
+    .map_err(lss_error)?;
+    let answers = session.inquire_selected(address.is_none());
+    session.back_to_waiting().map_err(lss_error)?;
+    let (found, node_id) = answers.map_err(lss_error)?;
+    let node_id = match node_id {
+        Ok(node_id) => Some(node_id),
+        Err(after) => {
+            eprintln!(
+                "warning: the device did not answer inquire node-ID within {} ms",
+                after.as_millis()
+            );
+            None
+        }
+    };
+    let several = session.extra_answers() > 0;
     if several {
         eprintln!(
             "warning: several devices are in LSS configuration state and answered together ({} extra answers); \
              the values shown are the first answers and may mix devices. List them with `canopener lss scan`, \
              or ask one by its address: `{INQUIRE_EXAMPLE}`",
-            session.extra_answers
+            session.extra_answers()
         );
     }
     match args.master.format {
@@ -253,7 +283,7 @@ pub(crate) fn inquire(args: LssInquireArgs) -> CliResult {
             value["selected"] = json!(if address.is_some() { "address" } else { "global" });
             value["several_answered"] = json!(several);
             value["timeout_ms"] = json!(timeout_ms);
-            print(&format!("{value}\n"))
+            print_stdout(&format!("{value}\n"))
         }
         OutputFormat::Text => {
             let mut text = String::new();
@@ -262,110 +292,46 @@ pub(crate) fn inquire(args: LssInquireArgs) -> CliResult {
             }
             let node = node_id.map_or_else(|| "no answer".to_owned(), node_id_text);
             text.push_str(&format!("{:<16} {node}\n", "node-ID"));
-            print(&text)
+            print_stdout(&text)
         }
     }
 }
 
-/// The address parts in CiA 305 order (1018h sub 1 to 4).
-const PARTS: [LssAddressPart; 4] = [
-    LssAddressPart::VendorId,
-    LssAddressPart::ProductCode,
-    LssAddressPart::RevisionNumber,
-    LssAddressPart::SerialNumber,
-];
-
-/// One LSS master on one bus, and what it saw besides the answers it waited for.
-#[derive(Debug)]
-struct Session {
-    link: BusLink,
-    master: LssMaster,
-    /// Answers from a second device where one was expected (several in configuration state).
-    extra_answers: u64,
-    /// Frames on 7E4h that answered nothing pending (late answers, garbage).
-    ignored: u64,
+/// Opens `--bus` for `command` and an LSS session with the timing of the options.
+fn open_session(master_args: &MasterArgs, command: &str) -> CliResult<LssSession<BusLink>> {
+    let config = lss_config(master_args.timeout, timeout_given())?;
+    let link = open_link(master_args.bus.spec.as_deref(), command)?;
+    Ok(LssSession::new(link, config))
 }
 
-impl Session {
-    fn open(master_args: &MasterArgs, command: &str) -> CliResult<Session> {
-        let config = lss_config(master_args.timeout, timeout_given())?;
-        let link = open_link(master_args.bus.spec.as_deref(), command)?;
-        Ok(Session {
-            link,
-            master: LssMaster::new(config),
-            extra_answers: 0,
-            ignored: 0,
-        })
-    }
-
-    /// Starts one service and drives it to its end event. The core ends every service within its
-    /// timeout and settle time; the deadline here only guards against a core that would not.
-    fn service(
-        &mut self,
-        start: impl FnOnce(&mut LssMaster, Instant) -> Result<(), LssCommandError>,
-    ) -> CliResult<LssEvent> {
-        let now = self.link.now();
-        start(&mut self.master, now)
-            .map_err(|err| CliError::Internal(anyhow::anyhow!("LSS master: {err}")))?;
-        let config = self.master.config();
-        let deadline = now + config.timeout * 2 + config.settle + Duration::from_secs(1);
-        let (extra, ignored) = (&mut self.extra_answers, &mut self.ignored);
-        let ended =
-            drive::<_, _, _, CliError>(&mut self.link, &mut self.master, Some(deadline), |_, event| {
-                Ok(match event {
-                    LssEvent::ExtraAnswer { .. } => {
-                        *extra += 1;
-                        Flow::Continue
-                    }
-                    LssEvent::Ignored { .. } => {
-                        *ignored += 1;
-                        Flow::Continue
-                    }
-                    LssEvent::Found { .. } | LssEvent::SwitchBitRate => Flow::Continue,
-                    end => Flow::Done(end),
-                })
-            })?;
-        match ended {
-            Ok(event) => Ok(event),
-            Err(Ended::Cancelled) => {
-                self.abandon();
-                eprintln!("interrupted");
-                Err(CliError::Exit(crate::error::exit_code::INTERRUPTED))
-            }
-            Err(Ended::Deadline) => Err(CliError::Internal(anyhow::anyhow!(
-                "the LSS master did not end {:?} within {} ms",
-                self.master.running(),
-                (deadline - now).as_millis()
-            ))),
+/// A failed LSS sequence as the user sees it: the device's refusal or silence (exit 7, with advice),
+/// an interruption (130), the bus (4) or a bug (1).
+fn lss_error(err: LssError) -> CliError {
+    match err {
+        LssError::Cancelled => {
+            eprintln!("interrupted");
+            CliError::Exit(exit_code::INTERRUPTED)
+        }
+        LssError::NotSelected { .. } => CliError::Device(format!(
+            "{err}; `canopener lss inquire` shows the address of a single device, `canopener lss scan` those of \
+             all unconfigured devices"
+        )),
+        LssError::NoDevice { .. } => CliError::Device(format!(
+            "{err}: no LSS device is on the bus, or it serves LSS slower (try e.g. --timeout 500ms)"
+        )),
+        LssError::Refused { .. } | LssError::Silent { .. } | LssError::InquirySilent { .. } => {
+            CliError::Device(err.to_string())
+        }
+        LssError::Link(err) => err.into(),
+        LssError::Start(_) | LssError::Stuck { .. } | LssError::Unexpected(_) => {
+            CliError::Internal(anyhow::Error::new(err))
         }
     }
+}
 
-    /// Switch state global to waiting (CiA 305): every device leaves configuration state, and one
-    /// that was unconfigured makes a node-ID it was given active.
-    fn back_to_waiting(&mut self) -> CliResult {
-        self.service(|master, _| master.switch_state_global(LssMode::Waiting))
-            .map(|_| ())
-    }
-
-    /// Sends switch state global to waiting whatever the master is doing: the command ends, and no
-    /// device may be left in configuration state.
-    fn abandon(&mut self) {
-        let request = LssRequest::SwitchStateGlobal { mode: 0 };
-        if let Some(id) = StandardId::new(LSS_MASTER_TO_SLAVE_ID)
-            && let Ok(frame) = CanFrame::new(id, &request.encode())
-        {
-            let _ = self.link.send(&frame);
-        }
-    }
-
-    fn warn_extra_answers(&self) {
-        if self.extra_answers > 0 {
-            eprintln!(
-                "warning: {} answers came from a second device: more than one device is in LSS configuration \
-                 state, for example two with the same LSS address",
-                self.extra_answers
-            );
-        }
+impl From<LssError> for CliError {
+    fn from(err: LssError) -> CliError {
+        lss_error(err)
     }
 }
 
@@ -394,288 +360,20 @@ fn timeout_given() -> bool {
         .any(|arg| arg == "--timeout" || arg.to_string_lossy().starts_with("--timeout="))
 }
 
-/// Switch state selective: the device with `address` enters configuration state.
-fn select(session: &mut Session, address: LssAddress) -> CliResult {
-    match session.service(|master, now| master.switch_state_selective(now, address))? {
-        LssEvent::Done { .. } => Ok(()),
-        LssEvent::TimedOut { after, .. } => Err(CliError::Device(format!(
-            "no device with {address} answered switch state selective within {} ms; `canopener lss inquire` \
-             shows the address of a single device, `canopener lss scan` those of all unconfigured devices",
-            after.as_millis()
-        ))),
-        other => Err(unexpected(&other)),
-    }
-}
-
-/// Inquires the previous node-ID, then configures the selected device; returns the previous
-/// node-ID when the device told it.
-fn configure_selected(
-    session: &mut Session,
-    address: &LssAddress,
-    node_id: Option<NodeId>,
-    bit_timing: Option<u8>,
-    store: bool,
-) -> CliResult<Option<u8>> {
-    let previous = match session.service(|master, now| master.inquire_node_id(now))? {
-        LssEvent::NodeIdInquired { node_id } => Some(node_id),
-        _ => None,
-    };
-    let what = format!(
-        "node-ID {}",
-        node_id_text(node_id.map_or(UNCONFIGURED_NODE_ID, NodeId::get))
-    );
-    let event = session.service(|master, now| master.configure_node_id(now, node_id))?;
-    confirmed(address, &what, &event)?;
-    if let Some(index) = bit_timing {
-        let what = format!(
-            "bit timing {}",
-            canopener_wire::bit_timing_text(index).unwrap_or("?")
-        );
-        let event = session.service(|master, now| master.configure_bit_timing(now, index))?;
-        confirmed(address, &what, &event)?;
-    }
-    if store {
-        let event = session.service(|master, now| master.store_configuration(now))?;
-        confirmed(address, "the configuration", &event)?;
-    }
-    Ok(previous)
-}
-
-/// The answer to configure node-ID, bit timing or store configuration as a result.
-fn confirmed(address: &LssAddress, what: &str, event: &LssEvent) -> CliResult {
-    match event {
-        LssEvent::Configured { result: Ok(()), .. } => Ok(()),
-        LssEvent::Configured {
-            service,
-            result: Err(err),
-        } => Err(CliError::Device(format!(
-            "the device with {address} refused {service} ({what}): {err}"
-        ))),
-        LssEvent::TimedOut { service, after } => Err(CliError::Device(format!(
-            "the device with {address} did not answer {service} ({what}) within {} ms",
-            after.as_millis()
-        ))),
-        other => Err(unexpected(other)),
-    }
-}
-
-/// Inquires the four address parts and the node-ID of the device in configuration state.
-fn inquire_selected(session: &mut Session, global: bool) -> CliResult<(LssAddress, Option<u8>)> {
-    let mut values = [0u32; 4];
-    for (idx, part) in PARTS.into_iter().enumerate() {
-        match session.service(|master, now| master.inquire_address(now, part))? {
-            LssEvent::Inquired { value, .. } => values[idx] = value,
-            LssEvent::TimedOut { service, after } if idx == 0 && global => {
-                return Err(CliError::Device(format!(
-                    "no device answered {service} within {} ms after switch state global: no LSS device is \
-                     on the bus, or it serves LSS slower (try e.g. --timeout 500ms)",
-                    after.as_millis()
-                )));
-            }
-            LssEvent::TimedOut { service, after } => {
-                return Err(CliError::Device(format!(
-                    "the device in LSS configuration state did not answer {service} within {} ms",
-                    after.as_millis()
-                )));
-            }
-            other => return Err(unexpected(&other)),
-        }
-    }
-    let [vendor_id, product_code, revision_number, serial_number] = values;
-    let address = LssAddress {
-        vendor_id,
-        product_code,
-        revision_number,
-        serial_number,
-    };
-    let node_id = match session.service(|master, now| master.inquire_node_id(now))? {
-        LssEvent::NodeIdInquired { node_id } => Some(node_id),
-        LssEvent::TimedOut { after, .. } => {
-            eprintln!(
-                "warning: the device did not answer inquire node-ID within {} ms",
-                after.as_millis()
-            );
-            None
-        }
-        other => return Err(unexpected(&other)),
-    };
-    Ok((address, node_id))
-}
-
-fn unexpected(event: &LssEvent) -> CliError {
-    CliError::Internal(anyhow::anyhow!("unexpected LSS master event: {event}"))
-}
-
-/// A device a scan found.
-#[derive(Debug, Clone, PartialEq, Eq)]
-struct Found {
-    address: LssAddress,
-    node_id: Option<NodeId>,
-    /// Why storing its node-ID failed, with `--store`.
-    store_problem: Option<String>,
-}
-
-/// How a scan ended.
-#[derive(Debug)]
-enum ScanOutcome {
-    Complete,
-    Interrupted,
-    Failed(ScanError),
-    /// Listing without assigning found a device a second time.
-    Repeated(LssAddress),
-    TooMany,
-}
-
-/// `lss scan --assign`: [`LssMaster::scan_all`].
-fn scan_all(
-    session: &mut Session,
-    progress: &ProgressBar,
-    printer: &mut Printer,
-    node_ids: Vec<NodeId>,
-    store: bool,
-) -> CliResult<(Vec<Found>, ScanOutcome)> {
-    let now = session.link.now();
-    let plan = ScanPlan {
-        node_ids,
-        store,
-        known: KnownParts::NONE,
-    };
-    session
-        .master
-        .scan_all(now, plan)
-        .map_err(|err| CliError::Usage(format!("{err}; e.g. `canopener lss scan --assign 10-20`")))?;
-    let mut found = Vec::new();
-    let mut store_problem = None;
-    let (extra, ignored) = (&mut session.extra_answers, &mut session.ignored);
-    let ended = drive::<_, _, _, CliError>(&mut session.link, &mut session.master, None, |_, event| {
-        match event {
-            LssEvent::Found { address, node_id } => {
-                let device = Found {
-                    address,
-                    node_id,
-                    store_problem: store_problem.take(),
-                };
-                printer.found(&device)?;
-                found.push(device);
-                progress.set_message(format!("{} found", found.len()));
-            }
-            LssEvent::Configured {
-                service: LssService::StoreConfiguration,
-                result: Err(err),
-            } => store_problem = Some(format!("store configuration: {err}")),
-            LssEvent::TimedOut {
-                service: LssService::StoreConfiguration,
-                after,
-            } => {
-                store_problem = Some(format!(
-                    "store configuration: no answer within {} ms",
-                    after.as_millis()
-                ));
-            }
-            LssEvent::ExtraAnswer { .. } => *extra += 1,
-            LssEvent::Ignored { .. } => *ignored += 1,
-            LssEvent::ScanFinished { .. } => return Ok(Flow::Done(ScanOutcome::Complete)),
-            LssEvent::ScanFailed { error, .. } => return Ok(Flow::Done(ScanOutcome::Failed(error))),
-            _ => {}
-        }
-        Ok(Flow::Continue)
-    })?;
-    let outcome = match ended {
-        Ok(outcome) => outcome,
-        // Without a deadline only Ctrl-C ends the drive.
-        Err(_) => {
-            session.abandon();
-            ScanOutcome::Interrupted
-        }
-    };
-    Ok((found, outcome))
-}
-
-/// `lss scan` without `--assign`: fastscan again and again, leaving each device found in
-/// configuration state (see the module docs), then all back to waiting.
-fn list_all(
-    session: &mut Session,
-    progress: &ProgressBar,
-    printer: &mut Printer,
-) -> CliResult<(Vec<Found>, ScanOutcome)> {
-    let mut found: Vec<Found> = Vec::new();
-    let mut seen = BTreeSet::new();
-    let outcome = loop {
-        if found.len() >= MAX_LISTED {
-            break ScanOutcome::TooMany;
-        }
-        let now = session.link.now();
-        session
-            .master
-            .fastscan(now, KnownParts::NONE)
-            .map_err(|err| CliError::Internal(anyhow::anyhow!("LSS master: {err}")))?;
-        let (extra, ignored) = (&mut session.extra_answers, &mut session.ignored);
-        let mut this = None;
-        let ended = drive::<_, _, _, CliError>(&mut session.link, &mut session.master, None, |_, event| {
-            match event {
-                LssEvent::Found { address, .. } => this = Some(address),
-                LssEvent::ExtraAnswer { .. } => *extra += 1,
-                LssEvent::Ignored { .. } => *ignored += 1,
-                LssEvent::ScanFinished { .. } => return Ok(Flow::Done(Ok(()))),
-                LssEvent::ScanFailed { error, .. } => return Ok(Flow::Done(Err(error))),
-                _ => {}
-            }
-            Ok(Flow::Continue)
-        })?;
-        match ended {
-            Err(_) => {
-                session.abandon();
-                break ScanOutcome::Interrupted;
-            }
-            Ok(Err(error)) => break ScanOutcome::Failed(error),
-            Ok(Ok(())) => {}
-        }
-        let Some(address) = this else {
-            break ScanOutcome::Complete;
-        };
-        if !seen.insert(address) {
-            break ScanOutcome::Repeated(address);
-        }
-        let device = Found {
-            address,
-            node_id: None,
-            store_problem: None,
-        };
-        printer.found(&device)?;
-        found.push(device);
-        progress.set_message(format!("{} found", found.len()));
-    };
-    if !matches!(outcome, ScanOutcome::Interrupted) {
-        session.back_to_waiting()?;
-    }
-    Ok((found, outcome))
-}
-
 /// Prints each device as it is found (text), so that a long scan shows its progress on stdout too.
-#[derive(Debug)]
-struct Printer {
-    format: OutputFormat,
-}
-
-impl Printer {
-    fn new(format: OutputFormat) -> Printer {
-        Printer { format }
+fn print_found(format: OutputFormat, device: &Found) -> CliResult {
+    if format != OutputFormat::Text {
+        return Ok(());
     }
-
-    fn found(&mut self, device: &Found) -> CliResult {
-        if self.format != OutputFormat::Text {
-            return Ok(());
-        }
-        let mut line = format!("found {}", device.address);
-        if let Some(node) = device.node_id {
-            line.push_str(&format!(" -> node-ID {node}"));
-        }
-        if let Some(problem) = &device.store_problem {
-            line.push_str(&format!(" (not stored: {problem})"));
-        }
-        line.push('\n');
-        print(&line)
+    let mut line = format!("found {}", device.address);
+    if let Some(node) = device.node_id {
+        line.push_str(&format!(" -> node-ID {node}"));
     }
+    if let Some(problem) = &device.store_problem {
+        line.push_str(&format!(" (not stored: {problem})"));
+    }
+    line.push('\n');
+    print_stdout(&line)
 }
 
 /// `--assign`: node-IDs in the order they are given, each once.
@@ -769,14 +467,6 @@ fn bit_timing_index(kbit: u16) -> CliResult<u8> {
         })
 }
 
-fn node_id_text(raw: u8) -> String {
-    if raw == UNCONFIGURED_NODE_ID {
-        "unconfigured (FFh)".to_owned()
-    } else {
-        raw.to_string()
-    }
-}
-
 fn address_json(address: &LssAddress) -> serde_json::Value {
     json!({
         "vendor_id": address.vendor_id,
@@ -784,27 +474,6 @@ fn address_json(address: &LssAddress) -> serde_json::Value {
         "revision_number": address.revision_number,
         "serial_number": address.serial_number,
     })
-}
-
-/// A spinner on stderr while fastscan runs, drawn only on a terminal.
-fn spinner() -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
-    if let Ok(style) = ProgressStyle::with_template("{spinner} LSS fastscan {elapsed}: {msg}") {
-        bar.set_style(style);
-    }
-    bar.set_message("0 found");
-    bar.enable_steady_tick(Duration::from_millis(100));
-    bar
-}
-
-fn print(text: &str) -> CliResult {
-    let mut out = std::io::stdout().lock();
-    out.write_all(text.as_bytes())
-        .and_then(|()| out.flush())
-        .map_err(stdout_error)
 }
 
 #[cfg(test)]
@@ -904,40 +573,33 @@ mod tests {
     }
 
     #[test]
-    fn refusals_and_silence_become_device_errors_naming_the_address() {
+    fn lss_errors_map_to_exit_codes_with_advice() {
         let address = LssAddress {
             vendor_id: 0xABC,
             product_code: 1,
             revision_number: 2,
             serial_number: 3,
         };
-        let refused = LssEvent::Configured {
-            service: LssService::ConfigureNodeId,
-            result: Err(canopener_master::lss_master::LssServiceError::NodeIdOutOfRange),
-        };
-        let err = confirmed(&address, "node-ID 5", &refused).unwrap_err();
-        assert_eq!(err.exit_code(), crate::error::exit_code::DEVICE);
-        let text = err.to_string();
+        let not_selected = lss_error(LssError::NotSelected {
+            address,
+            after: Duration::from_millis(100),
+        });
+        assert_eq!(not_selected.exit_code(), exit_code::DEVICE);
+        let text = not_selected.to_string();
         assert!(text.contains("vendor-id 0x00000ABC"), "{text}");
         assert!(
-            text.contains("refused configure node-ID (node-ID 5): node-ID out of range"),
+            text.contains("within 100 ms; `canopener lss inquire` shows"),
             "{text}"
         );
-        let silent = LssEvent::TimedOut {
-            service: LssService::StoreConfiguration,
-            after: Duration::from_millis(100),
-        };
-        let text = confirmed(&address, "the configuration", &silent)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            text.contains("did not answer store configuration (the configuration) within 100 ms"),
-            "{text}"
+        assert_eq!(lss_error(LssError::Cancelled).exit_code(), exit_code::INTERRUPTED);
+        assert_eq!(
+            lss_error(LssError::Stuck {
+                running: None,
+                within: Duration::from_secs(1)
+            })
+            .exit_code(),
+            exit_code::INTERNAL
         );
-        let ok = LssEvent::Configured {
-            service: LssService::StoreConfiguration,
-            result: Ok(()),
-        };
-        assert!(confirmed(&address, "x", &ok).is_ok());
+        assert_eq!(node_id_text(UNCONFIGURED_NODE_ID), "unconfigured (FFh)");
     }
 }

@@ -7,19 +7,25 @@
 
 use std::path::Path;
 
-use canopener_master::sdo_client::{DownloadMode, Protocol, UploadMode};
+use canopener_eds::Eds;
+use canopener_master::sdo_client::{DownloadMode, UploadMode};
 use canopener_master::value::{ValueType, parse_index, parse_sub};
+use canopener_master::value_typing::{
+    EdsEntry, TypeSource, decode, eds_entry, expedited_value, guess_type, value_type_of, write_warnings,
+};
+use canopener_runtime::files::write_atomic;
+use canopener_runtime::sdo_session::Progress;
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::print_stdout;
 use crate::error::{CliError, CliResult};
 use crate::master::args::{SdoDownloadArgs, SdoReadArgs, SdoUploadArgs, SdoWriteArgs};
-use crate::master::sdo_session::{ByteProgress, SdoSession, device_error, kbytes_per_s, millis, object_name};
-use crate::master::sdo_typing::{
-    TypeSource, Typing, decode, guess_type, json_value, raw_hex, value_type_of, write_warnings,
+use crate::master::link::open_session;
+use crate::master::output::{
+    ByteProgress, json_value, kbytes_per_s, millis, object_name, output_error, print_json, raw_hex,
+    refuse_existing, sdo_error,
 };
-use canopener_runtime::files::{WriteError, backup_path, write_atomic};
+use crate::output::print_stdout;
 
 pub(crate) fn read(args: SdoReadArgs) -> CliResult {
     let example = "canopener sdo read --node 5 1018 1";
@@ -35,15 +41,15 @@ pub(crate) fn read(args: SdoReadArgs) -> CliResult {
         );
     }
     let name = entry.as_ref().map(|entry| entry.name.clone());
-    let mut session = SdoSession::open(&args.master, args.object.node, "sdo read")?;
+    let mut session = open_session(&args.master, args.object.node, "sdo read")?;
     let mode = if args.block {
         UploadMode::Block
     } else {
         UploadMode::Normal
     };
     let transfer = session
-        .upload(index, sub, mode, &mut |_, _| {})?
-        .map_err(|err| device_error(args.object.node, index, sub, name.as_deref(), &err))?;
+        .upload(index, sub, mode, &mut |_| {})
+        .map_err(|err| sdo_error(args.object.node, index, sub, name.as_deref(), err))?;
     let (ty, source) = match (&typing, &entry) {
         (Typing::Fixed(ty), _) => (*ty, TypeSource::Option),
         (_, Some(entry)) => (value_type_of(entry.data_type), TypeSource::Eds),
@@ -135,11 +141,11 @@ pub(crate) fn write(args: SdoWriteArgs) -> CliResult {
     } else {
         DownloadMode::Auto
     };
-    let mut session = SdoSession::open(&args.master, args.object.node, "sdo write")?;
+    let mut session = open_session(&args.master, args.object.node, "sdo write")?;
     let bytes = data.len();
     let transfer = session
-        .download(index, sub, data.clone(), mode, &mut |_, _| {})?
-        .map_err(|err| device_error(args.object.node, index, sub, name.as_deref(), &err))?;
+        .download(index, sub, data.clone(), mode, &mut |_| {})
+        .map_err(|err| sdo_error(args.object.node, index, sub, name.as_deref(), err))?;
     match args.master.format {
         OutputFormat::Json => print_json(&json!({
             "node": args.object.node,
@@ -171,7 +177,7 @@ pub(crate) fn upload(args: SdoUploadArgs) -> CliResult {
     let example = "canopener sdo upload --node 5 1F50 1 -o firmware.bin";
     let (index, sub) = object_args(&args.object.index, &args.object.sub, example)?;
     refuse_existing(&args.output, args.force)?;
-    let mut session = SdoSession::open(&args.master, args.object.node, "sdo upload")?;
+    let mut session = open_session(&args.master, args.object.node, "sdo upload")?;
     let mode = if args.block {
         UploadMode::Block
     } else {
@@ -179,9 +185,9 @@ pub(crate) fn upload(args: SdoUploadArgs) -> CliResult {
     };
     let object = object_name(index, sub, None);
     let bar = ByteProgress::new(&format!("reading {object}"));
-    let outcome = session.upload(index, sub, mode, &mut |done, total| bar.update(done, total));
+    let outcome = session.upload(index, sub, mode, &mut |p: Progress| bar.update(p.done, p.total));
     bar.finish();
-    let transfer = outcome?.map_err(|err| device_error(args.object.node, index, sub, None, &err))?;
+    let transfer = outcome.map_err(|err| sdo_error(args.object.node, index, sub, None, err))?;
     write_atomic(&args.output, &transfer.data, args.force).map_err(|err| output_error(&args.output, err))?;
     let bytes = transfer.data.len();
     let rate = kbytes_per_s(bytes, transfer.elapsed);
@@ -209,8 +215,9 @@ pub(crate) fn upload(args: SdoUploadArgs) -> CliResult {
 pub(crate) fn download(args: SdoDownloadArgs) -> CliResult {
     let example = "canopener sdo download --node 5 1F50 1 firmware.bin";
     let (index, sub) = object_args(&args.object.index, &args.object.sub, example)?;
-    let data = std::fs::read(&args.input).map_err(|err| CliError::read_file(&args.input, err))?;
-    let mut session = SdoSession::open(&args.master, args.object.node, "sdo download")?;
+    let data =
+        canopener_runtime::files::read(&args.input).map_err(|err| CliError::read_file(&args.input, err))?;
+    let mut session = open_session(&args.master, args.object.node, "sdo download")?;
     let mode = if args.block {
         DownloadMode::Block
     } else {
@@ -219,9 +226,11 @@ pub(crate) fn download(args: SdoDownloadArgs) -> CliResult {
     let object = object_name(index, sub, None);
     let bytes = data.len();
     let bar = ByteProgress::new(&format!("writing {object}"));
-    let outcome = session.download(index, sub, data, mode, &mut |done, total| bar.update(done, total));
+    let outcome = session.download(index, sub, data, mode, &mut |p: Progress| {
+        bar.update(p.done, p.total)
+    });
     bar.finish();
-    let transfer = outcome?.map_err(|err| device_error(args.object.node, index, sub, None, &err))?;
+    let transfer = outcome.map_err(|err| sdo_error(args.object.node, index, sub, None, err))?;
     let rate = kbytes_per_s(bytes, transfer.elapsed);
     match args.master.format {
         OutputFormat::Json => print_json(&json!({
@@ -251,45 +260,43 @@ pub(crate) fn object_args(index: &str, sub: &str, example: &str) -> CliResult<(u
     Ok((index, sub))
 }
 
-/// Refuses to replace `path` without `--force` (before any bus traffic).
-pub(crate) fn refuse_existing(path: &Path, force: bool) -> CliResult {
-    if path.exists() && !force {
-        return Err(CliError::Usage(format!(
-            "{} exists; pass --force to replace it (the old file is kept as {})",
-            path.display(),
-            backup_path(path).display()
-        )));
+/// The typing options of one command, checked before the bus is opened.
+#[derive(Debug)]
+enum Typing {
+    /// `--type T`.
+    Fixed(ValueType),
+    /// `--eds FILE`, loaded.
+    Eds { path: String, eds: Box<Eds> },
+    /// Neither: reads guess by length, writes refuse.
+    Unknown,
+}
+
+impl Typing {
+    /// Reads `--type` or loads `--eds` (clap already refuses both at once).
+    fn from_args(value_type: Option<&str>, eds: Option<&Path>) -> CliResult<Typing> {
+        if let Some(text) = value_type {
+            let ty = text
+                .parse::<ValueType>()
+                .map_err(|err| CliError::Usage(format!("--type {text}: {err}; e.g. --type u16")))?;
+            return Ok(Typing::Fixed(ty));
+        }
+        if let Some(path) = eds {
+            let input = crate::eds::input::read_input(path)?;
+            return Ok(Typing::Eds {
+                path: path.display().to_string(),
+                eds: Box::new(input.eds),
+            });
+        }
+        Ok(Typing::Unknown)
     }
-    Ok(())
-}
 
-/// A result file that could not be written is an output error (exit 5).
-pub(crate) fn output_error(path: &Path, err: WriteError) -> CliError {
-    CliError::output(
-        format!("writing {}", path.display()),
-        std::io::Error::other(err.to_string()),
-    )
-}
-
-/// The bytes of a fixed-size value in an expedited answer that indicates more bytes than the type has
-/// (a server that always says 4, as some do): the type's bytes, and a warning about the rest.
-fn expedited_value(ty: ValueType, data: &[u8], protocol: Protocol) -> (&[u8], Option<String>) {
-    match ty.byte_len() {
-        Some(len) if protocol == Protocol::Expedited && len < data.len() => (
-            &data[..len],
-            Some(format!(
-                "the device sent {} bytes for a {ty} of {len}; the rest ({}) is taken as padding",
-                data.len(),
-                raw_hex(&data[len..])
-            )),
-        ),
-        _ => (data, None),
+    /// The EDS entry of `index`:`sub`, if an EDS was given and lists it.
+    fn entry(&self, index: u16, sub: u8) -> Option<EdsEntry> {
+        match self {
+            Typing::Eds { eds, .. } => eds_entry(eds, index, sub),
+            _ => None,
+        }
     }
-}
-
-/// One JSON object on a line of stdout.
-pub(crate) fn print_json(value: &serde_json::Value) -> CliResult {
-    print_stdout(&format!("{value}\n"))
 }
 
 /// `1018h:01 Vendor-ID`, or `1018h:01` without a name.
@@ -327,54 +334,9 @@ mod tests {
     }
 
     #[test]
-    fn expedited_padding_beyond_the_type_is_dropped_with_a_warning() {
-        let data = [0x2A, 0, 0, 0];
-        let (bytes, warning) = expedited_value(ValueType::U8, &data, Protocol::Expedited);
-        assert_eq!(bytes, [0x2A]);
-        assert!(
-            warning
-                .unwrap()
-                .contains("4 bytes for a u8 of 1; the rest (000000)")
-        );
-        assert_eq!(
-            expedited_value(ValueType::U8, &data, Protocol::Segmented),
-            (&data[..], None)
-        );
-        assert_eq!(
-            expedited_value(ValueType::U32, &data, Protocol::Expedited),
-            (&data[..], None)
-        );
-        assert_eq!(
-            expedited_value(ValueType::Str, &data, Protocol::Expedited),
-            (&data[..], None)
-        );
-    }
-
-    #[test]
     fn labels_show_the_name_when_known() {
         assert_eq!(labelled(0x1018, 1, Some("Vendor-ID")), "1018h:01 Vendor-ID");
         assert_eq!(labelled(0x1018, 1, Some("")), "1018h:01");
         assert_eq!(labelled(0x2000, 0x1F, None), "2000h:1F");
-    }
-
-    #[test]
-    fn existing_outputs_need_force_and_write_errors_are_output_errors() {
-        let dir = std::env::temp_dir().join(format!("canopener-sdo-unit-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let file = dir.join("x.bin");
-        std::fs::write(&file, b"old").unwrap();
-        let err = refuse_existing(&file, false).unwrap_err();
-        assert_eq!(err.exit_code(), 2);
-        assert!(err.to_string().contains("--force") && err.to_string().contains("x.bin.bak"));
-        assert!(refuse_existing(&file, true).is_ok());
-        assert!(refuse_existing(&dir.join("new.bin"), false).is_ok());
-        let denied = WriteError {
-            action: "create",
-            path: file.clone(),
-            source: std::io::Error::from(std::io::ErrorKind::PermissionDenied),
-        };
-        let err = output_error(&file, denied);
-        assert_eq!(err.exit_code(), 5);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -1,4 +1,5 @@
-//! The SDO clients of many nodes driven together, for `canopener node scan`: every node gets its own
+//! Which node-IDs answer, and who they are: the SDO clients of many nodes driven together as one
+//! core, [`Fleet`]. Every node gets its own
 //! client (CiA 301 §7.2.4: one transfer per channel at a time, but channels of different nodes are
 //! independent), so asking 127 node-IDs takes about one SDO timeout instead of 127.
 //!
@@ -6,27 +7,30 @@
 //! has), then, if anything answered it, the follow-ups (1018h sub 1..4). Only the node-IDs with a
 //! running transfer count against the limit of requests in flight.
 
-use canopener_can::Core;
 use std::collections::{HashMap, VecDeque};
 use std::time::Duration;
 
-use canopener_can::{CanFrame, CanId, Instant};
-use canopener_master::sdo_client::{SdoClient, SdoClientEvent, SdoTransferError, UploadMode};
+use canopener_can::{CanFrame, CanId, Core, Instant};
 
-use crate::error::{CliError, CliResult};
+use crate::node_info::unsigned;
+use crate::sdo_client::{SdoClient, SdoClientError, SdoClientEvent, SdoTransferError, UploadMode};
 
 /// The result of one upload of one node.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) struct ScanResult {
-    pub(crate) node: u8,
-    pub(crate) index: u16,
-    pub(crate) sub: u8,
-    pub(crate) outcome: Result<Vec<u8>, SdoTransferError>,
+pub struct ScanResult {
+    /// The node-ID asked.
+    pub node: u8,
+    /// The object index read.
+    pub index: u16,
+    /// The sub-index read.
+    pub sub: u8,
+    /// The value, or the abort or timeout.
+    pub outcome: Result<Vec<u8>, SdoTransferError>,
 }
 
 /// Many SDO clients as one sans-IO [`Core`].
 #[derive(Debug)]
-pub(crate) struct Fleet {
+pub struct Fleet {
     nodes: Vec<NodeJobs>,
     by_response: HashMap<CanId, usize>,
     /// Nodes (positions in `nodes`) that have not started yet, in order.
@@ -50,13 +54,13 @@ struct NodeJobs {
 impl Fleet {
     /// A fleet asking every node of `nodes` for `first`, then `follow_ups` of those that answered
     /// (an abort is an answer too), with at most `parallel` nodes busy at once.
-    pub(crate) fn new(
+    pub fn new(
         nodes: &[u8],
         first: (u16, u8),
         follow_ups: &[(u16, u8)],
         parallel: usize,
         timeout: Duration,
-    ) -> CliResult<Fleet> {
+    ) -> Result<Fleet, SdoClientError> {
         let mut fleet = Fleet {
             nodes: Vec::with_capacity(nodes.len()),
             by_response: HashMap::new(),
@@ -68,9 +72,7 @@ impl Fleet {
             started: false,
         };
         for &node in nodes {
-            let client = SdoClient::new(node)
-                .map_err(|err| CliError::Usage(format!("{err}; e.g. --range 1-127")))?
-                .with_timeout(timeout);
+            let client = SdoClient::new(node)?.with_timeout(timeout);
             fleet.by_response.insert(client.response_id(), fleet.nodes.len());
             fleet.waiting.push_back(fleet.nodes.len());
             fleet.nodes.push(NodeJobs {
@@ -84,13 +86,13 @@ impl Fleet {
     }
 
     /// Sends the first requests (up to the limit in flight).
-    pub(crate) fn start(&mut self, now: Instant) {
+    pub fn start(&mut self, now: Instant) {
         self.started = true;
         self.fill(now);
     }
 
     /// Whether every node has run all its uploads.
-    pub(crate) fn finished(&self) -> bool {
+    pub fn finished(&self) -> bool {
         self.started && self.in_flight == 0 && self.waiting.is_empty()
     }
 
@@ -208,11 +210,61 @@ impl Core for Fleet {
     }
 }
 
+/// The identity 1018h sub 1 to 4 (vendor-ID, product code, revision, serial number, CiA 301
+/// §7.5.2.24), the follow-ups of a scan by 1000h.
+pub const IDENTITY: [(u16, u8); 4] = [(0x1018, 1), (0x1018, 2), (0x1018, 3), (0x1018, 4)];
+
+/// One node that answered a scan for 1000h then [`IDENTITY`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ScanRow {
+    /// The node-ID.
+    pub node: u8,
+    /// 1000h, or why it is missing (an abort is an answer too).
+    pub device_type: Result<u32, String>,
+    /// 1018h sub 1..4, where read.
+    pub identity: [Option<u32>; 4],
+}
+
+/// The nodes that gave any answer to 1000h, with what they said, by node-ID.
+pub fn identify(results: &[ScanResult]) -> Vec<ScanRow> {
+    let mut rows: Vec<ScanRow> = Vec::new();
+    for result in results {
+        let as_u32 = |data: &[u8]| unsigned(data, 4).ok().map(|v| v as u32);
+        match (result.index, result.sub) {
+            (0x1000, 0) => {
+                let device_type = match &result.outcome {
+                    Ok(data) => unsigned(data, 4).map(|v| v as u32).map_err(|err| err.to_string()),
+                    Err(SdoTransferError::TimedOut { .. }) => continue,
+                    Err(err) => Err(err.to_string()),
+                };
+                rows.push(ScanRow {
+                    node: result.node,
+                    device_type,
+                    identity: [None; 4],
+                });
+            }
+            (0x1018, sub @ 1..=4) => {
+                if let Some(row) = rows.iter_mut().find(|row| row.node == result.node)
+                    && let Ok(data) = &result.outcome
+                {
+                    row.identity[usize::from(sub - 1)] = as_u32(data);
+                }
+            }
+            _ => {}
+        }
+    }
+    rows.sort_by_key(|row| row.node);
+    rows
+}
+
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use canopener_bus_engine::network::{BusFrame, Timing};
     use canopener_device::application::NoApplication;
     use canopener_device::device::Device;
+    use canopener_testkit::net::Net;
+
+    use super::*;
 
     const EDS: &str = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -227,84 +279,73 @@ mod tests {
         dev
     }
 
-    /// Runs the fleet against devices on virtual time, every frame delivered 1 ms after it was sent,
-    /// until it has finished; returns the results with the virtual time they were reported at.
-    fn run(fleet: &mut Fleet, devices: &mut [Device]) -> Vec<(u64, ScanResult)> {
-        let mut now = Instant::ZERO;
-        fleet.start(now);
-        let mut results = Vec::new();
-        let mut in_transit: Vec<(Instant, CanFrame, bool)> = Vec::new();
-        for _ in 0..10_000 {
-            while let Some(frame) = fleet.poll_transmit() {
-                in_transit.push((now + Duration::from_millis(1), frame, true));
-            }
-            for dev in devices.iter_mut() {
-                while let Some(frame) = dev.poll_transmit() {
-                    in_transit.push((now + Duration::from_millis(1), frame, false));
-                }
-            }
-            while let Some(result) = fleet.poll_event() {
-                results.push((now.as_micros() / 1000, result));
-            }
-            if fleet.finished() && in_transit.is_empty() {
-                return results;
-            }
-            let next_frame = in_transit.iter().map(|(at, ..)| *at).min();
-            let next = [next_frame, fleet.poll_timeout()].into_iter().flatten().min();
-            let Some(next) = next else { break };
-            now = next.max(now);
-            let (due, later): (Vec<_>, Vec<_>) = in_transit.into_iter().partition(|(at, ..)| *at <= now);
-            in_transit = later;
-            for (_, frame, from_fleet) in due {
-                if from_fleet {
-                    for dev in devices.iter_mut() {
-                        dev.handle_frame(now, &frame);
-                    }
-                } else {
-                    fleet.handle_frame(now, &frame);
-                }
-            }
-            if fleet.poll_timeout().is_some_and(|due| due <= now) {
-                fleet.handle_timeout(now);
-            }
+    /// Runs the fleet against `devices` until it has finished, every frame arriving 1 ms after it was
+    /// sent; the results, and the bus with its recording.
+    fn run(mut fleet: Fleet, devices: Vec<Device>) -> (Vec<ScanResult>, Net<Device>) {
+        let mut net = Net::new(Timing::Delayed(Duration::from_millis(1)));
+        for device in devices {
+            net.attach(device);
         }
-        panic!("the fleet did not finish; results so far: {results:?}");
+        fleet.start(Instant::ZERO);
+        let results = net.drive(&mut fleet, Instant::from_millis(10_000), |fleet, _| {
+            fleet.finished()
+        });
+        assert!(fleet.finished(), "the fleet did not finish: {results:?}");
+        (results, net)
+    }
+
+    /// When the frames on `ids` starting with `command` arrived, in ms.
+    fn arrivals(frames: &[BusFrame], ids: &[u32], command: u8) -> Vec<u64> {
+        frames
+            .iter()
+            .filter(|f| ids.contains(&f.frame.id().as_raw()) && f.frame.data().first() == Some(&command))
+            .map(|f| f.at.as_micros() / 1000)
+            .collect()
     }
 
     #[test]
     fn all_nodes_are_asked_at_once_and_the_answering_ones_identified() {
         let nodes: Vec<u8> = (1..=127).collect();
-        let identity: Vec<(u16, u8)> = (1..=4).map(|sub| (0x1018, sub)).collect();
         let timeout = Duration::from_millis(100);
-        let mut fleet = Fleet::new(&nodes, (0x1000, 0), &identity, 127, timeout).unwrap();
-        let mut devices = [device(5), device(90)];
-        let results = run(&mut fleet, &mut devices);
+        let fleet = Fleet::new(&nodes, (0x1000, 0), &IDENTITY, 127, timeout).unwrap();
+        let (results, mut net) = run(fleet, vec![device(5), device(90)]);
 
-        let answered: Vec<(u64, u8, u16, u8, Vec<u8>)> = results
+        let answered: Vec<(u8, u16, u8, Vec<u8>)> = results
             .iter()
-            .filter_map(|(at, r)| Some((*at, r.node, r.index, r.sub, r.outcome.clone().ok()?)))
+            .filter_map(|r| Some((r.node, r.index, r.sub, r.outcome.clone().ok()?)))
             .collect();
         assert_eq!(
             answered,
             [
-                (2, 5, 0x1000, 0, vec![0x91, 0x01, 0x0F, 0x00]),
-                (2, 90, 0x1000, 0, vec![0x91, 0x01, 0x0F, 0x00]),
-                (4, 5, 0x1018, 1, vec![0xBC, 0x0A, 0, 0]),
-                (4, 90, 0x1018, 1, vec![0xBC, 0x0A, 0, 0]),
-                (6, 5, 0x1018, 2, vec![0x01, 0x04, 0, 0]),
-                (6, 90, 0x1018, 2, vec![0x01, 0x04, 0, 0]),
-                (8, 5, 0x1018, 3, vec![0x02, 0x00, 0x01, 0]),
-                (8, 90, 0x1018, 3, vec![0x02, 0x00, 0x01, 0]),
-                (10, 5, 0x1018, 4, vec![0, 0, 0, 0]),
-                (10, 90, 0x1018, 4, vec![0, 0, 0, 0]),
+                (5, 0x1000, 0, vec![0x91, 0x01, 0x0F, 0x00]),
+                (90, 0x1000, 0, vec![0x91, 0x01, 0x0F, 0x00]),
+                (5, 0x1018, 1, vec![0xBC, 0x0A, 0, 0]),
+                (90, 0x1018, 1, vec![0xBC, 0x0A, 0, 0]),
+                (5, 0x1018, 2, vec![0x01, 0x04, 0, 0]),
+                (90, 0x1018, 2, vec![0x01, 0x04, 0, 0]),
+                (5, 0x1018, 3, vec![0x02, 0x00, 0x01, 0]),
+                (90, 0x1018, 3, vec![0x02, 0x00, 0x01, 0]),
+                (5, 0x1018, 4, vec![0, 0, 0, 0]),
+                (90, 0x1018, 4, vec![0, 0, 0, 0]),
             ]
         );
+        // Both devices answer each round trip together, 2 ms after the request went out.
+        let frames = net.bus_frames();
+        assert_eq!(
+            arrivals(&frames, &[0x585, 0x5DA], 0x43),
+            [2, 2, 4, 4, 6, 6, 8, 8, 10, 10]
+        );
         // The 125 silent node-IDs time out together, one timeout after the requests went out.
-        let timed_out: Vec<&(u64, ScanResult)> = results.iter().filter(|(_, r)| r.outcome.is_err()).collect();
+        let timed_out: Vec<&ScanResult> = results.iter().filter(|r| r.outcome.is_err()).collect();
         assert_eq!(timed_out.len(), 125);
-        assert!(timed_out.iter().all(|(at, r)| *at == 100
-            && r.index == 0x1000
-            && matches!(r.outcome, Err(SdoTransferError::TimedOut { .. }))));
+        assert!(
+            timed_out
+                .iter()
+                .all(|r| r.index == 0x1000 && matches!(r.outcome, Err(SdoTransferError::TimedOut { .. })))
+        );
+        // Their aborts (0504 0000h) went out at the timeout and arrived 1 ms later.
+        let requests: Vec<u32> = (0x601..=0x67F).collect();
+        assert_eq!(arrivals(&frames, &requests, 0x80), [101; 125]);
     }
 
     #[test]
@@ -318,25 +359,25 @@ mod tests {
             sent += 1;
         }
         assert_eq!(sent, 3);
-        let results = run(
-            &mut Fleet::new(&nodes, (0x1000, 0), &[], 3, timeout).unwrap(),
-            &mut [],
-        );
+        let (results, mut net) = run(Fleet::new(&nodes, (0x1000, 0), &[], 3, timeout).unwrap(), vec![]);
+        assert_eq!(results.len(), 10);
         // Ten silent nodes, three at a time: four rounds of one timeout each.
-        let times: Vec<u64> = results.iter().map(|(at, _)| *at).collect();
-        assert_eq!(times, [50, 50, 50, 100, 100, 100, 150, 150, 150, 200]);
+        let requests: Vec<u32> = (0x601..=0x60A).collect();
+        assert_eq!(
+            arrivals(&net.bus_frames(), &requests, 0x40),
+            [1, 1, 1, 51, 51, 51, 101, 101, 101, 151]
+        );
     }
 
     #[test]
     fn aborts_count_as_answers() {
         // A device without 1018h sub 4 still identifies itself with sub 1..3.
-        let nodes = [7];
         let follow: Vec<(u16, u8)> = vec![(0x1018, 1), (0x1018, 5)];
-        let mut fleet = Fleet::new(&nodes, (0x1000, 0), &follow, 1, Duration::from_millis(50)).unwrap();
-        let results = run(&mut fleet, &mut [device(7)]);
+        let fleet = Fleet::new(&[7], (0x1000, 0), &follow, 1, Duration::from_millis(50)).unwrap();
+        let (results, _) = run(fleet, vec![device(7)]);
         let summary: Vec<(u16, u8, Option<u32>)> = results
             .iter()
-            .map(|(_, r)| {
+            .map(|r| {
                 (
                     r.index,
                     r.sub,
@@ -352,5 +393,39 @@ mod tests {
                 (0x1018, 5, Some(0x0609_0011))
             ]
         );
+    }
+
+    fn result(node: u8, index: u16, sub: u8, outcome: Result<Vec<u8>, SdoTransferError>) -> ScanResult {
+        ScanResult {
+            node,
+            index,
+            sub,
+            outcome,
+        }
+    }
+
+    #[test]
+    fn rows_list_the_answering_nodes_with_identities() {
+        let silent = SdoTransferError::TimedOut {
+            waiting_for: "initiate upload response",
+            after: Duration::from_millis(100),
+        };
+        let refused = SdoTransferError::AbortedByServer { code: 0x0602_0000 };
+        let results = [
+            result(9, 0x1000, 0, Err(refused.clone())),
+            result(5, 0x1000, 0, Ok(vec![0x91, 0x01, 0x0F, 0x00])),
+            result(6, 0x1000, 0, Err(silent)),
+            result(5, 0x1018, 1, Ok(vec![0xBC, 0x0A, 0, 0])),
+            result(5, 0x1018, 4, Err(refused)),
+            result(9, 0x1018, 1, Ok(vec![1, 0, 0, 0])),
+        ];
+        let rows = identify(&results);
+        assert_eq!(rows.len(), 2);
+        assert_eq!(rows[0].node, 5);
+        assert_eq!(rows[0].device_type, Ok(0x000F_0191));
+        assert_eq!(rows[0].identity, [Some(0xABC), None, None, None]);
+        assert_eq!(rows[1].node, 9);
+        assert!(rows[1].device_type.as_ref().unwrap_err().contains("0x06020000"));
+        assert_eq!(rows[1].identity, [Some(1), None, None, None]);
     }
 }

@@ -1,45 +1,43 @@
-//! How `sdo read|write` and `node info|dump` type a value: by `--type`, by the entry's `DataType` in an
-//! EDS, or (reads only) by the length the device answered with; and what an EDS says about an entry
-//! (name, access type, limits) that a write should warn about.
-
-use std::path::Path;
+//! How a master types the value of an SDO transfer: by a type the user chose, by the entry's
+//! `DataType` in an EDS, or (reads only) by the length the device answered with; and what an EDS says
+//! about an entry (name, access type, limits) that a write should warn about. The device decides;
+//! these are warnings.
 
 use canopener_eds::value::{Value, parse_value};
 use canopener_eds::{AccessType, DataType, Eds};
-use canopener_master::value::{DisplayValue, ValueType};
-use serde_json::json;
 
-use crate::error::{CliError, CliResult};
+use crate::sdo_client::Protocol;
+use crate::value::{DisplayValue, ValueType};
 
 /// What an EDS says about one entry (a VAR, or one sub-object of an ARRAY or RECORD).
 #[derive(Debug, Clone)]
-pub(crate) struct EdsEntry {
+pub struct EdsEntry {
     /// `ParameterName`.
-    pub(crate) name: String,
+    pub name: String,
     /// `DataType`, resolved through DEFTYPE objects.
-    pub(crate) data_type: Option<DataType>,
+    pub data_type: Option<DataType>,
     /// `AccessType`.
-    pub(crate) access: Option<AccessType>,
+    pub access: Option<AccessType>,
     /// `LowLimit` as written.
-    pub(crate) low_limit: Option<String>,
+    pub low_limit: Option<String>,
     /// `HighLimit` as written.
-    pub(crate) high_limit: Option<String>,
+    pub high_limit: Option<String>,
 }
 
 /// Where the type of a value came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum TypeSource {
-    /// `--type`.
+pub enum TypeSource {
+    /// Chosen by the user.
     Option,
-    /// The entry's `DataType` in `--eds`.
+    /// The entry's `DataType` in an EDS.
     Eds,
     /// The length of the value read.
     Guessed,
 }
 
 impl TypeSource {
-    /// `option`, `eds` or `guessed`, as JSON output says it.
-    pub(crate) fn as_str(self) -> &'static str {
+    /// `option`, `eds` or `guessed`, as reports say it.
+    pub fn as_str(self) -> &'static str {
         match self {
             TypeSource::Option => "option",
             TypeSource::Eds => "eds",
@@ -48,47 +46,8 @@ impl TypeSource {
     }
 }
 
-/// The typing options of one command, checked before the bus is opened.
-#[derive(Debug)]
-pub(crate) enum Typing {
-    /// `--type T`.
-    Fixed(ValueType),
-    /// `--eds FILE`, loaded.
-    Eds { path: String, eds: Box<Eds> },
-    /// Neither: reads guess by length, writes refuse.
-    Unknown,
-}
-
-impl Typing {
-    /// Reads `--type` or loads `--eds` (clap already refuses both at once).
-    pub(crate) fn from_args(value_type: Option<&str>, eds: Option<&Path>) -> CliResult<Typing> {
-        if let Some(text) = value_type {
-            let ty = text
-                .parse::<ValueType>()
-                .map_err(|err| CliError::Usage(format!("--type {text}: {err}; e.g. --type u16")))?;
-            return Ok(Typing::Fixed(ty));
-        }
-        if let Some(path) = eds {
-            let input = crate::eds::input::read_input(path)?;
-            return Ok(Typing::Eds {
-                path: path.display().to_string(),
-                eds: Box::new(input.eds),
-            });
-        }
-        Ok(Typing::Unknown)
-    }
-
-    /// The EDS entry of `index`:`sub`, if an EDS was given and lists it.
-    pub(crate) fn entry(&self, index: u16, sub: u8) -> Option<EdsEntry> {
-        match self {
-            Typing::Eds { eds, .. } => eds_entry(eds, index, sub),
-            _ => None,
-        }
-    }
-}
-
 /// The entry `index`:`sub` of an EDS: a VAR or DOMAIN object is sub-index 0, otherwise the sub-object.
-pub(crate) fn eds_entry(eds: &Eds, index: u16, sub: u8) -> Option<EdsEntry> {
+pub fn eds_entry(eds: &Eds, index: u16, sub: u8) -> Option<EdsEntry> {
     let object = eds.object(index)?;
     let attributes = if object.subs.is_empty() {
         (sub == 0).then_some(&object.attributes)?
@@ -106,15 +65,15 @@ pub(crate) fn eds_entry(eds: &Eds, index: u16, sub: u8) -> Option<EdsEntry> {
 
 /// The type to read and write values of an EDS data type as; types without a text form
 /// (TIME_OF_DAY, UNICODE_STRING, records, unknown) as hex bytes.
-pub(crate) fn value_type_of(data_type: Option<DataType>) -> ValueType {
+pub fn value_type_of(data_type: Option<DataType>) -> ValueType {
     data_type
         .and_then(ValueType::from_data_type)
         .unwrap_or(ValueType::Bytes)
 }
 
-/// The type of a value read without `--type` or `--eds`: 1, 2, 4 or 8 bytes are an unsigned number of
+/// The type of a value read without a type chosen or an EDS: 1, 2, 4 or 8 bytes are an unsigned number of
 /// that width, printable text is a string, anything else hex bytes.
-pub(crate) fn guess_type(data: &[u8]) -> ValueType {
+pub fn guess_type(data: &[u8]) -> ValueType {
     match data.len() {
         1 => ValueType::U8,
         2 => ValueType::U16,
@@ -127,7 +86,7 @@ pub(crate) fn guess_type(data: &[u8]) -> ValueType {
 
 /// Text a person can read: UTF-8 without control characters other than tab, CR and LF; trailing NULs
 /// (a fixed-size string buffer's padding) allowed.
-pub(crate) fn is_printable(data: &[u8]) -> bool {
+pub fn is_printable(data: &[u8]) -> bool {
     let end = data
         .iter()
         .rposition(|byte| *byte != 0)
@@ -141,7 +100,7 @@ pub(crate) fn is_printable(data: &[u8]) -> bool {
 }
 
 /// Decodes `data` as `ty`; a length the type does not take gives hex bytes and a warning for stderr.
-pub(crate) fn decode(ty: ValueType, data: &[u8]) -> (ValueType, DisplayValue, Option<String>) {
+pub fn decode(ty: ValueType, data: &[u8]) -> (ValueType, DisplayValue, Option<String>) {
     match ty.decode(data) {
         Ok(value) => (ty, value, None),
         Err(err) => (
@@ -152,32 +111,29 @@ pub(crate) fn decode(ty: ValueType, data: &[u8]) -> (ValueType, DisplayValue, Op
     }
 }
 
-/// A decoded value as JSON: numbers and bools as such, strings as strings, bytes as hex text
-/// (`"01 02 FF"`), REALs that JSON cannot hold (NaN, infinity) as text.
-pub(crate) fn json_value(value: &DisplayValue) -> serde_json::Value {
-    match value {
-        DisplayValue::Bool(value) => json!(value),
-        DisplayValue::Unsigned { value, .. } => json!(value),
-        DisplayValue::Signed { value, .. } => json!(value),
-        DisplayValue::Real32(value) => float_json(f64::from(*value), value.to_string()),
-        DisplayValue::Real64(value) => float_json(*value, value.to_string()),
-        DisplayValue::Text(bytes) => json!(String::from_utf8_lossy(bytes)),
-        DisplayValue::Bytes(_) => json!(value.plain()),
+/// The bytes of a fixed-size value in an expedited answer that indicates more bytes than the type has
+/// (a server that always says 4, as some do, CiA 301 §7.2.4.3.6): the type's bytes, and a warning
+/// about the rest.
+pub fn expedited_value(ty: ValueType, data: &[u8], protocol: Protocol) -> (&[u8], Option<String>) {
+    match ty.byte_len() {
+        Some(len) if protocol == Protocol::Expedited && len < data.len() => (
+            &data[..len],
+            Some(format!(
+                "the device sent {} bytes for a {ty} of {len}; the rest ({}) is taken as padding",
+                data.len(),
+                data[len..]
+                    .iter()
+                    .map(|byte| format!("{byte:02X}"))
+                    .collect::<String>()
+            )),
+        ),
+        _ => (data, None),
     }
-}
-
-fn float_json(value: f64, text: String) -> serde_json::Value {
-    serde_json::Number::from_f64(value).map_or(serde_json::Value::String(text), serde_json::Value::Number)
-}
-
-/// Bytes as hex without separators (`BC0A0000`), the `raw` of JSON output.
-pub(crate) fn raw_hex(data: &[u8]) -> String {
-    data.iter().map(|byte| format!("{byte:02X}")).collect()
 }
 
 /// What the EDS says against writing `value` to `entry`: read-only access, or a value outside
 /// LowLimit..HighLimit. The device decides; these are warnings.
-pub(crate) fn write_warnings(entry: &EdsEntry, value: &DisplayValue, node: u8) -> Vec<String> {
+pub fn write_warnings(entry: &EdsEntry, value: &DisplayValue, node: u8) -> Vec<String> {
     let mut warnings = Vec::new();
     if let Some(access) = entry.access
         && !access.writable()
@@ -292,21 +248,27 @@ mod tests {
     }
 
     #[test]
-    fn json_values_keep_their_kind() {
-        assert_eq!(
-            json_value(&DisplayValue::Unsigned { value: 700, bits: 32 }),
-            json!(700)
+    fn expedited_padding_beyond_the_type_is_dropped_with_a_warning() {
+        let data = [0x2A, 0, 0, 0];
+        let (bytes, warning) = expedited_value(ValueType::U8, &data, Protocol::Expedited);
+        assert_eq!(bytes, [0x2A]);
+        assert!(
+            warning
+                .unwrap()
+                .contains("4 bytes for a u8 of 1; the rest (000000)")
         );
         assert_eq!(
-            json_value(&DisplayValue::Signed { value: -5, bits: 8 }),
-            json!(-5)
+            expedited_value(ValueType::U8, &data, Protocol::Segmented),
+            (&data[..], None)
         );
-        assert_eq!(json_value(&DisplayValue::Bool(true)), json!(true));
-        assert_eq!(json_value(&DisplayValue::Real32(1.5)), json!(1.5));
-        assert_eq!(json_value(&DisplayValue::Real64(f64::NAN)), json!("NaN"));
-        assert_eq!(json_value(&DisplayValue::Text(b"hi".to_vec())), json!("hi"));
-        assert_eq!(json_value(&DisplayValue::Bytes(vec![1, 0xFF])), json!("01 FF"));
-        assert_eq!(raw_hex(&[0xBC, 0x0A, 0, 0]), "BC0A0000");
+        assert_eq!(
+            expedited_value(ValueType::U32, &data, Protocol::Expedited),
+            (&data[..], None)
+        );
+        assert_eq!(
+            expedited_value(ValueType::Str, &data, Protocol::Expedited),
+            (&data[..], None)
+        );
     }
 
     #[test]
