@@ -5,7 +5,10 @@ use std::io;
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 
-use canopener_hub::{HubConfig, HubHandle, HubStats};
+use canopener_hub::HubHandle;
+/// The hub's settings and counters, so that front ends need not depend on the hub crate (and its
+/// tokio) themselves.
+pub use canopener_hub::{HubConfig, HubStats};
 
 use crate::cancel::Cancel;
 use crate::pacing::{SLICE, offset_from, sleep_until};

@@ -1,7 +1,6 @@
 //! `canopener bus serve`: the socketcand-compatible hub, until Ctrl-C or SIGTERM.
 
-use canopener_hub::{HubConfig, HubStats};
-use canopener_runtime::hub::{HubEnd, RunningHub};
+use canopener_runtime::hub::{HubConfig, HubEnd, HubStats, RunningHub};
 use canopener_transport::TransportError;
 
 use crate::bus::args::ServeArgs;
