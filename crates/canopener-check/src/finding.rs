@@ -3,7 +3,7 @@
 use canopener_eds::{Diagnostic, Severity, Span};
 use serde::Serialize;
 
-use crate::registry::CheckInfo;
+use crate::check_info::CheckInfo;
 
 /// A finding: which check, how serious, what and where.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]

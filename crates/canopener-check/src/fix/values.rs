@@ -62,7 +62,7 @@ pub(super) fn sub_number(cx: &Context<'_>, out: &mut Planned) {
 /// out than a device that lacks them, so that fix is refused with the reason.
 pub(super) fn sub0_highest(cx: &Context<'_>, out: &mut Planned) {
     let mut findings = Vec::new();
-    crate::group_f::run(cx, &mut findings);
+    crate::checks::objects::run(cx, &mut findings);
     let doc = cx.document;
     let mut done = std::collections::HashSet::new();
     // Findings marked not fixable are on objects whose sub 0 counts entries in use (1003h, PDO

@@ -1,4 +1,4 @@
-//! Group G of `eds-format-and-checks.md` §10: values (checks 45-50).
+//! Group G of the check catalogue (`docs/check-catalogue.md`): values (checks 45-50).
 //!
 //! The loader already reads every DefaultValue, LowLimit, HighLimit and ParameterValue with its data
 //! type and reports what does not parse (P050, P059-P061), what leaves the type's range, including
@@ -16,9 +16,9 @@ use canopener_eds::section_name::SectionKind;
 use canopener_eds::value::{Parsed, parse_value};
 use canopener_eds::{AccessType, DataType, ObjectType, Origin, Severity, TypeKind, Value};
 
+use crate::check_info::{CheckInfo, Group};
 use crate::context::{Context, object_kind};
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 const LOW_ABOVE_HIGH: CheckInfo = CheckInfo {
     code: "C601",

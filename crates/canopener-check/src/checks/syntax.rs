@@ -1,4 +1,4 @@
-//! Group A of `eds-format-and-checks.md` §10: syntax and lexical rules (checks 1-7).
+//! Group A of the check catalogue (`docs/check-catalogue.md`): syntax and lexical rules (checks 1-7).
 //!
 //! The loader already reports most of this group as `P0xx` diagnostics: encodings (P001-P004),
 //! malformed headers and lines (P010-P016), duplicates (P020, P021), spelling of section names and
@@ -13,9 +13,9 @@ use canopener_eds::section_name::{Companion, ModulePart, SectionKind};
 use canopener_eds::syntax::{LineKind, Section};
 use canopener_eds::{Severity, Span};
 
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 /// The longest line CiA 306 V1.3 §4.2 allows, in characters, without the line ending.
 const MAX_LINE: usize = 255;

@@ -1,19 +1,20 @@
-//! Group C of `eds-format-and-checks.md` §10: `[DeviceInfo]` and its cross-checks (checks 13-20).
+//! Group C of the check catalogue (`docs/check-catalogue.md`): `[DeviceInfo]` and its cross-checks (checks
+//! 13-20).
 //!
 //! The loader reads `[DeviceInfo]` into the model and reports reserved keys (P034), unknown keys
 //! (P033) and a missing section (P029), which is all of check 20. The checks here look at the
 //! values: mandatory keys, numbers and Booleans, the identity against 1018h, the bit rates,
 //! `Granularity`, the PDO counts against the PDO objects, and `[DynamicChannels]`.
 
-use canopener_eds::model::{DeviceInfo, strip_inline_comment};
+use canopener_eds::model::DeviceInfo;
 use canopener_eds::section_name::SectionKind;
-use canopener_eds::value::{self, mentions_nodeid};
-use canopener_eds::{Code, Origin, Severity};
+use canopener_eds::value::mentions_nodeid;
+use canopener_eds::{Origin, Severity};
 
+use super::reading::{BAUD_RATES, lenient_int, present, strict_int};
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::group_b::present;
-use crate::registry::{CheckInfo, Group};
 
 const KEY_MISSING: CheckInfo = CheckInfo {
     code: "C301",
@@ -291,18 +292,6 @@ pub(crate) const CHECKS: &[CheckInfo] = &[
     PDO_COUNT_MISMATCH,
     DYNAMIC_CHANNELS_MISSING,
     DYNAMIC_CHANNELS_UNANNOUNCED,
-];
-
-/// The bit rates `[DeviceInfo]` can declare, in kbit/s, with their keys (CiA 306 V1.3 §4.5).
-pub(crate) const BAUD_RATES: [(u32, &str); 8] = [
-    (10, "BaudRate_10"),
-    (20, "BaudRate_20"),
-    (50, "BaudRate_50"),
-    (125, "BaudRate_125"),
-    (250, "BaudRate_250"),
-    (500, "BaudRate_500"),
-    (800, "BaudRate_800"),
-    (1000, "BaudRate_1000"),
 ];
 
 const CAPABILITY_KEYS: [&str; 9] = [
@@ -612,42 +601,10 @@ fn check_dynamic_channels(cx: &Context<'_>, out: &mut Vec<Finding>, info: &Devic
     }
 }
 
-/// Reads a CiA 306 §4.2 integer: decimal, `0x` hexadecimal or octal with a leading `0`, optionally
-/// signed. The lenient forms the value parser also accepts (`FEh`, `08` read as decimal) are
-/// refused; an inline `; comment` is ignored, since group A reports it.
-pub(crate) fn strict_int(text: &str) -> Option<i128> {
-    let read = |t: &str| {
-        let mut issues = Vec::new();
-        let literal = value::parse_integer(t, &mut issues)?;
-        let lenient = issues
-            .iter()
-            .any(|i| matches!(i.code, Code::HexSuffix | Code::InvalidNumber));
-        (!lenient).then_some(literal.value)
-    };
-    read(text).or_else(|| read(strip_inline_comment(text)?))
-}
-
-/// Reads an integer the way the loader does (accepting `FEh`); for values whose notation other
-/// checks already report.
-pub(crate) fn lenient_int(text: &str) -> Option<i128> {
-    canopener_eds::model::int_of(text)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn strict_integers_follow_cia_306() {
-        assert_eq!(strict_int("0x00000ABC"), Some(2748));
-        assert_eq!(strict_int("2748"), Some(2748));
-        assert_eq!(strict_int("012"), Some(10));
-        assert_eq!(strict_int("0"), Some(0));
-        assert_eq!(strict_int("8 ; bits"), Some(8));
-        for bad in ["FEh", "08", "1.0", "", "e-RIO 8xx", "0x"] {
-            assert_eq!(strict_int(bad), None, "{bad}");
-        }
-    }
     fn findings(text: &str) -> Vec<Finding> {
         let loaded = canopener_eds::load(text.as_bytes());
         let cx = Context::new(&loaded, Some("x.eds"));

@@ -1,4 +1,4 @@
-//! Group E of `eds-format-and-checks.md` §10: the object lists `[MandatoryObjects]`,
+//! Group E of the check catalogue (`docs/check-catalogue.md`): the object lists `[MandatoryObjects]`,
 //! `[OptionalObjects]` and `[ManufacturerObjects]` (checks 22-27).
 //!
 //! The loader already reports most list problems: a count that disagrees with the entries or is not
@@ -13,9 +13,9 @@ use canopener_eds::model::{ObjectListKind, int_of};
 use canopener_eds::section_name::SectionKind;
 use canopener_eds::{Origin, Severity};
 
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 const SUPPORTED_OBJECTS_MISSING: CheckInfo = CheckInfo {
     code: "C401",
