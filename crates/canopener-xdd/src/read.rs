@@ -6,6 +6,7 @@
 
 use std::collections::{BTreeMap, HashMap};
 
+use canopener_eds::dcf::BITRATES_KBIT;
 use canopener_eds::model::Properties;
 use canopener_eds::{AccessType, Eds, Object, Origin, SubObject};
 use roxmltree::{Document, Node};
@@ -640,7 +641,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                                 "baud rate `{value}` has no CiA 306 BaudRate_ key; not carried into the EDS"
                             ),
                         );
-                    } else if matches!(r, BaudRate::Kbps(k) if !crate::notation::EDS_BAUD_RATES.contains(&k))
+                    } else if matches!(r, BaudRate::Kbps(k) if !BITRATES_KBIT.iter().any(|&b| u32::from(b) == k))
                     {
                         self.push(
                             rate.range().start,

@@ -5,13 +5,13 @@
 //! not look at the values. The checks here do: node-ID and bit rate, the LSS serial number against
 //! 1018h sub 4, `UploadFile`/`DownloadFile`, and `[ConnectedModules]`.
 
-use canopener_eds::model::{Attributes, CommissioningSpelling, DeviceCommissioning};
+use canopener_eds::model::{Attributes, CommissioningSpelling, DeviceCommissioning, DeviceInfo};
 use canopener_eds::section_name::SectionKind;
 use canopener_eds::value::mentions_nodeid;
 use canopener_eds::{AccessType, ObjectType, Origin, Severity, TypeKind};
 
 use super::numbered_list::check_numbered_list;
-use super::reading::{BAUD_RATES, is_dcf_file, present, strict_int};
+use super::reading::{is_dcf_file, present, strict_int};
 use crate::check_info::{CheckInfo, Group};
 use crate::context::{Context, object_kind};
 use crate::finding::Finding;
@@ -335,7 +335,7 @@ fn check_commissioning(cx: &Context<'_>, out: &mut Vec<Finding>, c: &DeviceCommi
     }
     let baudrate = present(c.baudrate.as_deref());
     let rate = baudrate.and_then(strict_int);
-    let standard = BAUD_RATES
+    let standard = DeviceInfo::BAUD_RATE_KEYS
         .iter()
         .find(|&&(kbit, _)| rate == Some(i128::from(kbit)));
     let problem = match (baudrate, rate) {

@@ -11,7 +11,7 @@ use canopener_eds::section_name::SectionKind;
 use canopener_eds::value::mentions_nodeid;
 use canopener_eds::{Origin, Severity};
 
-use super::reading::{BAUD_RATES, lenient_int, present, strict_int};
+use super::reading::{lenient_int, present, strict_int};
 use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
@@ -310,26 +310,6 @@ const MORE_CAPABILITY_KEYS: [&str; 2] = ["NrOfTXPDO", "LSS_Supported"];
 
 const NAME_KEYS: [&str; 3] = ["VendorName", "ProductName", "OrderCode"];
 
-const BOOLEAN_KEYS: [&str; 5] = [
-    "SimpleBootUpMaster",
-    "SimpleBootUpSlave",
-    "GroupMessaging",
-    "LSS_Supported",
-    "CANopenSafetySupported",
-];
-
-/// Numeric entries and their bit width (all unsigned).
-const NUMBER_KEYS: [(&str, u32); 8] = [
-    ("VendorNumber", 32),
-    ("ProductNumber", 32),
-    ("RevisionNumber", 32),
-    ("Granularity", 8),
-    ("DynamicChannelsSupported", 8),
-    ("CompactPDO", 8),
-    ("NrOfRXPDO", 16),
-    ("NrOfTXPDO", 16),
-];
-
 /// Runs the checks of this group.
 pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     // A missing [DeviceInfo] is P029; its keys are not reported again one by one.
@@ -341,7 +321,7 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
         .iter()
         .chain(&MORE_CAPABILITY_KEYS)
         .copied()
-        .chain(BAUD_RATES.iter().map(|&(_, key)| key));
+        .chain(DeviceInfo::BAUD_RATE_KEYS.map(|(_, key)| key));
     for key in capability {
         if present(info.get(key)).is_none() {
             out.push(missing(cx, &KEY_MISSING, info, key));
@@ -352,7 +332,7 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
             out.push(missing(cx, &NAME_MISSING, info, key));
         }
     }
-    for (key, bits) in NUMBER_KEYS {
+    for (key, bits) in DeviceInfo::NUMBER_KEYS {
         let Some(text) = present(info.get(key)) else {
             continue;
         };
@@ -387,10 +367,9 @@ fn missing(cx: &Context<'_>, check: &CheckInfo, info: &DeviceInfo, key: &str) ->
 }
 
 fn check_booleans(cx: &Context<'_>, out: &mut Vec<Finding>, info: &DeviceInfo) {
-    let keys = BOOLEAN_KEYS
-        .iter()
-        .copied()
-        .chain(BAUD_RATES.iter().map(|&(_, key)| key));
+    let keys = DeviceInfo::FLAG_KEYS
+        .into_iter()
+        .chain(DeviceInfo::BAUD_RATE_KEYS.map(|(_, key)| key));
     for key in keys {
         let Some(text) = present(info.get(key)) else {
             continue;
@@ -416,7 +395,7 @@ fn check_booleans(cx: &Context<'_>, out: &mut Vec<Finding>, info: &DeviceInfo) {
         };
         out.push(finding.with_help(format!("write {key}=0 or {key}=1")));
     }
-    let rates: Vec<Option<i128>> = BAUD_RATES
+    let rates: Vec<Option<i128>> = DeviceInfo::BAUD_RATE_KEYS
         .iter()
         .filter_map(|&(_, key)| present(info.get(key)))
         .map(strict_int)

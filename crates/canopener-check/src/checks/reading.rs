@@ -17,18 +17,6 @@ pub(crate) fn present(value: Option<&str>) -> Option<&str> {
     value.map(str::trim).filter(|v| !v.is_empty())
 }
 
-/// The bit rates `[DeviceInfo]` can declare, in kbit/s, with their keys (CiA 306 V1.3 §4.5).
-pub(crate) const BAUD_RATES: [(u32, &str); 8] = [
-    (10, "BaudRate_10"),
-    (20, "BaudRate_20"),
-    (50, "BaudRate_50"),
-    (125, "BaudRate_125"),
-    (250, "BaudRate_250"),
-    (500, "BaudRate_500"),
-    (800, "BaudRate_800"),
-    (1000, "BaudRate_1000"),
-];
-
 /// Reads a CiA 306 §4.2 integer: decimal, `0x` hexadecimal or octal with a leading `0`, optionally
 /// signed. The lenient forms the value parser also accepts (`FEh`, `08` read as decimal) are
 /// refused; an inline `; comment` is ignored, since group A reports it.

@@ -629,21 +629,10 @@ fn is_untyped_number(kind: SectionKind, key: &str) -> bool {
         SectionKind::FileInfo => any(&["FileVersion", "FileRevision"]),
         SectionKind::DeviceInfo => {
             key.get(..9).is_some_and(|p| p.eq_ignore_ascii_case("BaudRate_"))
-                || any(&[
-                    "VendorNumber",
-                    "ProductNumber",
-                    "RevisionNumber",
-                    "SimpleBootUpMaster",
-                    "SimpleBootUpSlave",
-                    "Granularity",
-                    "DynamicChannelsSupported",
-                    "GroupMessaging",
-                    "NrOfRXPDO",
-                    "NrOfTXPDO",
-                    "LSS_Supported",
-                    "CompactPDO",
-                    "CANopenSafetySupported",
-                ])
+                || DeviceInfo::FLAG_KEYS
+                    .into_iter()
+                    .chain(DeviceInfo::NUMBER_KEYS.map(|(key, _)| key))
+                    .any(|k| k.eq_ignore_ascii_case(key))
         }
         SectionKind::DummyUsage
         | SectionKind::ObjectList(_)
