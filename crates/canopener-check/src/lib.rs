@@ -29,5 +29,5 @@ pub mod fix;
 
 pub use check_info::{CheckDescription, CheckInfo, Group};
 pub use context::Context;
-pub use finding::Finding;
+pub use finding::{Finding, sort_by_position};
 pub use run::{FileCheck, Selection, check};

@@ -4,7 +4,7 @@ use canopener_eds::Loaded;
 
 use crate::check_info::CheckInfo;
 use crate::context::Context;
-use crate::finding::Finding;
+use crate::finding::{Finding, sort_by_position};
 use crate::registry;
 
 /// Which checks to report: `--only`, `--skip`, `--tag`.
@@ -55,10 +55,9 @@ pub fn check(loaded: &Loaded, file_name: Option<&str>, selection: &Selection) ->
             .filter(|info| !selection.selects_builtin(info))
             .map(|info| info.code)
             .collect();
-        findings.retain(|f| !dropped.contains(f.code.as_str()));
+        findings.retain(|f| !dropped.contains(f.diagnostic.code.as_str()));
     }
-    findings
-        .sort_by(|a, b| (a.span.line, a.span.column, &a.code).cmp(&(b.span.line, b.span.column, &b.code)));
+    sort_by_position(&mut findings);
     FileCheck { findings }
 }
 
@@ -69,6 +68,6 @@ pub(crate) fn findings_with_code(text: &str, code: &str) -> Vec<Finding> {
     check(&loaded, None, &Selection::default())
         .findings
         .into_iter()
-        .filter(|f| f.code == code)
+        .filter(|f| f.diagnostic.code == code)
         .collect()
 }

@@ -1695,7 +1695,7 @@ mod tests {
     }
 
     fn with_code<'f>(found: &'f [Finding], code: &str) -> Vec<&'f Finding> {
-        found.iter().filter(|f| f.code == code).collect()
+        found.iter().filter(|f| f.diagnostic.code == code).collect()
     }
 
     #[test]
@@ -1753,7 +1753,9 @@ mod tests {
         let restricted = with_code(&eds, "C710");
         assert_eq!(restricted.len(), 1, "{eds:?}");
         assert!(
-            restricted.iter().all(|f| f.message.contains("node-IDs 64..95")),
+            restricted
+                .iter()
+                .all(|f| f.diagnostic.message.contains("node-IDs 64..95")),
             "{restricted:?}"
         );
         let dcf = |node: u8| format!("[DeviceComissioning]\nNodeID={node}\n{TPDO1}");
@@ -1771,7 +1773,7 @@ mod tests {
         assert!(
             highest
                 .iter()
-                .all(|f| f.span.line == 4 && f.key.as_deref() == Some("CompactPDO"))
+                .all(|f| f.diagnostic.span.line == 4 && f.diagnostic.key.as_deref() == Some("CompactPDO"))
         );
     }
 
@@ -1787,7 +1789,8 @@ DefaultValue=0\nCompactSubObj=2\n\
         assert!(
             reserved
                 .iter()
-                .all(|f| f.section.as_deref() == Some("1016Value") && f.key.as_deref() == Some("2")),
+                .all(|f| f.diagnostic.section.as_deref() == Some("1016Value")
+                    && f.diagnostic.key.as_deref() == Some("2")),
             "{reserved:?}"
         );
     }

@@ -586,7 +586,10 @@ mod tests {
     }
 
     fn codes(found: &[Finding]) -> Vec<(&str, Severity)> {
-        found.iter().map(|f| (f.code.as_str(), f.severity)).collect()
+        found
+            .iter()
+            .map(|f| (f.diagnostic.code.as_str(), f.diagnostic.severity))
+            .collect()
     }
 
     const DCF: &str = "[FileInfo]\nLastEDS=x.eds\n[DeviceInfo]\nBaudRate_250=1\nBaudRate_500=0\n\

@@ -609,16 +609,19 @@ mod tests {
     #[test]
     fn booleans_in_another_notation_are_warnings_and_garbage_is_an_error() {
         let found = findings(&DEVICE.replace("BaudRate_250=1", "BaudRate_250=0x1"));
-        let severities: Vec<(&str, Severity)> = found.iter().map(|f| (f.code.as_str(), f.severity)).collect();
+        let severities: Vec<(&str, Severity)> = found
+            .iter()
+            .map(|f| (f.diagnostic.code.as_str(), f.diagnostic.severity))
+            .collect();
         // 0x1 still reads as 1, so the device supports a bit rate and C306 stays quiet.
         assert_eq!(severities, [("C305", Severity::Warning)]);
         let found = findings(&DEVICE.replace("GroupMessaging=0", "GroupMessaging=no"));
         assert_eq!(found.len(), 1);
         assert_eq!(
-            (found[0].code.as_str(), found[0].severity),
+            (found[0].diagnostic.code.as_str(), found[0].diagnostic.severity),
             ("C305", Severity::Error)
         );
-        assert_eq!(found[0].key.as_deref(), Some("GroupMessaging"));
+        assert_eq!(found[0].diagnostic.key.as_deref(), Some("GroupMessaging"));
     }
 
     #[test]
@@ -626,7 +629,7 @@ mod tests {
         let found = findings(&DEVICE.replace("DefaultValue=2748", "DefaultValue=0x00000ABD"));
         assert_eq!(found.len(), 1);
         assert_eq!(
-            found[0].message,
+            found[0].diagnostic.message,
             "VendorNumber 0x00000ABC differs from 1018sub1 DefaultValue 0x00000ABD"
         );
         let found = findings(&DEVICE.replace("DefaultValue=2748", "DefaultValue=$NODEID+0xABC"));

@@ -1092,9 +1092,9 @@ mod tests {
         let mut out = Vec::new();
         run(&cx, &mut out);
         assert_eq!(out.len(), loaded.diagnostics.len());
-        let duplicate = out.iter().find(|f| f.code == "P021");
-        assert!(duplicate.is_some_and(|f| !f.fixable && f.severity == Severity::Error));
-        let spelling = out.iter().find(|f| f.code == "P031");
-        assert!(spelling.is_some_and(|f| f.fixable && f.section.as_deref() == Some("1000sub01")));
+        let duplicate = out.iter().find(|f| f.diagnostic.code == "P021");
+        assert!(duplicate.is_some_and(|f| !f.fixable && f.diagnostic.severity == Severity::Error));
+        let spelling = out.iter().find(|f| f.diagnostic.code == "P031");
+        assert!(spelling.is_some_and(|f| f.fixable && f.diagnostic.section.as_deref() == Some("1000sub01")));
     }
 }

@@ -766,9 +766,9 @@ mod tests {
         let mut out = Vec::new();
         run(&cx, &mut out);
         assert_eq!(out.len(), 9);
-        assert!(out.iter().all(|f| f.code == "C851"));
+        assert!(out.iter().all(|f| f.diagnostic.code == "C851"));
         assert_eq!(
-            out.last().map(|f| f.message.as_str()),
+            out.last().map(|f| f.diagnostic.message.as_str()),
             Some("65527 more of the 65535 declared module types have no [M<x>ModuleInfo]")
         );
     }

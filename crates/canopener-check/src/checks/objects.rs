@@ -1112,8 +1112,8 @@ mod tests {
         let record = findings(&mapping("2000", "0"), "C537");
         assert_eq!(record.len(), 1);
         assert!(record[0].fixable);
-        assert_eq!(record[0].key.as_deref(), Some("DefaultValue"));
-        assert_eq!(record[0].section.as_deref(), Some("2000sub0"));
+        assert_eq!(record[0].diagnostic.key.as_deref(), Some("DefaultValue"));
+        assert_eq!(record[0].diagnostic.section.as_deref(), Some("2000sub0"));
     }
 
     #[test]

@@ -466,7 +466,10 @@ mod tests {
         let text = var("0x0008", "LowLimit=-1.5\nHighLimit=2.5\nDefaultValue=2.75\n");
         let found = findings(&text, "C602");
         assert_eq!(found.len(), 1);
-        assert_eq!(found[0].message, "DefaultValue 2.75 is above HighLimit 2.5");
+        assert_eq!(
+            found[0].diagnostic.message,
+            "DefaultValue 2.75 is above HighLimit 2.5"
+        );
         assert!(
             findings(
                 &var("0x0008", "LowLimit=-1.5\nHighLimit=2.5\nDefaultValue=-1.5\n"),
@@ -506,7 +509,12 @@ mod tests {
             "0x0007",
             "LowLimit=0x181\nHighLimit=0x1BF\nDefaultValue=$NODEID+0x180\n",
         );
-        assert!(findings(&eds, "C602")[0].message.contains("node-ID 127"));
+        assert!(
+            findings(&eds, "C602")[0]
+                .diagnostic
+                .message
+                .contains("node-ID 127")
+        );
     }
 
     #[test]

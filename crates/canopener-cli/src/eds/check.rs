@@ -74,7 +74,10 @@ pub(crate) fn exit_status(report: &Report, deny: Option<DenyLevel>) -> CliResult
 
 /// Counts findings of one severity in a file report.
 pub(crate) fn count(file: &FileReport, severity: Severity) -> usize {
-    file.findings.iter().filter(|f| f.severity == severity).count()
+    file.findings
+        .iter()
+        .filter(|f| f.diagnostic.severity == severity)
+        .count()
 }
 
 /// A progress bar on stderr for batches, drawn only on a terminal.

@@ -102,11 +102,9 @@ impl Checks {
             for pack in &self.packs {
                 findings.extend(pack.check(&cx, &self.selection));
             }
-            findings.sort_by(|a, b| {
-                (a.span.line, a.span.column, &a.code).cmp(&(b.span.line, b.span.column, &b.code))
-            });
+            canopener_check::sort_by_position(&mut findings);
         }
-        let lines: BTreeSet<u32> = findings.iter().map(|f| f.span.line).collect();
+        let lines: BTreeSet<u32> = findings.iter().map(|f| f.diagnostic.span.line).collect();
         let source: BTreeMap<u32, String> = lines
             .into_iter()
             .filter(|&l| l >= 1)

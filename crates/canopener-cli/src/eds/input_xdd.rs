@@ -14,8 +14,8 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> CliResult<Input> {
         .diagnostics
         .iter()
         .map(|d| Finding {
-            line: d.line,
-            column: d.column,
+            line: d.span.line,
+            column: d.span.column,
             severity: d.severity,
             code: d.code.as_str().to_owned(),
             message: d.message.clone(),

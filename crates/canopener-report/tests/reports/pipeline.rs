@@ -20,10 +20,9 @@ fn report() -> Report {
     // report so the test does not depend on which checks exist.
     for diagnostic in &loaded.diagnostics {
         let finding = Finding::from_diagnostic(diagnostic, false);
-        if !findings
-            .iter()
-            .any(|f| f.code == finding.code && f.span == finding.span)
-        {
+        if !findings.iter().any(|f| {
+            f.diagnostic.code == finding.diagnostic.code && f.diagnostic.span == finding.diagnostic.span
+        }) {
             findings.push(finding);
         }
     }
@@ -46,9 +45,9 @@ fn source_lines_come_from_the_document() {
     for finding in &file.findings {
         let line = file
             .source
-            .get(&finding.span.line)
+            .get(&finding.diagnostic.span.line)
             .expect("source line of every finding");
-        let index = usize::try_from(finding.span.line).expect("small") - 1;
+        let index = usize::try_from(finding.diagnostic.span.line).expect("small") - 1;
         assert_eq!(Some(&line.as_str()), lines.get(index), "{finding:?}");
     }
     let from_text = FileReport::from_text("test.eds", file.findings.clone(), EDS);
