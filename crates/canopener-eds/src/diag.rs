@@ -260,15 +260,7 @@ impl<C: DiagnosticCode> Diagnostic<C> {
     /// The same diagnostic with its code as a string, for lists that mix series (checker findings,
     /// rule-pack findings).
     pub fn into_string_code(self) -> Diagnostic<String> {
-        Diagnostic {
-            code: self.code.as_str().to_owned(),
-            severity: self.severity,
-            message: self.message,
-            span: self.span,
-            section: self.section,
-            key: self.key,
-            help: self.help,
-        }
+        self.map_code(|code| code.as_str().to_owned())
     }
 }
 
@@ -283,6 +275,19 @@ impl<C> Diagnostic<C> {
             section: None,
             key: None,
             help: None,
+        }
+    }
+
+    /// The same diagnostic with its code turned into another type (a series wrapped in a wider one).
+    pub fn map_code<D>(self, f: impl FnOnce(C) -> D) -> Diagnostic<D> {
+        Diagnostic {
+            code: f(self.code),
+            severity: self.severity,
+            message: self.message,
+            span: self.span,
+            section: self.section,
+            key: self.key,
+            help: self.help,
         }
     }
 

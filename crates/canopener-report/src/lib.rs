@@ -23,6 +23,7 @@ mod text;
 use std::collections::BTreeMap;
 
 use canopener_check::{CheckDescription, Finding};
+use canopener_eds::Severity;
 use canopener_eds::syntax::Document;
 
 pub use html::html;
@@ -94,6 +95,14 @@ impl FileReport {
             source,
             problem: None,
         }
+    }
+
+    /// How many findings have this severity.
+    pub fn count(&self, severity: Severity) -> usize {
+        self.findings
+            .iter()
+            .filter(|f| f.diagnostic.severity == severity)
+            .count()
     }
 
     /// The report of a file that could not be read.

@@ -2,14 +2,12 @@
 
 use std::io::Write;
 
-use canopener_check::Context;
-use canopener_check::fix::{self, Fix};
+use canopener_check::fix;
 use canopener_eds::Severity;
+use canopener_runtime::batch::display_path;
 
 use crate::eds::args::{DenyLevel, EdsFixArgs};
-use crate::eds::check::count;
-use crate::eds::check_inputs::Checks;
-use crate::eds::input::print_stdout;
+use crate::eds::input::{checker, print_stdout, read_bytes};
 use crate::error::{CliError, CliResult, stdout_error};
 use canopener_runtime::files::{backup_path, same_file, write_atomic};
 
@@ -22,18 +20,10 @@ pub(crate) fn run(args: EdsFixArgs) -> CliResult {
             args.file.display()
         )));
     }
-    let checks = Checks::from_args(&args.selection)?;
-    let bytes = std::fs::read(&args.file)
-        .map_err(|e| CliError::EdsTrouble(format!("cannot read {}: {e}", args.file.display())))?;
+    let checker = checker(&args.selection)?;
+    let bytes = read_bytes(&args.file)?;
     let name = args.file.file_name().and_then(|n| n.to_str());
-    let rule_fixes = |cx: &Context<'_>| -> Vec<Fix> {
-        checks
-            .packs
-            .iter()
-            .flat_map(|pack| pack.fixes(cx, &checks.selection))
-            .collect()
-    };
-    let outcome = fix::fix_file(&bytes, name, &checks.selection, &rule_fixes);
+    let outcome = checker.fix(name, &bytes);
     let path = args.file.display();
     for applied in &outcome.fixes {
         let note = if applied.changes_meaning {
@@ -75,15 +65,16 @@ pub(crate) fn run(args: EdsFixArgs) -> CliResult {
         stdout.write_all(&outcome.bytes).map_err(stdout_error)?;
         stdout.flush().map_err(stdout_error)?;
     }
-    let before = checks.check_bytes(&args.file, &bytes);
-    let after = checks.check_bytes(&args.file, &outcome.bytes);
-    let (errors, warnings) = (count(&after, Severity::Error), count(&after, Severity::Warning));
+    let shown = display_path(&args.file);
+    let before = checker.check(&shown, name, &bytes);
+    let after = checker.check(&shown, name, &outcome.bytes);
+    let (errors, warnings) = (after.count(Severity::Error), after.count(Severity::Warning));
     eprintln!(
         "{path}: {} fix(es) applied{}; errors {} -> {errors}, {warnings} warning(s) remain \
          (`canopener eds check` lists them)",
         outcome.fixes.len(),
         if args.dry_run { " in the diff only" } else { "" },
-        count(&before, Severity::Error),
+        before.count(Severity::Error),
     );
     if errors > 0 || (args.deny == Some(DenyLevel::Warnings) && warnings > 0) {
         return Err(CliError::Exit(1));

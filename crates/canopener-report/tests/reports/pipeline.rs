@@ -1,6 +1,7 @@
 //! The whole path the CLI takes: load an EDS, check it, build the report, write every format.
 
 use canopener_check::{CheckInfo, Finding, Selection, check, registry};
+use canopener_eds::Severity;
 use canopener_report::{FileReport, HumanOptions, Report, html, human, json, junit, sarif};
 use serde_json::Value;
 
@@ -77,4 +78,20 @@ fn every_format_accepts_a_real_check() {
     let page = html(&report);
     assert_eq!(page.matches("<article class=\"finding").count(), total);
     assert!(!page.contains("<x>"));
+}
+
+#[test]
+fn a_file_report_counts_its_findings_by_severity() {
+    let report = report();
+    let file = &report.files[0];
+    let total: usize = [Severity::Error, Severity::Warning, Severity::Info]
+        .into_iter()
+        .map(|s| file.count(s))
+        .sum();
+    assert_eq!(total, file.findings.len());
+    assert!(file.count(Severity::Error) > 0, "the duplicate key is an error");
+    assert_eq!(
+        FileReport::unreadable("gone.eds", "no such file").count(Severity::Error),
+        0
+    );
 }
