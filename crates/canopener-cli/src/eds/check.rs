@@ -4,12 +4,13 @@ use std::io::IsTerminal;
 
 use canopener_report::{HumanOptions, Report};
 use canopener_runtime::batch::{check_all, expand};
+use canopener_runtime::files::write_atomic;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::eds::args::{CheckFormat, ColorChoice, DenyLevel, EdsCheckArgs};
-use crate::eds::input::{checker, print_stdout};
+use crate::eds::input::checker;
 use crate::error::{CliError, CliResult};
-use canopener_runtime::files::write_atomic;
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: EdsCheckArgs) -> CliResult {
     let checker = checker(&args.selection)?;

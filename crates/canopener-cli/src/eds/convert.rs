@@ -1,11 +1,12 @@
 //! `canopener eds convert`: EDS ⇄ DCF ⇄ XDD/XDC ⇄ JSON.
 
 use canopener_description::convert::{ConvertError, Target, convert};
+use canopener_runtime::files::{same_file, write_atomic};
 
 use crate::eds::args::{ConvertTarget, EdsConvertArgs};
-use crate::eds::input::{print_stdout, read_input, report_diagnostics};
+use crate::eds::input::{read_input, report_diagnostics};
 use crate::error::{CliError, CliResult};
-use canopener_runtime::files::{same_file, write_atomic};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: EdsConvertArgs) -> CliResult {
     if args.to != ConvertTarget::Dcf && (args.node_id.is_some() || args.bitrate.is_some()) {

@@ -1,8 +1,9 @@
 //! `canopener eds explain CODE`: the explanation page of one check.
 
 use crate::eds::args::{CheckSelectionArgs, EdsExplainArgs, ReportFormat};
-use crate::eds::input::{checker, print_stdout};
+use crate::eds::input::checker;
 use crate::error::{CliError, CliResult};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: EdsExplainArgs) -> CliResult {
     let checker = checker(&CheckSelectionArgs {

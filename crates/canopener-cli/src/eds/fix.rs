@@ -1,15 +1,14 @@
 //! `canopener eds fix`: apply the safe fixes, say what each one did, and re-check the result.
 
-use std::io::Write;
-
 use canopener_check::fix;
 use canopener_eds::Severity;
 use canopener_runtime::batch::display_path;
+use canopener_runtime::files::{backup_path, same_file, write_atomic};
 
 use crate::eds::args::{DenyLevel, EdsFixArgs};
-use crate::eds::input::{checker, print_stdout, read_bytes};
-use crate::error::{CliError, CliResult, stdout_error};
-use canopener_runtime::files::{backup_path, same_file, write_atomic};
+use crate::eds::input::{checker, read_bytes};
+use crate::error::{CliError, CliResult};
+use crate::output::{print_stdout, write_stdout};
 
 pub(crate) fn run(args: EdsFixArgs) -> CliResult {
     if let Some(out) = &args.output
@@ -61,9 +60,7 @@ pub(crate) fn run(args: EdsFixArgs) -> CliResult {
     } else if let Some(out) = &args.output {
         write_atomic(out, &outcome.bytes, false)?;
     } else {
-        let mut stdout = std::io::stdout().lock();
-        stdout.write_all(&outcome.bytes).map_err(stdout_error)?;
-        stdout.flush().map_err(stdout_error)?;
+        write_stdout(&outcome.bytes)?;
     }
     let shown = display_path(&args.file);
     let before = checker.check(&shown, name, &bytes);

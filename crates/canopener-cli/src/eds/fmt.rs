@@ -2,11 +2,12 @@
 
 use canopener_description::DescriptionCode;
 use canopener_eds::Code;
+use canopener_runtime::files::{backup_path, same_file, write_atomic};
 
 use crate::eds::args::EdsFmtArgs;
-use crate::eds::input::{print_stdout, read_bytes, read_input, report_diagnostics};
+use crate::eds::input::{read_bytes, read_input, report_diagnostics};
 use crate::error::{CliError, CliResult};
-use canopener_runtime::files::{backup_path, same_file, write_atomic};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: EdsFmtArgs) -> CliResult {
     if let Some(out) = &args.output

@@ -9,17 +9,17 @@ use canopener_description::{Checker, Description, Selection};
 use canopener_eds::Severity;
 
 use crate::eds::args::CheckSelectionArgs;
-use crate::error::{CliError, CliResult, stdout_error};
+use crate::error::{CliError, CliResult};
 
 /// Reads and loads a description (EDS/DCF, XDD/XDC or JSON); only unreadable or refused files are
 /// errors (exit 2).
 pub(crate) fn read_input(path: &Path) -> CliResult<Description> {
-    canopener_runtime::description::read_description(path).map_err(|e| CliError::EdsTrouble(e.to_string()))
+    Ok(canopener_runtime::description::read_description(path)?)
 }
 
 /// Reads a file's bytes as they are (for commands that compare or edit them).
 pub(crate) fn read_bytes(path: &Path) -> CliResult<Vec<u8>> {
-    canopener_runtime::description::read_bytes(path).map_err(|e| CliError::EdsTrouble(e.to_string()))
+    Ok(canopener_runtime::description::read_bytes(path)?)
 }
 
 /// The checks in force: the rule packs read, `--only/--skip` names checked against every known
@@ -69,11 +69,4 @@ pub(crate) fn report_diagnostics(path: &Path, description: &Description, all: bo
             path.display()
         );
     }
-}
-
-/// Writes text to stdout, ending quietly if the reader went away.
-pub(crate) fn print_stdout(text: &str) -> CliResult {
-    let mut out = std::io::stdout().lock();
-    out.write_all(text.as_bytes()).map_err(stdout_error)?;
-    out.flush().map_err(stdout_error)
 }

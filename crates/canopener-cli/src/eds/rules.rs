@@ -1,8 +1,9 @@
 //! `canopener eds rules list`: every check, built-in and from rule packs.
 
 use crate::eds::args::{EdsRulesListArgs, ReportFormat};
-use crate::eds::input::{checker, print_stdout};
+use crate::eds::input::checker;
 use crate::error::{CliError, CliResult};
+use crate::output::print_stdout;
 
 pub(crate) fn list(args: EdsRulesListArgs) -> CliResult {
     let selected = checker(&args.selection)?.selected();

@@ -8,8 +8,9 @@ use canopener_eds::{Diagnostic, ObjectType, Severity};
 use serde::Serialize;
 
 use crate::eds::args::{EdsShowArgs, ReportFormat};
-use crate::eds::input::{print_stdout, read_input, report_diagnostics};
+use crate::eds::input::{read_input, report_diagnostics};
 use crate::error::{CliError, CliResult};
+use crate::output::print_stdout;
 
 /// One row of the table: an object or a sub-object.
 #[derive(Debug, Serialize)]
