@@ -13,9 +13,9 @@ fuzz_target!(|data: &[u8]| {
     let findings = check(&loaded, Some("fuzz.eds"), &selection).findings;
     let lines = loaded.document.lines().len();
     for finding in &findings {
-        let line = usize::try_from(finding.span.line).unwrap_or(usize::MAX);
+        let line = usize::try_from(finding.diagnostic.span.line).unwrap_or(usize::MAX);
         assert!((1..=lines + 1).contains(&line), "finding outside the file: {finding:?}");
-        assert!(finding.span.column >= 1, "finding with column 0: {finding:?}");
+        assert!(finding.diagnostic.span.column >= 1, "finding with column 0: {finding:?}");
     }
     let none = |_: &canopener_check::Context<'_>| Vec::new();
     let fixed = fix::fix_file(data, Some("fuzz.eds"), &selection, &none);

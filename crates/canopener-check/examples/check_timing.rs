@@ -98,7 +98,10 @@ fn time_file(path: &Path, repeat: usize) -> Json {
         load_only.push(loaded_at - start);
         counts = (
             findings.len(),
-            findings.iter().filter(|f| f.severity == Severity::Error).count(),
+            findings
+                .iter()
+                .filter(|f| f.diagnostic.severity == Severity::Error)
+                .count(),
         );
     }
     json!({

@@ -36,23 +36,26 @@ fn main() {
         let found = canopener_check::check(&loaded, name, &Selection::default()).findings;
         let mut seen_here = std::collections::BTreeSet::new();
         for f in found {
-            if only.as_deref().is_some_and(|c| !c.eq_ignore_ascii_case(&f.code)) {
+            if only
+                .as_deref()
+                .is_some_and(|c| !c.eq_ignore_ascii_case(&f.diagnostic.code))
+            {
                 continue;
             }
-            severities.insert(f.code.clone(), f.severity.to_string());
-            let entry = by_code.entry(f.code.clone()).or_default();
+            severities.insert(f.diagnostic.code.clone(), f.diagnostic.severity.to_string());
+            let entry = by_code.entry(f.diagnostic.code.clone()).or_default();
             entry.0 += 1;
-            if seen_here.insert(f.code.clone()) {
+            if seen_here.insert(f.diagnostic.code.clone()) {
                 entry.1 += 1;
             }
             if entry.2.len() < examples {
                 entry.2.push(format!(
                     "{}:{}:{} [{}] {}",
                     name.unwrap_or("?"),
-                    f.span.line,
-                    f.span.column,
-                    f.section.as_deref().unwrap_or("-"),
-                    f.message
+                    f.diagnostic.span.line,
+                    f.diagnostic.span.column,
+                    f.diagnostic.section.as_deref().unwrap_or("-"),
+                    f.diagnostic.message
                 ));
             }
         }

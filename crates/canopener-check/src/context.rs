@@ -5,8 +5,8 @@ use canopener_eds::section_name::{self, SectionKind};
 use canopener_eds::syntax::Section;
 use canopener_eds::{Diagnostic, Document, Eds, Loaded, Span};
 
+use crate::check_info::CheckInfo;
 use crate::finding::Finding;
-use crate::registry::CheckInfo;
 
 /// Where a finding points when the thing it is about is not written anywhere (a missing section):
 /// the start of the file, so every span names a real line.

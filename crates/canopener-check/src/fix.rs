@@ -438,7 +438,7 @@ fn errors(loaded: &Loaded, file_name: Option<&str>) -> usize {
     check(loaded, file_name, &Selection::default())
         .findings
         .iter()
-        .filter(|f| f.severity == Severity::Error)
+        .filter(|f| f.diagnostic.severity == Severity::Error)
         .count()
 }
 

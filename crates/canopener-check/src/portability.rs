@@ -15,9 +15,9 @@ mod text;
 mod tools;
 mod values;
 
+use crate::check_info::CheckInfo;
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::registry::CheckInfo;
 
 /// The checks of this group.
 pub const CHECKS: &[CheckInfo] = &[
@@ -85,7 +85,7 @@ mod tests {
     fn codes_are_numbered_in_order_and_unique() {
         for (i, check) in CHECKS.iter().enumerate() {
             assert_eq!(check.code, format!("T{:03}", i + 1));
-            assert_eq!(check.group, crate::registry::Group::Portability);
+            assert_eq!(check.group, crate::check_info::Group::Portability);
             assert!(
                 check.explanation.lines().all(|l| !l.starts_with('#')),
                 "{}",

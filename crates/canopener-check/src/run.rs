@@ -2,9 +2,10 @@
 
 use canopener_eds::Loaded;
 
+use crate::check_info::CheckInfo;
 use crate::context::Context;
-use crate::finding::Finding;
-use crate::registry::{self, CheckInfo};
+use crate::finding::{Finding, sort_by_position};
+use crate::registry;
 
 /// Which checks to report: `--only`, `--skip`, `--tag`.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -45,39 +46,28 @@ pub struct FileCheck {
 pub fn check(loaded: &Loaded, file_name: Option<&str>, selection: &Selection) -> FileCheck {
     let cx = Context::new(loaded, file_name);
     let mut findings = Vec::new();
-    crate::parse_codes::run(&cx, &mut findings);
-    crate::group_a::run(&cx, &mut findings);
-    crate::group_b::run(&cx, &mut findings);
-    crate::group_c::run(&cx, &mut findings);
-    crate::group_d::run(&cx, &mut findings);
-    crate::group_e::run(&cx, &mut findings);
-    crate::group_f::run(&cx, &mut findings);
-    crate::group_g::run(&cx, &mut findings);
-    crate::group_h::run(&cx, &mut findings);
-    crate::group_i::run(&cx, &mut findings);
-    crate::group_j::run(&cx, &mut findings);
-    crate::group_k::run(&cx, &mut findings);
-    crate::portability::run(&cx, &mut findings);
+    for group in crate::checks::GROUPS {
+        (group.run)(&cx, &mut findings);
+    }
     if *selection != Selection::default() {
         let dropped: std::collections::HashSet<&str> = registry::builtin()
             .into_iter()
             .filter(|info| !selection.selects_builtin(info))
             .map(|info| info.code)
             .collect();
-        findings.retain(|f| !dropped.contains(f.code.as_str()));
+        findings.retain(|f| !dropped.contains(f.diagnostic.code.as_str()));
     }
-    findings
-        .sort_by(|a, b| (a.span.line, a.span.column, &a.code).cmp(&(b.span.line, b.span.column, &b.code)));
+    sort_by_position(&mut findings);
     FileCheck { findings }
 }
 
-/// The findings with one code on an EDS text (for the groups' unit tests).
+/// The findings with one code on an EDS text (for the check modules' unit tests).
 #[cfg(test)]
 pub(crate) fn findings_with_code(text: &str, code: &str) -> Vec<Finding> {
     let loaded = canopener_eds::load(text.as_bytes());
     check(&loaded, None, &Selection::default())
         .findings
         .into_iter()
-        .filter(|f| f.code == code)
+        .filter(|f| f.diagnostic.code == code)
         .collect()
 }

@@ -385,7 +385,7 @@ fn c537_does_not_lower_sub0_below_what_the_device_may_have() {
     let finding = canopener_check::check(&loaded, None, &only(&["C537"]))
         .findings
         .into_iter()
-        .find(|f| f.code == "C537")
+        .find(|f| f.diagnostic.code == "C537")
         .expect("C537 is reported");
     assert!(!finding.fixable, "{finding:?}");
 }

@@ -2,13 +2,11 @@
 
 pub(crate) mod args;
 pub(crate) mod check;
-pub(crate) mod check_inputs;
 pub(crate) mod convert;
 pub(crate) mod diff;
 pub(crate) mod explain;
 pub(crate) mod fix;
 pub(crate) mod fmt;
 pub(crate) mod input;
-pub(crate) mod input_xdd;
 pub(crate) mod rules;
 pub(crate) mod show;

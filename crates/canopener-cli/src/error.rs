@@ -122,6 +122,14 @@ impl From<canopener_runtime::candump_file::ReadLogError> for CliError {
     }
 }
 
+/// A device description that cannot be read or loaded is trouble (exit 2, as diff(1) does), for every
+/// command that takes one.
+impl From<canopener_runtime::description::ReadError> for CliError {
+    fn from(err: canopener_runtime::description::ReadError) -> CliError {
+        CliError::EdsTrouble(err.to_string())
+    }
+}
+
 pub(crate) type CliResult<T = ()> = Result<T, CliError>;
 
 /// Wraps a write to stdout so that a closed pipe ends the command quietly.

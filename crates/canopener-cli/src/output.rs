@@ -7,8 +7,13 @@ use crate::error::{CliResult, stdout_error};
 
 /// Writes `text` to stdout under one lock and flushes it, so it appears at once even when stdout is a pipe.
 pub(crate) fn print_stdout(text: &str) -> CliResult {
+    write_stdout(text.as_bytes())
+}
+
+/// Writes bytes to stdout as they are (a file in its own encoding), under one lock, flushed.
+pub(crate) fn write_stdout(bytes: &[u8]) -> CliResult {
     let mut out = std::io::stdout().lock();
-    out.write_all(text.as_bytes())
+    out.write_all(bytes)
         .and_then(|()| out.flush())
         .map_err(stdout_error)
 }

@@ -5,12 +5,22 @@
 //! DCF are concrete: `$NODEID` formulas are resolved for the node (the `DefaultValue` keeps the formula,
 //! so the EDS can be regenerated). Going back drops exactly the DCF additions.
 
-use crate::model::{Attributes, DeviceCommissioning, Eds, Origin};
+use crate::model::{Attributes, DeviceCommissioning, DeviceInfo, Eds, Origin};
 use crate::types::DataType;
 use crate::value::{Radix, Value, parse_value};
 
-/// The bit rates CiA 306 names in `[DeviceInfo] BaudRate_*` and `[DeviceComissioning] Baudrate`, in kbit/s.
-pub const BITRATES_KBIT: [u16; 8] = [10, 20, 50, 125, 250, 500, 800, 1000];
+/// The bit rates CiA 306 names in `[DeviceInfo] BaudRate_*` and `[DeviceComissioning] Baudrate`, in kbit/s:
+/// those of [`DeviceInfo::BAUD_RATE_KEYS`].
+pub const BITRATES_KBIT: [u16; 8] = {
+    let keys = DeviceInfo::BAUD_RATE_KEYS;
+    let mut rates = [0; 8];
+    let mut i = 0;
+    while i < rates.len() {
+        rates[i] = keys[i].0;
+        i += 1;
+    }
+    rates
+};
 
 /// Why an EDS cannot become a DCF as asked.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

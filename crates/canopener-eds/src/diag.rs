@@ -1,7 +1,10 @@
-//! Diagnostics produced while reading a file: a stable code, a severity, a message and a span.
+//! The diagnostic vocabulary of every canopener reader and checker: a stable code, a severity, a
+//! message, a span, the section and key concerned, and help.
 //!
-//! Codes are stable across releases (tools and CI filters match on them). Loading diagnostics use
-//! the `P` series; the checker adds its own series on top of the same type.
+//! Codes are stable across releases (tools and CI filters match on them). Each series is an enum
+//! made by [`diagnostic_codes!`](crate::diagnostic_codes): loading diagnostics use the `P` series
+//! ([`Code`]), the XDD reader the `X` series; the checker's own codes and user rule ids are strings
+//! in the same [`Diagnostic`] shape.
 
 use std::fmt;
 
@@ -47,42 +50,90 @@ impl Span {
     }
 }
 
-macro_rules! codes {
-    ($($(#[$doc:meta])* $variant:ident = $code:literal, $slug:literal, $severity:ident;)*) => {
-        /// The stable identity of a loading diagnostic.
+/// What every series of diagnostic codes says about each of its codes: the loader's `P` series
+/// ([`Code`]), the XDD reader's `X` series, and any other series defined with
+/// [`diagnostic_codes!`](crate::diagnostic_codes).
+pub trait DiagnosticCode: Copy + fmt::Debug + fmt::Display {
+    /// The stable code, e.g. `P020`.
+    fn as_str(self) -> &'static str;
+    /// A short kebab-case name, e.g. `duplicate-section`.
+    fn slug(self) -> &'static str;
+    /// The severity this code is reported with.
+    fn severity(self) -> Severity;
+}
+
+/// Defines a series of stable diagnostic codes: an enum with one variant per code, its `ALL` list,
+/// `as_str`, `slug`, `severity` and `from_name`, `Display` and `Serialize` as the code string, and
+/// [`DiagnosticCode`]. Each line reads `Variant = "P020", "slug", Severity;` after its doc comment.
+#[macro_export]
+macro_rules! diagnostic_codes {
+    (
+        $(#[$enum_doc:meta])* $vis:vis enum $name:ident {
+            $($(#[$doc:meta])* $variant:ident = $code:literal, $slug:literal, $severity:ident;)*
+        }
+    ) => {
+        $(#[$enum_doc])*
         #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-        pub enum Code {
+        $vis enum $name {
             $($(#[$doc])* $variant,)*
         }
 
-        impl Code {
+        impl $name {
             /// Every code, in numeric order.
-            pub const ALL: &'static [Code] = &[$(Code::$variant,)*];
+            pub const ALL: &'static [$name] = &[$($name::$variant,)*];
 
             /// The stable code, e.g. `P020`.
             pub fn as_str(self) -> &'static str {
-                match self { $(Code::$variant => $code,)* }
+                match self { $($name::$variant => $code,)* }
             }
 
             /// A short kebab-case name, e.g. `duplicate-section`.
             pub fn slug(self) -> &'static str {
-                match self { $(Code::$variant => $slug,)* }
+                match self { $($name::$variant => $slug,)* }
             }
 
             /// The severity this code is reported with.
-            pub fn severity(self) -> Severity {
-                match self { $(Code::$variant => Severity::$severity,)* }
+            pub fn severity(self) -> $crate::diag::Severity {
+                match self { $($name::$variant => $crate::diag::Severity::$severity,)* }
             }
 
-            /// Looks a code up by its stable string (`P020`) or its slug.
-            pub fn from_name(name: &str) -> Option<Code> {
-                Code::ALL.iter().copied().find(|c| c.as_str().eq_ignore_ascii_case(name) || c.slug() == name)
+            /// Looks a code up by its stable string (case-insensitive) or its slug.
+            pub fn from_name(name: &str) -> Option<$name> {
+                $name::ALL.iter().copied().find(|c| c.as_str().eq_ignore_ascii_case(name) || c.slug() == name)
+            }
+        }
+
+        impl $crate::diag::DiagnosticCode for $name {
+            fn as_str(self) -> &'static str {
+                $name::as_str(self)
+            }
+
+            fn slug(self) -> &'static str {
+                $name::slug(self)
+            }
+
+            fn severity(self) -> $crate::diag::Severity {
+                $name::severity(self)
+            }
+        }
+
+        impl ::std::fmt::Display for $name {
+            fn fmt(&self, f: &mut ::std::fmt::Formatter<'_>) -> ::std::fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+
+        impl $crate::serde::Serialize for $name {
+            fn serialize<S: $crate::serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+                serializer.serialize_str(self.as_str())
             }
         }
     };
 }
 
-codes! {
+crate::diagnostic_codes! {
+    /// The stable identity of a loading diagnostic.
+    pub enum Code {
     /// The file is not valid UTF-8 and was decoded as Windows-1252 (CiA 306 §4.2 wants ASCII).
     Windows1252 = "P001", "windows-1252-fallback", Error;
     /// The file starts with a UTF-8 byte order mark, which python canopen and lely cannot read.
@@ -175,26 +226,18 @@ codes! {
     PdoPairIncomplete = "P080", "pdo-pair-incomplete", Error;
     /// A module section (`M<x>...`) whose number is not declared in `[SupportedModules]`.
     UnlistedModule = "P090", "unlisted-module", Error;
-}
-
-impl fmt::Display for Code {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
     }
 }
 
-impl Serialize for Code {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.serialize_str(self.as_str())
-    }
-}
-
-/// One finding about the file, with where it is and how to fix it.
+/// One thing a reader or checker found in a file: which code, how serious, what, where, and how to
+/// fix it. Every series shares this shape: `Diagnostic` (the loader's `P` codes),
+/// `canopener_xdd::XddDiagnostic` (`X` codes), and the checker's findings, whose codes are check
+/// codes or rule ids (`Diagnostic<String>`).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
-pub struct Diagnostic {
+pub struct Diagnostic<C = Code> {
     /// The stable code.
-    pub code: Code,
-    /// The severity (normally `code.severity()`).
+    pub code: C,
+    /// The severity (normally that of the code).
     pub severity: Severity,
     /// What is wrong, naming the value as written.
     pub message: String,
@@ -208,17 +251,43 @@ pub struct Diagnostic {
     pub help: Option<String>,
 }
 
-impl Diagnostic {
+impl<C: DiagnosticCode> Diagnostic<C> {
     /// A diagnostic with the code's default severity.
-    pub fn new(code: Code, span: Span, message: impl Into<String>) -> Self {
+    pub fn new(code: C, span: Span, message: impl Into<String>) -> Self {
+        Self::from_parts(code, code.severity(), span, message)
+    }
+
+    /// The same diagnostic with its code as a string, for lists that mix series (checker findings,
+    /// rule-pack findings).
+    pub fn into_string_code(self) -> Diagnostic<String> {
+        self.map_code(|code| code.as_str().to_owned())
+    }
+}
+
+impl<C> Diagnostic<C> {
+    /// A diagnostic with an explicit severity (for codes that carry none themselves, such as rule ids).
+    pub fn from_parts(code: C, severity: Severity, span: Span, message: impl Into<String>) -> Self {
         Self {
             code,
-            severity: code.severity(),
+            severity,
             message: message.into(),
             span,
             section: None,
             key: None,
             help: None,
+        }
+    }
+
+    /// The same diagnostic with its code turned into another type (a series wrapped in a wider one).
+    pub fn map_code<D>(self, f: impl FnOnce(C) -> D) -> Diagnostic<D> {
+        Diagnostic {
+            code: f(self.code),
+            severity: self.severity,
+            message: self.message,
+            span: self.span,
+            section: self.section,
+            key: self.key,
+            help: self.help,
         }
     }
 
@@ -236,7 +305,8 @@ impl Diagnostic {
     }
 }
 
-impl fmt::Display for Diagnostic {
+impl<C: fmt::Display> fmt::Display for Diagnostic<C> {
+    /// `line:column: severity[code]: message`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,

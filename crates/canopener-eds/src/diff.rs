@@ -11,7 +11,7 @@ use std::fmt;
 use serde::Serialize;
 
 use crate::model::{
-    Attributes, Eds, Object, Origin, Properties, REPRESENTATION_KEYS, SUB_CARRIED_KEYS, int_of,
+    Attributes, DeviceInfo, Eds, Object, Origin, Properties, REPRESENTATION_KEYS, SUB_CARRIED_KEYS, int_of,
 };
 use crate::types::DataType;
 use crate::value::parse_value;
@@ -267,28 +267,17 @@ fn compare_pairs(
 
 /// Keys whose absence means 0 (CiA 306 §4.5: a flag not set, no compact PDOs, no dynamic channels), so
 /// `CompactPDO=0` on one side and nothing on the other describe the same device.
-const ZERO_WHEN_ABSENT: &[&str] = &[
-    "CompactPDO",
-    "DynamicChannelsSupported",
-    "GroupMessaging",
-    "LSS_Supported",
-    "SimpleBootUpMaster",
-    "SimpleBootUpSlave",
-    "CANopenSafetySupported",
-    "BaudRate_10",
-    "BaudRate_20",
-    "BaudRate_50",
-    "BaudRate_125",
-    "BaudRate_250",
-    "BaudRate_500",
-    "BaudRate_800",
-    "BaudRate_1000",
-];
+fn zero_when_absent(key: &str) -> bool {
+    ["CompactPDO", "DynamicChannelsSupported"]
+        .into_iter()
+        .chain(DeviceInfo::FLAG_KEYS)
+        .chain(DeviceInfo::BAUD_RATE_KEYS.map(|(_, key)| key))
+        .any(|k| k.eq_ignore_ascii_case(key))
+}
 
 /// Whether a key present on one side only says nothing the absent side does not.
 fn absent_means(key: &str, value: &str) -> bool {
-    value.trim().is_empty()
-        || (ZERO_WHEN_ABSENT.iter().any(|k| k.eq_ignore_ascii_case(key)) && int_of(value) == Some(0))
+    value.trim().is_empty() || (zero_when_absent(key) && int_of(value) == Some(0))
 }
 
 fn same_text_value(a: &str, b: &str) -> bool {

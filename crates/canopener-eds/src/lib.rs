@@ -32,9 +32,13 @@ pub mod types;
 pub mod value;
 pub mod write;
 
-pub use diag::{Code, Diagnostic, Severity, Span};
+pub use diag::{Code, Diagnostic, DiagnosticCode, Severity, Span};
+
 pub use load::{Loaded, build, load};
 pub use model::{Attributes, Eds, Object, ObjectListKind, Origin, SubObject};
+/// For [`diagnostic_codes!`]: the codes it defines serialise as their code string.
+#[doc(hidden)]
+pub use serde;
 pub use syntax::Document;
 pub use types::{AccessType, DataType, ObjectType, TypeKind};
 pub use value::Value;

@@ -234,6 +234,44 @@ keyed_section! {
     }
 }
 
+/// What the `[DeviceInfo]` keys hold (CiA 306 §4.5): the one list every reader and checker of the
+/// section uses.
+impl DeviceInfo {
+    /// The Boolean keys that declare a supported bit rate, with that bit rate in kbit/s.
+    pub const BAUD_RATE_KEYS: [(u16, &'static str); 8] = [
+        (10, "BaudRate_10"),
+        (20, "BaudRate_20"),
+        (50, "BaudRate_50"),
+        (125, "BaudRate_125"),
+        (250, "BaudRate_250"),
+        (500, "BaudRate_500"),
+        (800, "BaudRate_800"),
+        (1000, "BaudRate_1000"),
+    ];
+
+    /// The Boolean keys besides the bit rates: capabilities the device has or lacks
+    /// (`CANopenSafetySupported` from CiA 306-1 V1.4).
+    pub const FLAG_KEYS: [&'static str; 5] = [
+        "SimpleBootUpMaster",
+        "SimpleBootUpSlave",
+        "GroupMessaging",
+        "LSS_Supported",
+        "CANopenSafetySupported",
+    ];
+
+    /// The numeric keys, all unsigned, with their width in bits.
+    pub const NUMBER_KEYS: [(&'static str, u32); 8] = [
+        ("VendorNumber", 32),
+        ("ProductNumber", 32),
+        ("RevisionNumber", 32),
+        ("Granularity", 8),
+        ("DynamicChannelsSupported", 8),
+        ("CompactPDO", 8),
+        ("NrOfRXPDO", 16),
+        ("NrOfTXPDO", 16),
+    ];
+}
+
 keyed_section! {
     /// `[DeviceComissioning]` of a DCF (CiA 306 §5.3.1).
     DeviceCommissioning {
@@ -782,6 +820,23 @@ mod hex_keys {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn device_info_key_lists_name_known_keys_once() {
+        let keys: Vec<&str> = DeviceInfo::BAUD_RATE_KEYS
+            .map(|(_, key)| key)
+            .into_iter()
+            .chain(DeviceInfo::FLAG_KEYS)
+            .chain(DeviceInfo::NUMBER_KEYS.map(|(key, _)| key))
+            .collect();
+        let mut info = DeviceInfo::default();
+        for key in &keys {
+            assert!(info.slot_mut(key).is_some(), "{key} is not a [DeviceInfo] key");
+        }
+        let unique: std::collections::BTreeSet<&str> = keys.iter().copied().collect();
+        assert_eq!(unique.len(), keys.len(), "a key is in two lists");
+        assert_eq!(crate::dcf::BITRATES_KBIT, [10, 20, 50, 125, 250, 500, 800, 1000]);
+    }
 
     #[test]
     fn keyed_sections_match_keys_case_insensitively() {

@@ -227,7 +227,11 @@ fn write_file(out: &mut String, file: &FileReport) {
         esc(&file.path)
     );
     for severity in [Severity::Error, Severity::Warning, Severity::Info] {
-        let n = file.findings.iter().filter(|f| f.severity == severity).count();
+        let n = file
+            .findings
+            .iter()
+            .filter(|f| f.diagnostic.severity == severity)
+            .count();
         if n > 0 {
             let label = match severity {
                 Severity::Error => plural(n, "error", "errors"),
@@ -252,8 +256,8 @@ fn write_file(out: &mut String, file: &FileReport) {
 }
 
 fn write_finding(out: &mut String, file: &FileReport, f: &Finding) {
-    let severity = f.severity;
-    let code = esc(&f.code);
+    let severity = f.diagnostic.severity;
+    let code = esc(&f.diagnostic.code);
     let _ = writeln!(
         out,
         "<article class=\"finding {severity}\" data-severity=\"{severity}\" data-code=\"{code}\">"
@@ -263,16 +267,16 @@ fn write_finding(out: &mut String, file: &FileReport, f: &Finding) {
         "<div class=\"head\">{} <a class=\"code\" href=\"#{}\" title=\"explanation\">{code}</a> \
          <span class=\"msg\">{}</span></div>",
         badge(severity),
-        esc(&check_anchor(&f.code)),
-        esc(&f.message)
+        esc(&check_anchor(&f.diagnostic.code)),
+        esc(&f.diagnostic.message)
     );
-    let span = f.span;
+    let span = f.diagnostic.span;
     let mut location = if span.line == 0 {
         esc(&file.path)
     } else {
         format!("{}:{}:{}", esc(&file.path), span.line, span.column.max(1))
     };
-    match (&f.section, &f.key) {
+    match (&f.diagnostic.section, &f.diagnostic.key) {
         (Some(section), Some(key)) => {
             let _ = write!(location, " &middot; [{}] {}", esc(section), esc(key));
         }
@@ -302,7 +306,7 @@ fn write_finding(out: &mut String, file: &FileReport, f: &Finding) {
             "^".repeat(snip.caret_width)
         );
     }
-    if let Some(help) = &f.help {
+    if let Some(help) = &f.diagnostic.help {
         let _ = writeln!(out, "<p class=\"help\"><strong>help:</strong> {}</p>", esc(help));
     }
     out.push_str("</article>\n");
@@ -356,7 +360,7 @@ fn write_checks(out: &mut String, report: &Report) {
         .files
         .iter()
         .flat_map(|f| &f.findings)
-        .map(|f| f.code.as_str())
+        .map(|f| f.diagnostic.code.as_str())
         .filter(|c| !described.contains(c))
         .collect();
     for code in undescribed {

@@ -92,17 +92,21 @@ pub fn human(report: &Report, options: &HumanOptions) -> String {
 }
 
 fn write_finding(out: &mut String, paint: &Paint, file: &FileReport, finding: &Finding) {
-    let color = severity_color(finding.severity);
+    let color = severity_color(finding.diagnostic.severity);
     let _ = writeln!(
         out,
         "{}{}",
         paint.paint(
             color,
-            &format!("{}[{}]", finding.severity, terminal_safe(&finding.code))
+            &format!(
+                "{}[{}]",
+                finding.diagnostic.severity,
+                terminal_safe(&finding.diagnostic.code)
+            )
         ),
-        paint.paint(BOLD, &format!(": {}", terminal_safe(&finding.message)))
+        paint.paint(BOLD, &format!(": {}", terminal_safe(&finding.diagnostic.message)))
     );
-    let span = finding.span;
+    let span = finding.diagnostic.span;
     let number = span.line.to_string();
     let gutter = " ".repeat(number.len());
     let location = if span.line == 0 {
@@ -138,7 +142,7 @@ fn write_finding(out: &mut String, paint: &Paint, file: &FileReport, finding: &F
             paint.paint(color, &"^".repeat(snip.caret_width))
         );
     }
-    if let Some(help) = &finding.help {
+    if let Some(help) = &finding.diagnostic.help {
         if source.is_some() {
             let _ = writeln!(out, "{gutter} {}", paint.paint(BLUE, "|"));
         }
@@ -190,17 +194,19 @@ fn write_table(out: &mut String, paint: &Paint, rows: &[crate::CodeCount]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use canopener_eds::Span;
+    use canopener_eds::{Diagnostic, Span};
 
     fn finding(severity: Severity, line: u32, column: u32, len: u32, help: Option<&str>) -> Finding {
         Finding {
-            code: "C301".into(),
-            severity,
-            message: "VendorNumber 0x123 differs from 1018sub1 DefaultValue 0x124".into(),
-            span: Span::new(line, column, len),
-            section: Some("DeviceInfo".into()),
-            key: Some("VendorNumber".into()),
-            help: help.map(str::to_owned),
+            diagnostic: Diagnostic {
+                code: "C301".into(),
+                severity,
+                message: "VendorNumber 0x123 differs from 1018sub1 DefaultValue 0x124".into(),
+                span: Span::new(line, column, len),
+                section: Some("DeviceInfo".into()),
+                key: Some("VendorNumber".into()),
+                help: help.map(str::to_owned),
+            },
             fixable: false,
         }
     }
@@ -256,7 +262,7 @@ error[C301]: VendorNumber 0x123 differs from 1018sub1 DefaultValue 0x124
     #[test]
     fn colors_only_when_asked_and_file_text_cannot_inject_escapes() {
         let mut f = finding(Severity::Error, 1, 1, 3, None);
-        f.message = "value \u{1b}[2J as written".into();
+        f.diagnostic.message = "value \u{1b}[2J as written".into();
         let r = report(vec![f], &[(1, "A=\u{1b}]0;x\u{7}")]);
         let plain = human(&r, &HumanOptions::default());
         assert!(!plain.contains('\u{1b}'), "{plain:?}");

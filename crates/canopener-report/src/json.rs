@@ -68,16 +68,16 @@ pub fn json(report: &Report) -> String {
                     .findings
                     .iter()
                     .map(|f| Finding {
-                        code: &f.code,
-                        severity: f.severity,
-                        message: &f.message,
-                        line: f.span.line,
-                        column: f.span.column,
-                        length: f.span.len,
-                        section: f.section.as_deref(),
-                        key: f.key.as_deref(),
+                        code: &f.diagnostic.code,
+                        severity: f.diagnostic.severity,
+                        message: &f.diagnostic.message,
+                        line: f.diagnostic.span.line,
+                        column: f.diagnostic.span.column,
+                        length: f.diagnostic.span.len,
+                        section: f.diagnostic.section.as_deref(),
+                        key: f.diagnostic.key.as_deref(),
                         fixable: f.fixable,
-                        help: f.help.as_deref(),
+                        help: f.diagnostic.help.as_deref(),
                     })
                     .collect(),
             })

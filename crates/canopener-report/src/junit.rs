@@ -71,7 +71,7 @@ fn suite(report: &Report, file: &FileReport) -> Suite {
         let extra: BTreeSet<&str> = file
             .findings
             .iter()
-            .map(|f| f.code.as_str())
+            .map(|f| f.diagnostic.code.as_str())
             .filter(|c| !seen.contains(c))
             .collect();
         codes.extend(extra.into_iter().map(|c| (c, "")));
@@ -82,16 +82,20 @@ fn suite(report: &Report, file: &FileReport) -> Suite {
             } else {
                 format!("{code} {title}")
             };
-            let found: Vec<&Finding> = file.findings.iter().filter(|f| f.code == code).collect();
+            let found: Vec<&Finding> = file
+                .findings
+                .iter()
+                .filter(|f| f.diagnostic.code == code)
+                .collect();
             let failing: Vec<&Finding> = found
                 .iter()
                 .copied()
-                .filter(|f| f.severity != Severity::Info)
+                .filter(|f| f.diagnostic.severity != Severity::Info)
                 .collect();
             let infos: Vec<&Finding> = found
                 .iter()
                 .copied()
-                .filter(|f| f.severity == Severity::Info)
+                .filter(|f| f.diagnostic.severity == Severity::Info)
                 .collect();
             let open = format!(
                 "    <testcase classname=\"{path}\" name=\"{}\"",
@@ -106,13 +110,13 @@ fn suite(report: &Report, file: &FileReport) -> Suite {
                 failures += 1;
                 let worst = failing
                     .iter()
-                    .map(|f| f.severity)
+                    .map(|f| f.diagnostic.severity)
                     .max()
                     .unwrap_or(Severity::Warning);
                 let message = if failing.len() > 1 {
-                    format!("{} (and {} more)", first.message, failing.len() - 1)
+                    format!("{} (and {} more)", first.diagnostic.message, failing.len() - 1)
                 } else {
-                    first.message.clone()
+                    first.diagnostic.message.clone()
                 };
                 let _ = writeln!(
                     cases,
@@ -154,9 +158,14 @@ fn listing(file: &FileReport, findings: &[&Finding]) -> String {
         let _ = writeln!(
             text,
             "{}:{}:{}: {}[{}]: {}",
-            file.path, f.span.line, f.span.column, f.severity, f.code, f.message
+            file.path,
+            f.diagnostic.span.line,
+            f.diagnostic.span.column,
+            f.diagnostic.severity,
+            f.diagnostic.code,
+            f.diagnostic.message
         );
-        if let Some(help) = &f.help {
+        if let Some(help) = &f.diagnostic.help {
             let _ = writeln!(text, "    help: {help}");
         }
     }

@@ -23,6 +23,7 @@ mod text;
 use std::collections::BTreeMap;
 
 use canopener_check::{CheckDescription, Finding};
+use canopener_eds::Severity;
 use canopener_eds::syntax::Document;
 
 pub use html::html;
@@ -62,11 +63,11 @@ impl FileReport {
         let source = findings
             .iter()
             .filter_map(|f| {
-                let index = usize::try_from(f.span.line).ok()?.checked_sub(1)?;
+                let index = usize::try_from(f.diagnostic.span.line).ok()?.checked_sub(1)?;
                 document
                     .lines()
                     .get(index)
-                    .map(|_| (f.span.line, document.line_text(index).to_owned()))
+                    .map(|_| (f.diagnostic.span.line, document.line_text(index).to_owned()))
             })
             .collect();
         Self {
@@ -80,7 +81,8 @@ impl FileReport {
     /// The report of a checked file, taking the lines the findings point at from its decoded text
     /// (lines end at `\n`; a `\r` before it is dropped).
     pub fn from_text(path: impl Into<String>, findings: Vec<Finding>, text: &str) -> Self {
-        let wanted: std::collections::BTreeSet<u32> = findings.iter().map(|f| f.span.line).collect();
+        let wanted: std::collections::BTreeSet<u32> =
+            findings.iter().map(|f| f.diagnostic.span.line).collect();
         let source = text
             .split('\n')
             .zip(1u32..)
@@ -93,6 +95,14 @@ impl FileReport {
             source,
             problem: None,
         }
+    }
+
+    /// How many findings have this severity.
+    pub fn count(&self, severity: Severity) -> usize {
+        self.findings
+            .iter()
+            .filter(|f| f.diagnostic.severity == severity)
+            .count()
     }
 
     /// The report of a file that could not be read.

@@ -54,24 +54,27 @@ pub fn sarif(report: &Report) -> String {
         let mut occurrences: HashMap<u64, usize> = HashMap::new();
         for finding in &file.findings {
             let hash = fnv1a64(&[
-                &finding.code,
-                finding.section.as_deref().unwrap_or(""),
-                finding.key.as_deref().unwrap_or(""),
-                &finding.message,
+                &finding.diagnostic.code,
+                finding.diagnostic.section.as_deref().unwrap_or(""),
+                finding.diagnostic.key.as_deref().unwrap_or(""),
+                &finding.diagnostic.message,
             ]);
             // Identical findings in one file are told apart by their order, as GitHub does with
             // its own line hashes.
             let occurrence = occurrences.entry(hash).or_insert(0);
             *occurrence += 1;
             let fingerprint = format!("{hash:016x}:{occurrence}");
-            let index = rule_index.get(finding.code.as_str()).copied().unwrap_or(0);
+            let index = rule_index
+                .get(finding.diagnostic.code.as_str())
+                .copied()
+                .unwrap_or(0);
             results.push(result(
                 finding,
                 index,
                 &uri,
                 artifact,
                 &fingerprint,
-                file.source.get(&finding.span.line),
+                file.source.get(&finding.diagnostic.span.line),
             ));
         }
     }
@@ -117,7 +120,7 @@ fn rules(report: &Report) -> (Vec<Value>, HashMap<&str, usize>) {
         .files
         .iter()
         .flat_map(|f| &f.findings)
-        .map(|f| f.code.as_str())
+        .map(|f| f.diagnostic.code.as_str())
         .filter(|code| !index.contains_key(code))
         .collect();
     for code in missing {
@@ -184,7 +187,7 @@ fn result(
         "artifactLocation".into(),
         json!({ "uri": uri, "index": artifact }),
     );
-    let span = finding.span;
+    let span = finding.diagnostic.span;
     // Line 0 means the finding concerns the file as a whole: no region.
     if span.line > 0 {
         let column = span.column.max(1);
@@ -212,20 +215,20 @@ fn result(
             );
         }
     }
-    let text = match &finding.help {
-        Some(help) => format!("{}\nhelp: {help}", finding.message),
-        None => finding.message.clone(),
+    let text = match &finding.diagnostic.help {
+        Some(help) => format!("{}\nhelp: {help}", finding.diagnostic.message),
+        None => finding.diagnostic.message.clone(),
     };
     json!({
-        "ruleId": finding.code,
+        "ruleId": finding.diagnostic.code,
         "ruleIndex": rule_index,
-        "level": level(finding.severity),
+        "level": level(finding.diagnostic.severity),
         "message": { "text": text },
         "locations": [{ "physicalLocation": physical }],
         "partialFingerprints": { (FINGERPRINT_KEY): fingerprint },
         "properties": {
-            "section": finding.section,
-            "key": finding.key,
+            "section": finding.diagnostic.section,
+            "key": finding.diagnostic.key,
             "fixable": finding.fixable,
         },
     })

@@ -85,7 +85,7 @@ pub(crate) fn summarize(report: &Report) -> Summary {
         let mut has_error = false;
         let mut seen: Vec<&str> = Vec::new();
         for finding in &file.findings {
-            match finding.severity {
+            match finding.diagnostic.severity {
                 Severity::Error => {
                     summary.errors += 1;
                     has_error = true;
@@ -93,13 +93,14 @@ pub(crate) fn summarize(report: &Report) -> Summary {
                 Severity::Warning => summary.warnings += 1,
                 Severity::Info => summary.infos += 1,
             }
-            let entry = codes
-                .entry(finding.code.as_str())
-                .or_insert((finding.severity, 0, 0));
-            entry.0 = entry.0.max(finding.severity);
+            let entry =
+                codes
+                    .entry(finding.diagnostic.code.as_str())
+                    .or_insert((finding.diagnostic.severity, 0, 0));
+            entry.0 = entry.0.max(finding.diagnostic.severity);
             entry.1 += 1;
-            if !seen.contains(&finding.code.as_str()) {
-                seen.push(&finding.code);
+            if !seen.contains(&finding.diagnostic.code.as_str()) {
+                seen.push(&finding.diagnostic.code);
                 entry.2 += 1;
             }
         }

@@ -100,6 +100,10 @@ fn xml_char(c: char) -> bool {
 /// Escapes text for XML element content or (`attribute`) a quoted attribute value. Characters
 /// XML 1.0 forbids become U+FFFD; in attributes, tab and line breaks become character references so
 /// attribute normalisation keeps them.
+///
+/// `canopener-xdd` has its own escaper on purpose: it writes XDD exactly as CANopenEditor does
+/// (`'` unescaped, hexadecimal references such as `&#xA;`), while JUnit reports have always used
+/// `&apos;` and decimal references; sharing one would change the bytes of one of the two outputs.
 pub(crate) fn xml_escape(text: &str, attribute: bool) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {

@@ -66,19 +66,21 @@ fn main() {
         }
         let mut seen_here = std::collections::BTreeSet::new();
         for f in found {
-            let entry = by_code.entry(format!("{} ({})", f.code, f.severity)).or_default();
+            let entry = by_code
+                .entry(format!("{} ({})", f.diagnostic.code, f.diagnostic.severity))
+                .or_default();
             entry.0 += 1;
-            if seen_here.insert(f.code.clone()) {
+            if seen_here.insert(f.diagnostic.code.clone()) {
                 entry.1 += 1;
             }
             if entry.2.len() < examples {
                 entry.2.push(format!(
                     "{}:{}:{} [{}] {}",
                     name.unwrap_or("?"),
-                    f.span.line,
-                    f.span.column,
-                    f.section.as_deref().unwrap_or("-"),
-                    f.message
+                    f.diagnostic.span.line,
+                    f.diagnostic.span.column,
+                    f.diagnostic.section.as_deref().unwrap_or("-"),
+                    f.diagnostic.message
                 ));
             }
         }

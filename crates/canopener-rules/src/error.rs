@@ -3,6 +3,8 @@
 use std::fmt;
 use std::ops::Range;
 
+use canopener_eds::{Diagnostic, Severity, Span};
+
 /// What kind of problem a [`PackError`] reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PackErrorKind {
@@ -30,7 +32,9 @@ pub enum PackErrorKind {
     Fix,
 }
 
-/// A rule pack that cannot be used, with where the problem is and how to fix it.
+/// A rule pack that cannot be used: the pack, the rule, and a diagnostic in the shared shape saying
+/// what kind of problem it is, where in the pack (1-based line and column, in characters), what is
+/// wrong and how to fix it. Its severity is always `error`: a pack with a problem is not used.
 ///
 /// Displayed as `origin:line:column: rule `id`: what is wrong` and a `help:` line.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -38,29 +42,23 @@ pub enum PackErrorKind {
 pub struct PackError {
     /// The pack's path (or another name the caller gave it).
     pub origin: String,
-    /// 1-based line in the pack.
-    pub line: usize,
-    /// 1-based column (in characters).
-    pub column: usize,
     /// The id of the rule the problem is in, when it is in one.
     pub rule: Option<String>,
-    /// What kind of problem it is.
-    pub kind: PackErrorKind,
-    /// What is wrong.
-    pub message: String,
-    /// How to fix it.
-    pub help: String,
+    /// What kind of problem it is (the code), where, what is wrong and how to fix it (boxed: errors
+    /// travel through many `Result`s while a pack is parsed).
+    pub diagnostic: Box<Diagnostic<PackErrorKind>>,
 }
 
 impl PackError {
     fn render(&self) -> String {
-        let mut out = format!("{}:{}:{}: ", self.origin, self.line, self.column);
+        let d = &self.diagnostic;
+        let mut out = format!("{}:{}:{}: ", self.origin, d.span.line, d.span.column);
         if let Some(rule) = &self.rule {
             out.push_str(&format!("rule `{rule}`: "));
         }
-        out.push_str(&self.message);
-        if !self.help.is_empty() {
-            out.push_str(&format!("\n  help: {}", self.help));
+        out.push_str(&d.message);
+        if let Some(help) = &d.help {
+            out.push_str(&format!("\n  help: {help}"));
         }
         out
     }
@@ -99,14 +97,21 @@ impl Locator<'_> {
         help: impl fmt::Display,
     ) -> PackError {
         let (line, column) = self.line_column(at);
+        let to_u32 = |n: usize| u32::try_from(n).unwrap_or(u32::MAX);
+        let mut diagnostic = Diagnostic::from_parts(
+            kind,
+            Severity::Error,
+            Span::new(to_u32(line), to_u32(column), 0),
+            message.to_string(),
+        );
+        let help = help.to_string();
+        if !help.is_empty() {
+            diagnostic = diagnostic.with_help(help);
+        }
         PackError {
             origin: self.origin.to_owned(),
-            line,
-            column,
             rule: rule.map(str::to_owned),
-            kind,
-            message: message.to_string(),
-            help: help.to_string(),
+            diagnostic: Box::new(diagnostic),
         }
     }
 

@@ -3,9 +3,9 @@
 use std::sync::Arc;
 
 use canopener_check::fix::{Edit, Fix};
-use canopener_check::{Context, Finding, Selection};
+use canopener_check::{Context, Finding, Selection, sort_by_position};
 use canopener_eds::section_name::SectionKind;
-use canopener_eds::{Severity, Span};
+use canopener_eds::{Diagnostic, Severity, Span};
 use cel::common::value::{CowVal, Val};
 use cel::context::VariableResolver;
 use cel::{Env, ExecutionError, Value};
@@ -82,8 +82,7 @@ pub(crate) fn run(env: &Arc<Env>, rules: &[Rule], cx: &Context<'_>, selection: &
             out.findings.push(failure_finding(cx, rule, item, &f));
         }
     }
-    out.findings
-        .sort_by(|a, b| (a.span.line, a.span.column, &a.code).cmp(&(b.span.line, b.span.column, &b.code)));
+    sort_by_position(&mut out.findings);
     out
 }
 
@@ -404,13 +403,15 @@ fn report(cx: &Context<'_>, rule: &Rule, item: Option<&Item>, verdict: &Verdict,
         _ => None,
     };
     out.findings.push(Finding {
-        code: rule.id.clone(),
-        severity: rule.severity,
-        message: verdict.message.clone(),
-        span: at.span,
-        section: at.section,
-        key: at.key,
-        help: verdict.help.clone(),
+        diagnostic: Diagnostic {
+            code: rule.id.clone(),
+            severity: rule.severity,
+            message: verdict.message.clone(),
+            span: at.span,
+            section: at.section,
+            key: at.key,
+            help: verdict.help.clone(),
+        },
         fixable: fix.is_some(),
     });
     out.fixes.extend(fix);
@@ -493,19 +494,21 @@ fn failure_finding(cx: &Context<'_>, rule: &Rule, item: Option<&Item>, f: &Failu
         n => format!(" (and {} more items)", n - 1),
     };
     Finding {
-        code: EVALUATION_ERROR_CODE.to_owned(),
-        severity: Severity::Error,
-        message: format!(
-            "rule `{}` could not be evaluated{subject}{more}: {}: {}",
-            rule.id, f.what, f.error
-        ),
-        span: at.span,
-        section: at.section,
-        key: None,
-        help: Some(format!(
-            "fix the rule in its pack, or skip it with --skip {}; `canopener eds explain R000` says more",
-            rule.id
-        )),
+        diagnostic: Diagnostic {
+            code: EVALUATION_ERROR_CODE.to_owned(),
+            severity: Severity::Error,
+            message: format!(
+                "rule `{}` could not be evaluated{subject}{more}: {}: {}",
+                rule.id, f.what, f.error
+            ),
+            span: at.span,
+            section: at.section,
+            key: None,
+            help: Some(format!(
+                "fix the rule in its pack, or skip it with --skip {}; `canopener eds explain R000` says more",
+                rule.id
+            )),
+        },
         fixable: false,
     }
 }

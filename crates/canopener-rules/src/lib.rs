@@ -20,7 +20,7 @@
 //! let loaded = canopener_eds::load(b"[1000]\nParameterName=Device type\nDataType=0x0007\n");
 //! let cx = canopener_check::Context::new(&loaded, Some("demo.eds"));
 //! let findings = pack.check(&cx, &canopener_check::Selection::default());
-//! assert_eq!(findings[0].message, "ParameterName 'Device type' contains blanks");
+//! assert_eq!(findings[0].diagnostic.message, "ParameterName 'Device type' contains blanks");
 //! ```
 //!
 //! The format and the function library are described in this crate's `README.md`.

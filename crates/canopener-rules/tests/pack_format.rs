@@ -70,7 +70,7 @@ fn run(pack: &RulePack, text: &str) -> Vec<Finding> {
 fn sections(findings: &[Finding]) -> Vec<String> {
     findings
         .iter()
-        .map(|f| f.section.clone().unwrap_or_default())
+        .map(|f| f.diagnostic.section.clone().unwrap_or_default())
         .collect()
 }
 
@@ -81,25 +81,37 @@ const HEAD: &str = "id = \"t/r\"\ndescription = \"d\"\nseverity = \"warning\"\n"
 #[test]
 fn toml_errors_name_line_and_column() {
     let e = error("[pack]\nname = \"t\"\n[[rule]\nid = 1\n");
-    assert_eq!(e.kind, PackErrorKind::Toml);
-    assert_eq!((e.line, e.column), (3, 8));
+    assert_eq!(e.diagnostic.code, PackErrorKind::Toml);
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (3, 8));
     assert!(e.to_string().starts_with("t.toml:3:8: "), "{e}");
     assert!(e.to_string().contains("\n  help: "), "{e}");
 
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\nsevrity = \"x\"\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::Toml);
-    assert_eq!(e.line, 10);
-    assert!(e.message.contains("unknown field `sevrity`"), "{}", e.message);
+    assert_eq!(e.diagnostic.code, PackErrorKind::Toml);
+    assert_eq!(e.diagnostic.span.line, 10);
+    assert!(
+        e.diagnostic.message.contains("unknown field `sevrity`"),
+        "{}",
+        e.diagnostic.message
+    );
 
     let e = error(&one_rule(
         "id = \"t/r\"\ndescription = \"d\"\nseverity = \"warning\"\nselect = \"objects\"\n",
     ));
-    assert!(e.message.contains("missing field `assert`"), "{}", e.message);
+    assert!(
+        e.diagnostic.message.contains("missing field `assert`"),
+        "{}",
+        e.diagnostic.message
+    );
 
     let e = error(&format!("[[rule]]\n{HEAD}select = \"file\"\nassert = \"true\"\n"));
-    assert!(e.message.contains("missing field `pack`"), "{}", e.message);
+    assert!(
+        e.diagnostic.message.contains("missing field `pack`"),
+        "{}",
+        e.diagnostic.message
+    );
 }
 
 #[test]
@@ -107,21 +119,24 @@ fn ids_are_namespaced_and_unique() {
     let e = error(&one_rule(
         "id = \"norule\"\ndescription = \"d\"\nseverity = \"info\"\nselect = \"file\"\nassert = \"true\"\n",
     ));
-    assert_eq!(e.kind, PackErrorKind::InvalidId);
+    assert_eq!(e.diagnostic.code, PackErrorKind::InvalidId);
     assert_eq!(e.rule.as_deref(), Some("norule"));
-    assert_eq!((e.line, e.column), (5, 7));
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (5, 7));
     for bad in ["a/", "/a", "a/b c", "a//b", "C301", "a/-b"] {
         let text = one_rule(&format!(
             "id = \"{bad}\"\ndescription = \"d\"\nseverity = \"info\"\nselect = \"file\"\nassert = \"true\"\n"
         ));
-        assert_eq!(error(&text).kind, PackErrorKind::InvalidId, "{bad}");
+        assert_eq!(error(&text).diagnostic.code, PackErrorKind::InvalidId, "{bad}");
     }
     let rule = format!("{HEAD}select = \"file\"\nassert = \"true\"\n");
     let twice = format!("{}\n[[rule]]\n{}", one_rule(&rule), rule.replace("t/r", "T/R"));
     let e = error(&twice);
-    assert_eq!(e.kind, PackErrorKind::DuplicateId);
-    assert_eq!(e.line, 11);
-    assert_eq!(e.message, "the id is already used by the rule on line 4");
+    assert_eq!(e.diagnostic.code, PackErrorKind::DuplicateId);
+    assert_eq!(e.diagnostic.span.line, 11);
+    assert_eq!(
+        e.diagnostic.message,
+        "the id is already used by the rule on line 4"
+    );
     assert!(
         parsed(&one_rule(&rule.replace("t/r", "team.a/sub-x/rule_1"))).rule_ids() == ["team.a/sub-x/rule_1"]
     );
@@ -132,16 +147,20 @@ fn severity_and_select_are_checked() {
     let e = error(&one_rule(
         "id = \"t/r\"\ndescription = \"d\"\nseverity = \"fatal\"\nselect = \"file\"\nassert = \"true\"\n",
     ));
-    assert_eq!(e.kind, PackErrorKind::Severity);
+    assert_eq!(e.diagnostic.code, PackErrorKind::Severity);
     assert_eq!(
-        (e.line, e.column, e.message.as_str()),
+        (
+            e.diagnostic.span.line,
+            e.diagnostic.span.column,
+            e.diagnostic.message.as_str()
+        ),
         (7, 13, "unknown severity `fatal`")
     );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"object\"\nassert = \"true\"\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::Select);
-    assert_eq!((e.line, e.column), (8, 11));
+    assert_eq!(e.diagnostic.code, PackErrorKind::Select);
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (8, 11));
     assert_eq!(
         e.to_string(),
         "t.toml:8:11: rule `t/r`: unknown select `object`\n  help: select one of \"file\" (once per file), \"objects\", \"subobjects\" or \"entries\" (objects and sub-objects)"
@@ -153,21 +172,22 @@ fn cel_syntax_errors_point_into_the_expression() {
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"item.name ==\"\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::CelSyntax);
+    assert_eq!(e.diagnostic.code, PackErrorKind::CelSyntax);
     // `assert = "` is 10 characters; the expression's end is its 13th column.
-    assert_eq!((e.line, e.column), (9, 23));
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (9, 23));
     assert!(
-        e.message
+        e.diagnostic
+            .message
             .starts_with("in assert: CEL syntax error in `item.name ==`"),
         "{}",
-        e.message
+        e.diagnostic.message
     );
 
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = '''\ntrue &&\n  item.index >\n'''\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::CelSyntax);
-    assert_eq!(e.line, 12, "{e}");
+    assert_eq!(e.diagnostic.code, PackErrorKind::CelSyntax);
+    assert_eq!(e.diagnostic.span.line, 12, "{e}");
 }
 
 #[test]
@@ -175,8 +195,8 @@ fn unknown_names_are_errors_with_suggestions() {
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"itme.index > 0\"\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::UnknownName);
-    assert_eq!((e.line, e.column), (9, 11));
+    assert_eq!(e.diagnostic.code, PackErrorKind::UnknownName);
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (9, 11));
     assert_eq!(
         e.to_string(),
         "t.toml:9:11: rule `t/r`: in assert `itme.index > 0`: unknown variable `itme`\n  help: did you mean `item`? rules can use `eds`, `params`, `item`"
@@ -184,17 +204,20 @@ fn unknown_names_are_errors_with_suggestions() {
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nwhere = \"item.idx > 0\"\nassert = \"true\"\n"
     )));
-    assert_eq!((e.line, e.column), (9, 14));
-    assert_eq!(e.message, "in where `item.idx > 0`: unknown field `item.idx`");
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (9, 14));
+    assert_eq!(
+        e.diagnostic.message,
+        "in where `item.idx > 0`: unknown field `item.idx`"
+    );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"has_objekt(1)\"\n"
     )));
-    assert_eq!(e.help, "did you mean `has_object`?");
+    assert_eq!(e.diagnostic.help.as_deref(), Some("did you mean `has_object`?"));
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"file\"\nassert = \"item.index > 0\"\n"
     )));
     assert_eq!(
-        e.message,
+        e.diagnostic.message,
         "in assert `item.index > 0`: `item` does not exist here: a rule with select = \"file\" is evaluated once per file"
     );
 }
@@ -207,29 +230,40 @@ fn parameters_are_typed() {
         ))
     };
     let e = error(&rule("rates = { type = \"list<int>\", value = [125, \"250\"] }"));
-    assert_eq!(e.kind, PackErrorKind::Parameter);
-    assert_eq!((e.line, e.column), (11, 39));
+    assert_eq!(e.diagnostic.code, PackErrorKind::Parameter);
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (11, 39));
     assert_eq!(
-        e.message,
+        e.diagnostic.message,
         "parameter `rates` is declared `list<int>` but element 2 is a string (expected int)"
     );
     let e = error(&rule("n = { type = \"int\", value = \"1\" }"));
     assert_eq!(
-        e.message,
+        e.diagnostic.message,
         "parameter `n` is declared `int` but its value is a string"
     );
     let e = error(&rule("n = { type = \"integer\", value = 1 }"));
-    assert_eq!((e.line, e.column), (11, 15));
-    assert!(e.help.contains("list<string>"), "{}", e.help);
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (11, 15));
+    assert!(
+        e.diagnostic
+            .help
+            .as_deref()
+            .is_some_and(|h| h.contains("list<string>")),
+        "{:?}",
+        e.diagnostic.help
+    );
     let e = error(&rule("n = { type = \"list<int>\", value = 1 }"));
     assert_eq!(
-        e.message,
+        e.diagnostic.message,
         "parameter `n` is declared `list<int>` but its value is a integer"
     );
     let e = error(&rule("n = { type = \"int\" }"));
-    assert!(e.message.contains("missing field `value`"), "{}", e.message);
+    assert!(
+        e.diagnostic.message.contains("missing field `value`"),
+        "{}",
+        e.diagnostic.message
+    );
     let e = error(&rule("\"my name\" = { type = \"int\", value = 1 }"));
-    assert_eq!(e.message, "`my name` cannot be a parameter name");
+    assert_eq!(e.diagnostic.message, "`my name` cannot be a parameter name");
     // Every type, including an integer where a double is declared.
     let pack = parsed(&one_rule(&format!(
         "{HEAD}select = \"file\"\nassert = \"params.i == 1 && params.d == 2.0 && params.b && params.s == 'x' && \
@@ -253,10 +287,13 @@ fn parameters_are_typed() {
         &rule("n = { type = \"int\", value = 1 }").replace("assert = \"true\"", "assert = \"params.m > 0\""),
     );
     assert_eq!(
-        e.message,
+        e.diagnostic.message,
         "in assert `params.m > 0`: unknown parameter `params.m`"
     );
-    assert_eq!(e.help, "did you mean `n`? `params` has `n`");
+    assert_eq!(
+        e.diagnostic.help.as_deref(),
+        Some("did you mean `n`? `params` has `n`")
+    );
 }
 
 #[test]
@@ -264,44 +301,47 @@ fn malformed_structured_assertions_and_templates() {
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"file\"\n[rule.assert]\nall = []\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::Assertion);
-    assert_eq!(e.message, "assert.all is empty");
+    assert_eq!(e.diagnostic.code, PackErrorKind::Assertion);
+    assert_eq!(e.diagnostic.message, "assert.all is empty");
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"file\"\n[rule.assert]\nall = [\"true\"]\nany = [\"true\"]\n"
     )));
     assert_eq!(
-        e.message,
+        e.diagnostic.message,
         "assert has 2 keys (all, any); it needs exactly one of all, any, not"
     );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"file\"\n[rule.assert]\nnone = [\"true\"]\n"
     )));
-    assert_eq!(e.message, "assert has the unknown key `none`");
+    assert_eq!(e.diagnostic.message, "assert has the unknown key `none`");
     let e = error(&one_rule(&format!("{HEAD}select = \"file\"\nassert = 5\n")));
-    assert_eq!(e.message, "assert is a integer");
+    assert_eq!(e.diagnostic.message, "assert is a integer");
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"file\"\n[rule.assert]\nall = [\"true\", {{ not = \"eds.nope\" }}]\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::UnknownName);
+    assert_eq!(e.diagnostic.code, PackErrorKind::UnknownName);
     assert_eq!(
-        e.message,
+        e.diagnostic.message,
         "in assert.all[1].not `eds.nope`: unknown field `eds.nope`"
     );
     assert_eq!(
-        (e.line, e.column),
+        (e.diagnostic.span.line, e.diagnostic.span.column),
         (10, 28),
         "nested expressions are located in the table"
     );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\nmessage = \"name {{item.name\"\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::Template);
-    assert_eq!((e.line, e.column), (10, 17));
+    assert_eq!(e.diagnostic.code, PackErrorKind::Template);
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (10, 17));
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\nhelp = \"{{item.nam}}\"\n"
     )));
-    assert_eq!(e.message, "in help `item.nam`: unknown field `item.nam`");
-    assert_eq!((e.line, e.column), (10, 14));
+    assert_eq!(
+        e.diagnostic.message,
+        "in help `item.nam`: unknown field `item.nam`"
+    );
+    assert_eq!((e.diagnostic.span.line, e.diagnostic.span.column), (10, 14));
 }
 
 #[test]
@@ -309,53 +349,66 @@ fn fixes_and_places_must_fit_the_selection() {
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\n[rule.fix]\nvalue = \"'x'\"\nchanges_meaning = false\n"
     )));
-    assert_eq!(e.kind, PackErrorKind::Fix);
-    assert_eq!(e.message, "the fix needs the key it sets");
+    assert_eq!(e.diagnostic.code, PackErrorKind::Fix);
+    assert_eq!(e.diagnostic.message, "the fix needs the key it sets");
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\n[rule.fix]\nkey = \"K\"\nvalue = \"'x'\"\n"
     )));
     assert!(
-        e.message.contains("missing field `changes_meaning`"),
+        e.diagnostic.message.contains("missing field `changes_meaning`"),
         "{}",
-        e.message
+        e.diagnostic.message
     );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\n[rule.fix]\nsection = \"DeviceInfo\"\nkey = \"K\"\nvalue = \"'x'\"\nchanges_meaning = false\n"
     )));
-    assert_eq!(e.message, "a fix of an object rule edits the item's own section");
+    assert_eq!(
+        e.diagnostic.message,
+        "a fix of an object rule edits the item's own section"
+    );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"file\"\nassert = \"true\"\n[rule.fix]\nkey = \"K\"\nvalue = \"'x'\"\nchanges_meaning = false\n"
     )));
-    assert_eq!(e.message, "a fix of a file rule needs the section it edits");
+    assert_eq!(
+        e.diagnostic.message,
+        "a fix of a file rule needs the section it edits"
+    );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nsection = \"DeviceInfo\"\nassert = \"true\"\n"
     )));
-    assert_eq!(e.message, "`section` is only for select = \"file\" rules");
+    assert_eq!(
+        e.diagnostic.message,
+        "`section` is only for select = \"file\" rules"
+    );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"file\"\nsection = \"Nonsense Section\"\nassert = \"true\"\n"
     )));
-    assert_eq!(e.message, "`Nonsense Section` is not a CiA 306 section name");
+    assert_eq!(
+        e.diagnostic.message,
+        "`Nonsense Section` is not a CiA 306 section name"
+    );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\n[rule.let]\nitem = \"1\"\n"
     )));
     assert_eq!(
-        e.message,
+        e.diagnostic.message,
         "the let binding `item` hides the variable of that name"
     );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\n[rule.let]\nx = \"item.index\"\n"
     )));
     assert!(
-        e.message
+        e.diagnostic
+            .message
             .starts_with("in let.x `item.index`: `item` does not exist here"),
         "{}",
-        e.message
+        e.diagnostic.message
     );
     let e = error(&one_rule(&format!(
         "{HEAD}select = \"objects\"\nassert = \"true\"\n[rule.let]\nx = \"1\"\ny = \"x + 1\"\n"
     )));
     assert_eq!(
-        e.message, "in let.y `x + 1`: unknown variable `x`",
+        e.diagnostic.message, "in let.y `x + 1`: unknown variable `x`",
         "lets cannot see each other"
     );
 }
@@ -385,19 +438,31 @@ fn selections_pick_objects_sub_objects_entries_or_the_file() {
     let generated: Vec<_> = all
         .iter()
         .filter(|f| !f.fixable)
-        .map(|f| f.section.clone().unwrap_or_default())
+        .map(|f| f.diagnostic.section.clone().unwrap_or_default())
         .collect();
     assert!(generated.contains(&"2000sub3".to_owned()), "{generated:?}");
     let file = run(&rule("file", ""), FILE);
     assert_eq!(file.len(), 1);
-    assert_eq!((file[0].span.line, file[0].section.as_deref()), (1, None));
+    assert_eq!(
+        (
+            file[0].diagnostic.span.line,
+            file[0].diagnostic.section.as_deref()
+        ),
+        (1, None)
+    );
     let at = run(
         &rule("file", "section = \"[DeviceInfo]\"\nkey = \"BaudRate_250\"\n"),
         FILE,
     );
-    assert_eq!((at[0].span.line, at[0].span.column), (5, 14));
     assert_eq!(
-        (at[0].section.as_deref(), at[0].key.as_deref()),
+        (at[0].diagnostic.span.line, at[0].diagnostic.span.column),
+        (5, 14)
+    );
+    assert_eq!(
+        (
+            at[0].diagnostic.section.as_deref(),
+            at[0].diagnostic.key.as_deref()
+        ),
         (Some("DeviceInfo"), Some("BaudRate_250"))
     );
 }
@@ -412,7 +477,7 @@ fn structured_assertions_nest_all_any_and_not() {
     let messages = |assert: &str| {
         run(&pack(assert), FILE)
             .into_iter()
-            .map(|f| f.message)
+            .map(|f| f.diagnostic.message)
             .collect::<Vec<_>>()
     };
     // sub0 (value 1) and sub1 (value 0x10)
@@ -439,7 +504,10 @@ fn structured_assertions_nest_all_any_and_not() {
     assert!(messages("any = [\"item.name > 3\", \"true\"]").is_empty());
     let found = run(&pack("any = [\"item.name > 3\", \"false\"]"), FILE);
     assert_eq!(
-        found.iter().map(|f| f.code.as_str()).collect::<Vec<_>>(),
+        found
+            .iter()
+            .map(|f| f.diagnostic.code.as_str())
+            .collect::<Vec<_>>(),
         ["R000"]
     );
 }
@@ -452,8 +520,11 @@ fn templates_show_values_and_keep_literal_braces() {
          help = \"set {{item.section}}\"\n"
     )));
     let found = run(&pack, FILE);
-    assert_eq!(found[0].message, "{Vendor} 0x0010 [1, \"x\", null] 1 true");
-    assert_eq!(found[0].help.as_deref(), Some("set 1018sub1"));
+    assert_eq!(
+        found[0].diagnostic.message,
+        "{Vendor} 0x0010 [1, \"x\", null] 1 true"
+    );
+    assert_eq!(found[0].diagnostic.help.as_deref(), Some("set 1018sub1"));
 }
 
 #[test]
@@ -465,7 +536,10 @@ fn lets_are_computed_once_and_see_params_and_eds() {
     )));
     let found = run(&pack, FILE);
     assert_eq!(
-        found.iter().map(|f| f.message.as_str()).collect::<Vec<_>>(),
+        found
+            .iter()
+            .map(|f| f.diagnostic.message.as_str())
+            .collect::<Vec<_>>(),
         ["0x1018 not in [\"0x1000\", \"0x2000\"]"]
     );
 }
@@ -506,22 +580,28 @@ fn a_runtime_error_is_one_r000_per_rule_and_file() {
     // `value` is null for the record 1018 and the placeholder object of the orphan 1400sub1 (no
     // DefaultValue): comparing null with 0 fails on each.
     let found = run(&pack, FILE);
-    let r000: Vec<_> = found.iter().filter(|f| f.code == "R000").collect();
+    let r000: Vec<_> = found.iter().filter(|f| f.diagnostic.code == "R000").collect();
     assert_eq!(r000.len(), 1);
-    assert_eq!(r000[0].severity, Severity::Error);
-    assert_eq!(r000[0].section.as_deref(), Some("1018"));
-    assert_eq!(r000[0].span.line, 11);
+    assert_eq!(r000[0].diagnostic.severity, Severity::Error);
+    assert_eq!(r000[0].diagnostic.section.as_deref(), Some("1018"));
+    assert_eq!(r000[0].diagnostic.span.line, 11);
     assert!(
-        r000[0].message.starts_with("rule `t/r` could not be evaluated on [1018] (and 1 more item): assert: `item.value > 0`: found no matching overload for '_>_' applied to '(null_type, int)' (a value is null: test it with `!= null` first)"),
+        r000[0].diagnostic.message.starts_with("rule `t/r` could not be evaluated on [1018] (and 1 more item): assert: `item.value > 0`: found no matching overload for '_>_' applied to '(null_type, int)' (a value is null: test it with `!= null` first)"),
         "{}",
-        r000[0].message
+        r000[0].diagnostic.message
     );
-    assert!(r000[0].help.as_deref().is_some_and(|h| h.contains("--skip t/r")));
+    assert!(
+        r000[0]
+            .diagnostic
+            .help
+            .as_deref()
+            .is_some_and(|h| h.contains("--skip t/r"))
+    );
     // The other items are still checked, and the rule's own findings still reported.
     let pack = parsed(&one_rule(&format!(
         "{HEAD}select = \"entries\"\nassert = \"item.value > 1\"\n"
     )));
-    let codes: Vec<_> = run(&pack, FILE).into_iter().map(|f| f.code).collect();
+    let codes: Vec<_> = run(&pack, FILE).into_iter().map(|f| f.diagnostic.code).collect();
     assert_eq!(codes.iter().filter(|c| *c == "t/r").count(), 1, "{codes:?}");
     // `--skip R000` hides them.
     let loaded = canopener_eds::load(FILE.as_bytes());
@@ -530,7 +610,7 @@ fn a_runtime_error_is_one_r000_per_rule_and_file() {
         skip: vec!["r000".to_owned()],
         ..Selection::default()
     };
-    assert!(pack.check(&cx, &skip).iter().all(|f| f.code != "R000"));
+    assert!(pack.check(&cx, &skip).iter().all(|f| f.diagnostic.code != "R000"));
 }
 
 #[test]
@@ -565,11 +645,11 @@ fn every_part_of_a_rule_can_fail_at_run_time() {
         let pack = parsed(&one_rule(&format!("{HEAD}select = \"objects\"\n{body}")));
         let found = run(&pack, FILE);
         assert_eq!(found.len(), 1, "{body}: {found:#?}");
-        assert_eq!(found[0].code, "R000");
+        assert_eq!(found[0].diagnostic.code, "R000");
         assert!(
-            found[0].message.contains(expected),
+            found[0].diagnostic.message.contains(expected),
             "{body}: {}",
-            found[0].message
+            found[0].diagnostic.message
         );
     }
 }
@@ -596,7 +676,7 @@ fn fixes_set_or_add_keys_and_file_rules_add_sections() {
     let found = pack.check(&cx, &Selection::default());
     assert!(found[0].fixable);
     assert_eq!(
-        found[0].key.as_deref(),
+        found[0].diagnostic.key.as_deref(),
         Some("Unit"),
         "a finding points at the fix's key"
     );
@@ -667,5 +747,5 @@ fn an_empty_pack_is_fine_and_the_default_explanation_describes_the_rule() {
          A user rule from the pack `t` (t.toml), reported as a warning."
     );
     let e = error("[pack]\nname = \" \"\n");
-    assert_eq!(e.message, "the pack's `name` is empty");
+    assert_eq!(e.diagnostic.message, "the pack's `name` is empty");
 }

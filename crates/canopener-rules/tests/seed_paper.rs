@@ -98,7 +98,7 @@ fn check(text: &str) -> Vec<Finding> {
 }
 
 fn of<'a>(findings: &'a [Finding], code: &str) -> Vec<&'a Finding> {
-    findings.iter().filter(|f| f.code == code).collect()
+    findings.iter().filter(|f| f.diagnostic.code == code).collect()
 }
 
 fn fixes(text: &str, code: &str) -> Vec<Fix> {
@@ -149,17 +149,23 @@ fn blanks_in_names_are_found_in_objects_and_sub_objects() {
     ]));
     let blanks = of(&found, "paper/no-blank-names");
     assert_eq!(blanks.len(), 2, "{found:#?}");
-    assert_eq!(blanks[0].message, "ParameterName 'Vendor ID' contains 1 blank(s)");
-    assert_eq!(blanks[0].section.as_deref(), Some("1018sub1"));
-    assert_eq!(blanks[0].key.as_deref(), Some("ParameterName"));
-    assert_eq!((blanks[0].span.line, blanks[0].span.column), (30, 15));
+    assert_eq!(
+        blanks[0].diagnostic.message,
+        "ParameterName 'Vendor ID' contains 1 blank(s)"
+    );
+    assert_eq!(blanks[0].diagnostic.section.as_deref(), Some("1018sub1"));
+    assert_eq!(blanks[0].diagnostic.key.as_deref(), Some("ParameterName"));
+    assert_eq!(
+        (blanks[0].diagnostic.span.line, blanks[0].diagnostic.span.column),
+        (30, 15)
+    );
     assert!(blanks[0].fixable);
     assert_eq!(
-        blanks[1].message,
+        blanks[1].diagnostic.message,
         "ParameterName 'Motor  gain' contains 2 blank(s)"
     );
     assert_eq!(
-        blanks[1].help.as_deref(),
+        blanks[1].diagnostic.help.as_deref(),
         Some("write 'Motor__gain' instead, or let `canopener eds fix` do it")
     );
     // Underscores and other punctuation are fine.
@@ -202,11 +208,14 @@ fn the_blank_fix_replaces_blanks_and_says_it_changes_meaning() {
 fn duplicate_object_names_are_found_file_wide() {
     let found = check(&edited(&[("ParameterName=Gain", "ParameterName=Identity")]));
     let dups = of(&found, "paper/unique-object-names");
-    let sections: Vec<_> = dups.iter().map(|f| f.section.as_deref()).collect();
+    let sections: Vec<_> = dups.iter().map(|f| f.diagnostic.section.as_deref()).collect();
     assert_eq!(sections, [Some("1018"), Some("2000")]);
-    assert_eq!(dups[0].message, "ParameterName 'Identity' is also used by [2000]");
     assert_eq!(
-        dups[1].help.as_deref(),
+        dups[0].diagnostic.message,
+        "ParameterName 'Identity' is also used by [2000]"
+    );
+    assert_eq!(
+        dups[1].diagnostic.help.as_deref(),
         Some("give each object a distinct name, e.g. 'Identity_2000'")
     );
     // An object may share its name with a sub-object: only objects are compared.
@@ -234,7 +243,7 @@ fn duplicate_sub_object_names_are_found_per_object() {
     let dups = of(&found, "paper/unique-sub-names");
     assert_eq!(dups.len(), 2);
     assert_eq!(
-        dups[0].message,
+        dups[0].diagnostic.message,
         "ParameterName 'Highest_sub_index' is used by 2 sub-objects of [1018] 'Identity'"
     );
     let planned = fixes(
@@ -269,13 +278,16 @@ fn missing_baud_rates_are_named() {
     let baud = of(&found, "paper/required-baud-rates");
     assert_eq!(baud.len(), 1);
     assert_eq!(
-        baud[0].message,
+        baud[0].diagnostic.message,
         "required baud rate(s) not supported: 250 kbit/s, 500 kbit/s"
     );
-    assert_eq!(baud[0].section.as_deref(), Some("DeviceInfo"));
-    assert_eq!((baud[0].span.line, baud[0].span.column), (3, 1));
+    assert_eq!(baud[0].diagnostic.section.as_deref(), Some("DeviceInfo"));
+    assert_eq!(
+        (baud[0].diagnostic.span.line, baud[0].diagnostic.span.column),
+        (3, 1)
+    );
     assert!(!baud[0].fixable, "declaring a baud rate would be false");
-    assert_eq!(baud[0].severity, canopener_eds::Severity::Error);
+    assert_eq!(baud[0].diagnostic.severity, canopener_eds::Severity::Error);
     // A rate the project does not require may be missing; `0x1` is read as an EDS number.
     assert!(
         check(&edited(&[
@@ -302,7 +314,7 @@ fn the_required_baud_rates_are_a_parameter() {
     .unwrap_or_else(|e| panic!("{e}"));
     let found = check_with(&with_1000, BASE);
     assert_eq!(
-        of(&found, "paper/required-baud-rates")[0].message,
+        of(&found, "paper/required-baud-rates")[0].diagnostic.message,
         "required baud rate(s) not supported: 1000 kbit/s"
     );
 }
@@ -316,7 +328,7 @@ fn the_sync_cob_id_must_carry_can_id_0x80() {
         )]));
         of(&found, "paper/sync-cob-id")
             .iter()
-            .map(|f| f.message.clone())
+            .map(|f| f.diagnostic.message.clone())
             .collect::<Vec<_>>()
     };
     assert_eq!(
@@ -362,16 +374,16 @@ fn a_zero_vendor_id_is_found() {
     let vendor = of(&found, "policy/vendor-id-set");
     assert_eq!(vendor.len(), 1);
     assert_eq!(
-        vendor[0].message,
+        vendor[0].diagnostic.message,
         "Vendor-ID 0x00000000 is not a CiA-assigned vendor-ID"
     );
-    assert_eq!(vendor[0].section.as_deref(), Some("1018sub1"));
-    assert_eq!(vendor[0].key.as_deref(), Some("DefaultValue"));
+    assert_eq!(vendor[0].diagnostic.section.as_deref(), Some("1018sub1"));
+    assert_eq!(vendor[0].diagnostic.key.as_deref(), Some("DefaultValue"));
     assert!(check(&edited(&[("DefaultValue=0x1234", "DefaultValue=1")])).is_empty());
     // No DefaultValue at all is no vendor-ID either.
     let missing = check(&edited(&[("DefaultValue=0x1234\n", "")]));
     assert_eq!(
-        of(&missing, "policy/vendor-id-set")[0].message,
+        of(&missing, "policy/vendor-id-set")[0].diagnostic.message,
         "Vendor-ID (no DefaultValue) is not a CiA-assigned vendor-ID"
     );
 }
@@ -382,7 +394,7 @@ fn a_disabled_heartbeat_is_information_and_fixable() {
     let found = check(&text);
     let heartbeat = of(&found, "policy/heartbeat-enabled");
     assert_eq!(heartbeat.len(), 1);
-    assert_eq!(heartbeat[0].severity, canopener_eds::Severity::Info);
+    assert_eq!(heartbeat[0].diagnostic.severity, canopener_eds::Severity::Info);
     assert_eq!(
         fixes(&text, "policy/heartbeat-enabled")[0].description,
         "[1017] DefaultValue: 0 -> 1000"
@@ -412,10 +424,13 @@ fn writable_manufacturer_integers_need_limits() {
     let found = check(&edited(&[("HighLimit=100\n", "")]));
     let limits = of(&found, "policy/writable-limits");
     assert_eq!(limits.len(), 1);
-    assert_eq!(limits[0].message, "writable UNSIGNED16 'Gain' has no HighLimit");
+    assert_eq!(
+        limits[0].diagnostic.message,
+        "writable UNSIGNED16 'Gain' has no HighLimit"
+    );
     let found = check(&edited(&[("LowLimit=0\nHighLimit=100\n", "")]));
     assert_eq!(
-        of(&found, "policy/writable-limits")[0].message,
+        of(&found, "policy/writable-limits")[0].diagnostic.message,
         "writable UNSIGNED16 'Gain' has no LowLimit and HighLimit"
     );
     // Keys compare case-insensitively; read-only and non-integer parameters need no limits.
@@ -434,7 +449,11 @@ fn selection_by_id_slug_and_tag() {
     let cx = Context::new(&loaded, None);
     let pack = pack();
     let codes = |selection: Selection| {
-        let mut codes: Vec<String> = pack.check(&cx, &selection).into_iter().map(|f| f.code).collect();
+        let mut codes: Vec<String> = pack
+            .check(&cx, &selection)
+            .into_iter()
+            .map(|f| f.diagnostic.code)
+            .collect();
         codes.dedup();
         codes
     };
@@ -501,7 +520,7 @@ fn corpus_findings(name: &str) -> (Vec<Finding>, BTreeMap<String, usize>) {
     let found = pack().check(&cx, &Selection::default());
     let mut counts = BTreeMap::new();
     for f in &found {
-        *counts.entry(f.code.clone()).or_insert(0) += 1;
+        *counts.entry(f.diagnostic.code.clone()).or_insert(0) += 1;
     }
     (found, counts)
 }
@@ -509,8 +528,8 @@ fn corpus_findings(name: &str) -> (Vec<Finding>, BTreeMap<String, usize>) {
 fn message_at<'a>(found: &'a [Finding], code: &str, section: &str) -> Option<&'a str> {
     found
         .iter()
-        .find(|f| f.code == code && f.section.as_deref() == Some(section))
-        .map(|f| f.message.as_str())
+        .find(|f| f.diagnostic.code == code && f.diagnostic.section.as_deref() == Some(section))
+        .map(|f| f.diagnostic.message.as_str())
 }
 
 #[test]
@@ -554,10 +573,13 @@ fn modm_test_device_has_a_zero_sync_cob_id() {
     assert_eq!(counts.get("paper/sync-cob-id"), Some(&1));
     assert_eq!(counts.get("paper/no-blank-names"), Some(&147));
     assert_eq!(counts.get("paper/required-baud-rates"), None);
-    let sync = found.iter().find(|f| f.code == "paper/sync-cob-id");
-    assert_eq!(sync.map(|f| (f.span.line, f.span.column)), Some((106, 14)));
+    let sync = found.iter().find(|f| f.diagnostic.code == "paper/sync-cob-id");
     assert_eq!(
-        sync.map(|f| f.message.as_str()),
+        sync.map(|f| (f.diagnostic.span.line, f.diagnostic.span.column)),
+        Some((106, 14))
+    );
+    assert_eq!(
+        sync.map(|f| f.diagnostic.message.as_str()),
         Some("COB-ID SYNC 0 has CAN-ID 0x000; the project uses CAN-ID 0x080")
     );
 }
@@ -595,12 +617,15 @@ fn every_corpus_file_is_checked_without_evaluation_errors() {
     for (name, bytes) in &files {
         let loaded = canopener_eds::load(bytes);
         let findings = pack.check(&Context::new(&loaded, Some(name)), &Selection::default());
-        assert!(findings.iter().all(|f| f.code != "R000"), "{name}: {findings:#?}");
+        assert!(
+            findings.iter().all(|f| f.diagnostic.code != "R000"),
+            "{name}: {findings:#?}"
+        );
         for f in findings {
             if vendored.contains(name) {
-                *vendored_total.entry(f.code.clone()).or_insert(0) += 1;
+                *vendored_total.entry(f.diagnostic.code.clone()).or_insert(0) += 1;
             }
-            *total.entry(f.code).or_insert(0) += 1;
+            *total.entry(f.diagnostic.code).or_insert(0) += 1;
         }
     }
     // The vendored files alone, which every checkout has.
@@ -658,8 +683,8 @@ fn fixing_real_files_converges_and_is_idempotent() {
         let fixable_left: Vec<_> = left.iter().filter(|f| f.fixable).collect();
         assert!(fixable_left.is_empty(), "{name}: {fixable_left:#?}");
         assert!(
-            left.iter()
-                .all(|f| f.code != "paper/no-blank-names" && !f.code.starts_with("paper/unique"))
+            left.iter().all(|f| f.diagnostic.code != "paper/no-blank-names"
+                && !f.diagnostic.code.starts_with("paper/unique"))
         );
         let again = fix::fix_file(&outcome.bytes, Some(name), &selection, &|cx| {
             pack.fixes(cx, &selection)

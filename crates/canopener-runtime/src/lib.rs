@@ -27,10 +27,15 @@
 //!   [`node_scan`], [`node_dump`], [`nmt_command`] (with confirmation), [`lss_session`], [`pdo_map`],
 //!   [`pdo_watch`], [`sync_producer`] and [`heartbeat_watch`]. Their pure parts (plans, reports,
 //!   statistics) are `canopener-master`'s.
+//! - [`description`]: reading device descriptions (any format) and rule packs from files.
+//! - [`batch`]: checking many description files: expanding directories and glob patterns, and
+//!   checking the files in parallel.
 
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod cancel;
+pub mod description;
 pub mod files;
 pub mod heartbeat_watch;
 pub mod link;

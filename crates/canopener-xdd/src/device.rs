@@ -18,8 +18,7 @@ use canopener_eds::{Eds, Object};
 use crate::diag::{Note, XddCode};
 use crate::entry::{nonempty, single_line};
 use crate::notation::{
-    BaudRate, EDS_BAUD_RATES, date_to_eds, date_to_xsd, parse_baud_rate, parse_unsigned, time_to_eds,
-    time_to_xsd,
+    BaudRate, date_to_eds, date_to_xsd, parse_baud_rate, parse_unsigned, time_to_eds, time_to_xsd,
 };
 use crate::side_channel::{self, Control};
 use crate::xml::sanitize;
@@ -156,9 +155,9 @@ pub(crate) fn to_eds(d: &XmlDevice, notes: &mut Vec<Note>) -> Header {
     di.product_number = text(&d.product_id).map(|t| normalize_id("productID", &t, notes));
     di.order_code = text(&d.order_number);
     if let Some(rates) = &d.baud_rates {
-        for kbps in EDS_BAUD_RATES {
-            let supported = rates.contains(&BaudRate::Kbps(kbps));
-            di.set(&format!("BaudRate_{kbps}"), flag(supported));
+        for (kbps, key) in DeviceInfo::BAUD_RATE_KEYS {
+            let supported = rates.contains(&BaudRate::Kbps(u32::from(kbps)));
+            di.set(key, flag(supported));
         }
     }
     if let Some(g) = &d.general {
@@ -269,10 +268,10 @@ pub(crate) fn from_eds(eds: &Eds, file_name: &str, with_values: bool) -> XmlDevi
     };
     let is_one = |v: Option<&str>| v.and_then(int_of) == Some(1);
     d.baud_rates = Some(
-        EDS_BAUD_RATES
+        DeviceInfo::BAUD_RATE_KEYS
             .iter()
-            .filter(|k| is_one(di.get(&format!("BaudRate_{k}"))))
-            .map(|&k| BaudRate::Kbps(k))
+            .filter(|(_, key)| is_one(di.get(key)))
+            .map(|&(kbps, _)| BaudRate::Kbps(u32::from(kbps)))
             .collect(),
     );
     let count = |v: &Option<String>| v.as_deref().and_then(int_of).and_then(|n| u64::try_from(n).ok());

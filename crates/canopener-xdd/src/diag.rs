@@ -1,49 +1,16 @@
-//! Diagnostics produced while reading an XDD/XDC: a stable code, a severity, a message and a
-//! 1-based line/column in the XML text.
+//! Diagnostics produced while reading an XDD/XDC: the `X` series of stable codes, reported in the
+//! shared [`Diagnostic`] shape of `canopener-eds` with a 1-based line/column in the XML text.
 //!
 //! Codes are stable across releases (tools and CI filters match on them). The `X` series belongs to
-//! the XDD reader; the EDS loader uses the `P` series with the same [`Severity`].
+//! the XDD reader; the EDS loader uses the `P` series with the same shape and [`Severity`].
 
-use std::fmt;
-
+use canopener_eds::Diagnostic;
+#[cfg(doc)]
 use canopener_eds::Severity;
 
-macro_rules! codes {
-    ($($(#[$doc:meta])* $variant:ident = $code:literal, $slug:literal, $severity:ident;)*) => {
-        /// The stable identity of an XDD reading diagnostic.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-        pub enum XddCode {
-            $($(#[$doc])* $variant,)*
-        }
-
-        impl XddCode {
-            /// Every code, in numeric order.
-            pub const ALL: &'static [XddCode] = &[$(XddCode::$variant,)*];
-
-            /// The stable code, e.g. `X013`.
-            pub fn as_str(self) -> &'static str {
-                match self { $(XddCode::$variant => $code,)* }
-            }
-
-            /// A short kebab-case name, e.g. `sub-number-mismatch`.
-            pub fn slug(self) -> &'static str {
-                match self { $(XddCode::$variant => $slug,)* }
-            }
-
-            /// The severity this code is reported with.
-            pub fn severity(self) -> Severity {
-                match self { $(XddCode::$variant => Severity::$severity,)* }
-            }
-
-            /// Looks a code up by its stable string (`X013`) or its slug.
-            pub fn from_name(name: &str) -> Option<XddCode> {
-                XddCode::ALL.iter().copied().find(|c| c.as_str().eq_ignore_ascii_case(name) || c.slug() == name)
-            }
-        }
-    };
-}
-
-codes! {
+canopener_eds::diagnostic_codes! {
+    /// The stable identity of an XDD reading diagnostic.
+    pub enum XddCode {
     /// The root element is in no namespace (EdsDcfNet writes such files); CiA 311 files are not
     /// schema-valid that way, but the reader matches local names and reads it anyway.
     NoNamespace = "X001", "no-namespace", Warning;
@@ -109,51 +76,13 @@ codes! {
     DisabledObject = "X040", "disabled-object", Info;
     /// A canopener side-channel property that could not be applied.
     SideChannel = "X041", "side-channel", Warning;
-}
-
-impl fmt::Display for XddCode {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
     }
 }
 
-/// One finding about an XDD/XDC file.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct XddDiagnostic {
-    /// The stable code.
-    pub code: XddCode,
-    /// The severity (that of the code).
-    pub severity: Severity,
-    /// What is wrong and what the reader did about it.
-    pub message: String,
-    /// 1-based line of the element or attribute concerned.
-    pub line: u32,
-    /// 1-based column (in characters).
-    pub column: u32,
-}
-
-impl XddDiagnostic {
-    /// A diagnostic with the code's severity.
-    pub fn new(code: XddCode, line: u32, column: u32, message: impl Into<String>) -> Self {
-        Self {
-            code,
-            severity: code.severity(),
-            message: message.into(),
-            line,
-            column,
-        }
-    }
-}
-
-impl fmt::Display for XddDiagnostic {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{}:{}: {}[{}]: {}",
-            self.line, self.column, self.severity, self.code, self.message
-        )
-    }
-}
+/// One finding about an XDD/XDC file: the shared diagnostic shape with an `X` code. Its span is the
+/// 1-based line and column (in characters) of the element or attribute concerned, with length 0;
+/// it names no section or key and has no help.
+pub type XddDiagnostic = Diagnostic<XddCode>;
 
 /// A finding before it has a position: the mapping functions report these and the reader places them.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -173,6 +102,8 @@ impl Note {
 
 #[cfg(test)]
 mod tests {
+    use canopener_eds::Span;
+
     use super::*;
 
     #[test]
@@ -194,7 +125,7 @@ mod tests {
         assert_eq!(XddCode::from_name("x013"), Some(XddCode::SubNumberMismatch));
         assert_eq!(XddCode::from_name("no-access"), Some(XddCode::NoAccess));
         assert_eq!(XddCode::from_name("X999"), None);
-        let d = XddDiagnostic::new(XddCode::NoAccess, 3, 7, "noAccess on 1001");
+        let d = XddDiagnostic::new(XddCode::NoAccess, Span::new(3, 7, 0), "noAccess on 1001");
         assert_eq!(d.to_string(), "3:7: info[X022]: noAccess on 1001");
     }
 }

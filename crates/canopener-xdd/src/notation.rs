@@ -331,9 +331,6 @@ impl PdoMapping {
     }
 }
 
-/// The CiA 306 baud-rate keys (kbit/s) in key order.
-pub(crate) const EDS_BAUD_RATES: [u32; 8] = [10, 20, 50, 125, 250, 500, 800, 1000];
-
 /// A CiA 311 baud-rate token.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum BaudRate {

@@ -6,8 +6,9 @@
 
 use std::collections::{BTreeMap, HashMap};
 
+use canopener_eds::dcf::BITRATES_KBIT;
 use canopener_eds::model::Properties;
-use canopener_eds::{AccessType, Eds, Object, Origin, SubObject};
+use canopener_eds::{AccessType, Eds, Object, Origin, Span, SubObject};
 use roxmltree::{Document, Node};
 
 use crate::device::{
@@ -50,8 +51,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
                     0,
                     XddDiagnostic::new(
                         XddCode::ProjectWrapper,
-                        line,
-                        column,
+                        Span::new(line, column, 0),
                         format!(
                             "`{root}` is a CANopenEditor project, not an XDD; the device inside was read"
                         ),
@@ -302,7 +302,7 @@ fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<
         XddKind::Xdd
     };
     let mut diagnostics = reader.diagnostics;
-    diagnostics.sort_by_key(|d| (d.line, d.column));
+    diagnostics.sort_by_key(|d| (d.span.line, d.span.column));
     Ok(XddLoaded {
         eds,
         kind,
@@ -315,7 +315,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn push(&mut self, offset: usize, code: XddCode, message: String) {
         let (line, column) = self.positions.at(offset);
         self.diagnostics
-            .push(XddDiagnostic::new(code, line, column, message));
+            .push(XddDiagnostic::new(code, Span::new(line, column, 0), message));
     }
 
     fn place(&mut self, offset: usize, notes: Vec<Note>) {
@@ -640,7 +640,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                                 "baud rate `{value}` has no CiA 306 BaudRate_ key; not carried into the EDS"
                             ),
                         );
-                    } else if matches!(r, BaudRate::Kbps(k) if !crate::notation::EDS_BAUD_RATES.contains(&k))
+                    } else if matches!(r, BaudRate::Kbps(k) if !BITRATES_KBIT.iter().any(|&b| u32::from(b) == k))
                     {
                         self.push(
                             rate.range().start,
@@ -1423,7 +1423,7 @@ mod tests {
             .diagnostics
             .iter()
             .find(|d| d.code == XddCode::UnresolvedReference)
-            .map(|d| (d.line, d.column));
+            .map(|d| (d.span.line, d.span.column));
         let line = text.lines().position(|l| l.contains("UID_NOPE")).map(|l| l + 1);
         assert_eq!(d.map(|d| d.0), line.and_then(|l| u32::try_from(l).ok()));
         assert!(d.is_some_and(|d| d.1 > 1));

@@ -19,7 +19,9 @@ pub(crate) fn sanitize(text: &str) -> String {
 }
 
 /// Escapes text for a double-quoted attribute value. Tab, CR and LF become character references so
-/// that attribute-value normalisation (XML 1.0 §3.3.3) gives them back unchanged.
+/// that attribute-value normalisation (XML 1.0 §3.3.3) gives them back unchanged. The references are
+/// hexadecimal and `'` stays as it is, as CANopenEditor's .NET writer has them (canopener-report's
+/// JUnit escaper differs in both, and keeps its own for its own output).
 pub(crate) fn escape_attribute(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {

@@ -279,7 +279,7 @@ proptest! {
         }
         bytes.truncate(bytes.len().saturating_sub(cut));
         if let Ok(loaded) = read(&bytes) {
-            prop_assert!(loaded.diagnostics.windows(2).all(|w| (w[0].line, w[0].column) <= (w[1].line, w[1].column)));
+            prop_assert!(loaded.diagnostics.windows(2).all(|w| (w[0].span.line, w[0].span.column) <= (w[1].span.line, w[1].span.column)));
         }
     }
 }

@@ -62,13 +62,16 @@ pub(super) fn sub_number(cx: &Context<'_>, out: &mut Planned) {
 /// out than a device that lacks them, so that fix is refused with the reason.
 pub(super) fn sub0_highest(cx: &Context<'_>, out: &mut Planned) {
     let mut findings = Vec::new();
-    crate::group_f::run(cx, &mut findings);
+    crate::checks::objects::run(cx, &mut findings);
     let doc = cx.document;
     let mut done = std::collections::HashSet::new();
     // Findings marked not fixable are on objects whose sub 0 counts entries in use (1003h, PDO
     // mappings): lowering it would change what the device does, so they are left alone.
-    for finding in findings.iter().filter(|f| f.code == "C537" && f.fixable) {
-        let Some(name) = finding.section.as_deref() else {
+    for finding in findings
+        .iter()
+        .filter(|f| f.diagnostic.code == "C537" && f.fixable)
+    {
+        let Some(name) = finding.diagnostic.section.as_deref() else {
             continue;
         };
         let index = match section_name::classify(name) {

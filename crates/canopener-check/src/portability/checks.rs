@@ -8,7 +8,7 @@
 
 use canopener_eds::Severity;
 
-use crate::registry::{CheckInfo, Group};
+use crate::check_info::{CheckInfo, Group};
 
 const fn warning(
     code: &'static str,

@@ -1,30 +1,13 @@
 //! The descriptive sections: `[DeviceInfo]`, `[DummyUsage]` and a DCF's `[DeviceComissioning]`,
 //! which python canopen and CANopenEditor read with narrower rules than CiA 306 §4.2.
 
-use canopener_eds::model::int_of;
+use canopener_eds::model::{DeviceInfo, int_of};
 use canopener_eds::section_name::SectionKind;
 
 use super::checks::{DCF_BAUDRATE, DUMMY_USAGE_PARTIAL, INFO_BOOLEAN, VENDOR_NUMBER};
 use super::tools::{DCFCHK, EDITOR, HOST, PY, at_header, at_value, exact_entry, python_int0, python_int10};
 use crate::context::Context;
 use crate::finding::Finding;
-
-/// The `[DeviceInfo]` booleans (CiA 306 §4.5).
-const BOOLEANS: &[&str] = &[
-    "BaudRate_10",
-    "BaudRate_20",
-    "BaudRate_50",
-    "BaudRate_125",
-    "BaudRate_250",
-    "BaudRate_500",
-    "BaudRate_800",
-    "BaudRate_1000",
-    "SimpleBootUpMaster",
-    "SimpleBootUpSlave",
-    "GroupMessaging",
-    "LSS_Supported",
-    "CANopenSafetySupported",
-];
 
 pub(super) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     dummy_usage(cx, out);
@@ -88,7 +71,11 @@ fn device_info(cx: &Context<'_>, out: &mut Vec<Finding>) {
         return;
     };
     let name = cx.document.section_name(section);
-    for &key in BOOLEANS {
+    let booleans = DeviceInfo::BAUD_RATE_KEYS
+        .map(|(_, key)| key)
+        .into_iter()
+        .chain(DeviceInfo::FLAG_KEYS);
+    for key in booleans {
         let Some(line) = cx.document.find_entry(section, key) else {
             continue;
         };

@@ -8,9 +8,9 @@ use canopener_eds::section_name::SectionKind;
 use canopener_eds::syntax::Section;
 use canopener_eds::{Attributes, DataType, Object, ObjectType, Origin};
 
+use crate::check_info::CheckInfo;
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::registry::CheckInfo;
 
 /// The tools, named with the versions the quirk matrix ran (`canopen-tools-survey.md` §1c).
 pub(super) const PY: &str = "python canopen 2.4.1";

@@ -2,33 +2,25 @@
 
 use std::io::IsTerminal;
 
-use canopener_eds::Severity;
-use canopener_report::{FileReport, HumanOptions, Report};
+use canopener_report::{HumanOptions, Report};
+use canopener_runtime::batch::{check_all, expand};
+use canopener_runtime::files::write_atomic;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rayon::prelude::*;
 
 use crate::eds::args::{CheckFormat, ColorChoice, DenyLevel, EdsCheckArgs};
-use crate::eds::check_inputs::{Checks, expand};
-use crate::eds::input::print_stdout;
+use crate::eds::input::checker;
 use crate::error::{CliError, CliResult};
-use canopener_runtime::files::write_atomic;
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: EdsCheckArgs) -> CliResult {
-    let checks = Checks::from_args(&args.selection)?;
+    let checker = checker(&args.selection)?;
     let targets = expand(&args.inputs);
     let progress = progress_bar(targets.len() as u64);
-    let files: Vec<FileReport> = targets
-        .par_iter()
-        .map(|target| {
-            let report = checks.check_target(target);
-            progress.inc(1);
-            report
-        })
-        .collect();
+    let files = check_all(&checker, &targets, || progress.inc(1));
     progress.finish_and_clear();
     let report = Report {
         tool_version: env!("CARGO_PKG_VERSION").to_owned(),
-        checks: checks.selected(),
+        checks: checker.selected(),
         files,
     };
     let rendered = match args.format {
@@ -63,18 +55,13 @@ pub(crate) fn run(args: EdsCheckArgs) -> CliResult {
 }
 
 /// 2 when a file could not be read, 1 when errors (or denied warnings) were found, else 0.
-pub(crate) fn exit_status(report: &Report, deny: Option<DenyLevel>) -> CliResult {
+fn exit_status(report: &Report, deny: Option<DenyLevel>) -> CliResult {
     let summary = report.summary();
     if summary.problems > 0 {
         return Err(CliError::Exit(2));
     }
     let denied = summary.errors > 0 || (deny == Some(DenyLevel::Warnings) && summary.warnings > 0);
     if denied { Err(CliError::Exit(1)) } else { Ok(()) }
-}
-
-/// Counts findings of one severity in a file report.
-pub(crate) fn count(file: &FileReport, severity: Severity) -> usize {
-    file.findings.iter().filter(|f| f.severity == severity).count()
 }
 
 /// A progress bar on stderr for batches, drawn only on a terminal.

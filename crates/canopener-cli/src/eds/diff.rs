@@ -6,8 +6,9 @@ use canopener_eds::diff::{ChangeKind, diff};
 use serde::Serialize;
 
 use crate::eds::args::{EdsDiffArgs, ReportFormat};
-use crate::eds::input::{print_stdout, read_input};
+use crate::eds::input::read_input;
 use crate::error::{CliError, CliResult};
+use crate::output::print_stdout;
 
 #[derive(Serialize)]
 struct DiffJson<'a> {

@@ -1,23 +1,19 @@
 //! `canopener eds explain CODE`: the explanation page of one check.
 
 use crate::eds::args::{CheckSelectionArgs, EdsExplainArgs, ReportFormat};
-use crate::eds::check_inputs::Checks;
-use crate::eds::input::print_stdout;
+use crate::eds::input::checker;
 use crate::error::{CliError, CliResult};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: EdsExplainArgs) -> CliResult {
-    let checks = Checks::from_args(&CheckSelectionArgs {
+    let checker = checker(&CheckSelectionArgs {
         rules: args.rules.clone(),
         only: Vec::new(),
         skip: Vec::new(),
         tag: Vec::new(),
     })?;
     let wanted = args.code.trim();
-    let Some(check) = checks
-        .all()
-        .into_iter()
-        .find(|c| c.code.eq_ignore_ascii_case(wanted) || c.slug == wanted)
-    else {
+    let Some(check) = checker.find(wanted) else {
         return Err(CliError::EdsTrouble(format!(
             "no check '{wanted}'; `canopener eds rules list` shows every code (add --rules PACK for rule ids)"
         )));

@@ -1,17 +1,14 @@
 //! `canopener eds fix`: apply the safe fixes, say what each one did, and re-check the result.
 
-use std::io::Write;
-
-use canopener_check::Context;
-use canopener_check::fix::{self, Fix};
+use canopener_check::fix;
 use canopener_eds::Severity;
+use canopener_runtime::batch::display_path;
+use canopener_runtime::files::{backup_path, same_file, write_atomic};
 
 use crate::eds::args::{DenyLevel, EdsFixArgs};
-use crate::eds::check::count;
-use crate::eds::check_inputs::Checks;
-use crate::eds::input::print_stdout;
-use crate::error::{CliError, CliResult, stdout_error};
-use canopener_runtime::files::{backup_path, same_file, write_atomic};
+use crate::eds::input::{checker, read_bytes};
+use crate::error::{CliError, CliResult};
+use crate::output::{print_stdout, write_stdout};
 
 pub(crate) fn run(args: EdsFixArgs) -> CliResult {
     if let Some(out) = &args.output
@@ -22,18 +19,10 @@ pub(crate) fn run(args: EdsFixArgs) -> CliResult {
             args.file.display()
         )));
     }
-    let checks = Checks::from_args(&args.selection)?;
-    let bytes = std::fs::read(&args.file)
-        .map_err(|e| CliError::EdsTrouble(format!("cannot read {}: {e}", args.file.display())))?;
+    let checker = checker(&args.selection)?;
+    let bytes = read_bytes(&args.file)?;
     let name = args.file.file_name().and_then(|n| n.to_str());
-    let rule_fixes = |cx: &Context<'_>| -> Vec<Fix> {
-        checks
-            .packs
-            .iter()
-            .flat_map(|pack| pack.fixes(cx, &checks.selection))
-            .collect()
-    };
-    let outcome = fix::fix_file(&bytes, name, &checks.selection, &rule_fixes);
+    let outcome = checker.fix(name, &bytes);
     let path = args.file.display();
     for applied in &outcome.fixes {
         let note = if applied.changes_meaning {
@@ -71,19 +60,18 @@ pub(crate) fn run(args: EdsFixArgs) -> CliResult {
     } else if let Some(out) = &args.output {
         write_atomic(out, &outcome.bytes, false)?;
     } else {
-        let mut stdout = std::io::stdout().lock();
-        stdout.write_all(&outcome.bytes).map_err(stdout_error)?;
-        stdout.flush().map_err(stdout_error)?;
+        write_stdout(&outcome.bytes)?;
     }
-    let before = checks.check_bytes(&args.file, &bytes);
-    let after = checks.check_bytes(&args.file, &outcome.bytes);
-    let (errors, warnings) = (count(&after, Severity::Error), count(&after, Severity::Warning));
+    let shown = display_path(&args.file);
+    let before = checker.check(&shown, name, &bytes);
+    let after = checker.check(&shown, name, &outcome.bytes);
+    let (errors, warnings) = (after.count(Severity::Error), after.count(Severity::Warning));
     eprintln!(
         "{path}: {} fix(es) applied{}; errors {} -> {errors}, {warnings} warning(s) remain \
          (`canopener eds check` lists them)",
         outcome.fixes.len(),
         if args.dry_run { " in the diff only" } else { "" },
-        count(&before, Severity::Error),
+        before.count(Severity::Error),
     );
     if errors > 0 || (args.deny == Some(DenyLevel::Warnings) && warnings > 0) {
         return Err(CliError::Exit(1));

@@ -1,10 +1,13 @@
 //! `canopener eds fmt`: canonical CiA 306 text.
 
-use crate::eds::args::EdsFmtArgs;
-use crate::eds::convert::canonical_bytes;
-use crate::eds::input::{print_stdout, read_input, report_diagnostics};
-use crate::error::{CliError, CliResult};
+use canopener_description::DescriptionCode;
+use canopener_eds::Code;
 use canopener_runtime::files::{backup_path, same_file, write_atomic};
+
+use crate::eds::args::EdsFmtArgs;
+use crate::eds::input::{read_bytes, read_input, report_diagnostics};
+use crate::error::{CliError, CliResult};
+use crate::output::print_stdout;
 
 pub(crate) fn run(args: EdsFmtArgs) -> CliResult {
     if let Some(out) = &args.output
@@ -16,19 +19,23 @@ pub(crate) fn run(args: EdsFmtArgs) -> CliResult {
         )));
     }
     let input = read_input(&args.file)?;
-    report_diagnostics(&input, args.diagnostics)?;
-    let dropped = input.diagnostics.iter().filter(|d| d.code == "P020").count();
+    report_diagnostics(&args.file, &input, args.diagnostics);
+    let dropped = input
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == DescriptionCode::Eds(Code::DuplicateSection))
+        .count();
     if dropped > 0 && !args.check {
         eprintln!(
             "warning: {dropped} repeated section(s) are not part of the model and are left out; \
              `canopener eds show --diagnostics` names them"
         );
     }
-    let bytes = canonical_bytes(&input, &input.eds)?;
+    let bytes = input
+        .canonical_bytes(&input.eds)
+        .map_err(|e| CliError::EdsTrouble(format!("{}: {e}", args.file.display())))?;
     if args.check {
-        let original = std::fs::read(&args.file)
-            .map_err(|e| CliError::EdsTrouble(format!("cannot read {}: {e}", args.file.display())))?;
-        if original == bytes {
+        if read_bytes(&args.file)? == bytes {
             return Ok(());
         }
         eprintln!(

@@ -1,13 +1,12 @@
 //! `canopener eds rules list`: every check, built-in and from rule packs.
 
 use crate::eds::args::{EdsRulesListArgs, ReportFormat};
-use crate::eds::check_inputs::Checks;
-use crate::eds::input::print_stdout;
+use crate::eds::input::checker;
 use crate::error::{CliError, CliResult};
+use crate::output::print_stdout;
 
 pub(crate) fn list(args: EdsRulesListArgs) -> CliResult {
-    let checks = Checks::from_args(&args.selection)?;
-    let selected = checks.selected();
+    let selected = checker(&args.selection)?.selected();
     let text = match args.format {
         ReportFormat::Json => {
             let mut json =

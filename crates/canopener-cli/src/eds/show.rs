@@ -2,13 +2,15 @@
 
 use std::fmt::Write as _;
 
-use canopener_eds::ObjectType;
+use canopener_description::DescriptionCode;
 use canopener_eds::model::{Attributes, Eds, Origin};
+use canopener_eds::{Diagnostic, ObjectType, Severity};
 use serde::Serialize;
 
 use crate::eds::args::{EdsShowArgs, ReportFormat};
-use crate::eds::input::{Finding, print_stdout, read_input, report_diagnostics};
+use crate::eds::input::{read_input, report_diagnostics};
 use crate::error::{CliError, CliResult};
+use crate::output::print_stdout;
 
 /// One row of the table: an object or a sub-object.
 #[derive(Debug, Serialize)]
@@ -38,7 +40,31 @@ struct ShowJson<'a> {
     file_info: Vec<(&'a str, &'a str)>,
     device_info: Vec<(&'a str, &'a str)>,
     objects: Vec<Row>,
-    diagnostics: &'a [Finding],
+    diagnostics: Vec<DiagnosticJson<'a>>,
+}
+
+/// A loading diagnostic as the JSON document shows it (flat: line and column, no span).
+#[derive(Debug, Serialize)]
+struct DiagnosticJson<'a> {
+    line: u32,
+    column: u32,
+    severity: Severity,
+    code: DescriptionCode,
+    message: &'a str,
+    help: Option<&'a str>,
+}
+
+impl<'a> From<&'a Diagnostic<DescriptionCode>> for DiagnosticJson<'a> {
+    fn from(d: &'a Diagnostic<DescriptionCode>) -> Self {
+        DiagnosticJson {
+            line: d.span.line,
+            column: d.span.column,
+            severity: d.severity,
+            code: d.code,
+            message: &d.message,
+            help: d.help.as_deref(),
+        }
+    }
 }
 
 pub(crate) fn run(args: EdsShowArgs) -> CliResult {
@@ -60,23 +86,19 @@ pub(crate) fn run(args: EdsShowArgs) -> CliResult {
         ReportFormat::Json => {
             let doc = ShowJson {
                 file: args.file.display().to_string(),
-                format: match input.format {
-                    crate::eds::input::SourceFormat::Eds => "eds",
-                    crate::eds::input::SourceFormat::Xdd => "xdd",
-                    crate::eds::input::SourceFormat::Json => "json",
-                },
+                format: input.format.name(),
                 dcf: eds.is_dcf(),
                 node_id,
                 file_info: eds.file_info.entries(),
                 device_info: eds.device_info.entries(),
                 objects: rows,
-                diagnostics: &input.diagnostics,
+                diagnostics: input.diagnostics.iter().map(DiagnosticJson::from).collect(),
             };
             let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?;
             print_stdout(&format!("{text}\n"))
         }
         ReportFormat::Human => {
-            report_diagnostics(&input, args.diagnostics)?;
+            report_diagnostics(&args.file, &input, args.diagnostics);
             let mut out = String::new();
             if args.object.is_none() {
                 header(eds, &mut out);

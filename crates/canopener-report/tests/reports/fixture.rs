@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use canopener_check::{CheckDescription, Finding, Group};
-use canopener_eds::{Severity, Span};
+use canopener_eds::{Diagnostic, Severity, Span};
 use canopener_report::{FileReport, Report};
 
 pub(crate) fn check(
@@ -49,13 +49,15 @@ pub(crate) fn finding(
     fixable: bool,
 ) -> Finding {
     Finding {
-        code: code.into(),
-        severity,
-        message: message.into(),
-        span: Span::new(line, column, len),
-        section: section.map(Into::into),
-        key: key.map(Into::into),
-        help: help.map(Into::into),
+        diagnostic: Diagnostic {
+            code: code.into(),
+            severity,
+            message: message.into(),
+            span: Span::new(line, column, len),
+            section: section.map(Into::into),
+            key: key.map(Into::into),
+            help: help.map(Into::into),
+        },
         fixable,
     }
 }

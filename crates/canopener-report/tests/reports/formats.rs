@@ -119,13 +119,16 @@ fn json_has_every_mandatory_member() {
                 ["error", "warning", "info"].contains(&f["severity"].as_str().unwrap_or("")),
                 "{f}"
             );
-            assert_eq!(f["line"], e.span.line);
-            assert_eq!(f["column"], e.span.column);
-            assert_eq!(f["section"].as_str(), e.section.as_deref());
-            assert_eq!(f["key"].as_str(), e.key.as_deref());
+            assert_eq!(f["line"], e.diagnostic.span.line);
+            assert_eq!(f["column"], e.diagnostic.span.column);
+            assert_eq!(f["section"].as_str(), e.diagnostic.section.as_deref());
+            assert_eq!(f["key"].as_str(), e.diagnostic.key.as_deref());
             assert_eq!(f["fixable"], e.fixable);
-            assert_eq!(f.get("help").and_then(Value::as_str), e.help.as_deref());
-            assert_eq!(f["message"], e.message.as_str());
+            assert_eq!(
+                f.get("help").and_then(Value::as_str),
+                e.diagnostic.help.as_deref()
+            );
+            assert_eq!(f["message"], e.diagnostic.message.as_str());
         }
     }
     let summary = &doc["summary"];

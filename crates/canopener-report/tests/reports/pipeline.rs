@@ -1,6 +1,7 @@
 //! The whole path the CLI takes: load an EDS, check it, build the report, write every format.
 
 use canopener_check::{CheckInfo, Finding, Selection, check, registry};
+use canopener_eds::Severity;
 use canopener_report::{FileReport, HumanOptions, Report, html, human, json, junit, sarif};
 use serde_json::Value;
 
@@ -20,10 +21,9 @@ fn report() -> Report {
     // report so the test does not depend on which checks exist.
     for diagnostic in &loaded.diagnostics {
         let finding = Finding::from_diagnostic(diagnostic, false);
-        if !findings
-            .iter()
-            .any(|f| f.code == finding.code && f.span == finding.span)
-        {
+        if !findings.iter().any(|f| {
+            f.diagnostic.code == finding.diagnostic.code && f.diagnostic.span == finding.diagnostic.span
+        }) {
             findings.push(finding);
         }
     }
@@ -46,9 +46,9 @@ fn source_lines_come_from_the_document() {
     for finding in &file.findings {
         let line = file
             .source
-            .get(&finding.span.line)
+            .get(&finding.diagnostic.span.line)
             .expect("source line of every finding");
-        let index = usize::try_from(finding.span.line).expect("small") - 1;
+        let index = usize::try_from(finding.diagnostic.span.line).expect("small") - 1;
         assert_eq!(Some(&line.as_str()), lines.get(index), "{finding:?}");
     }
     let from_text = FileReport::from_text("test.eds", file.findings.clone(), EDS);
@@ -78,4 +78,20 @@ fn every_format_accepts_a_real_check() {
     let page = html(&report);
     assert_eq!(page.matches("<article class=\"finding").count(), total);
     assert!(!page.contains("<x>"));
+}
+
+#[test]
+fn a_file_report_counts_its_findings_by_severity() {
+    let report = report();
+    let file = &report.files[0];
+    let total: usize = [Severity::Error, Severity::Warning, Severity::Info]
+        .into_iter()
+        .map(|s| file.count(s))
+        .sum();
+    assert_eq!(total, file.findings.len());
+    assert!(file.count(Severity::Error) > 0, "the duplicate key is an error");
+    assert_eq!(
+        FileReport::unreadable("gone.eds", "no such file").count(Severity::Error),
+        0
+    );
 }

@@ -203,14 +203,14 @@ fn fingerprints_survive_line_moves_but_not_other_changes() {
     let base = report();
     let original = fingerprint(&base, 0);
     let mut moved = base.clone();
-    moved.files[0].findings[0].span.line += 7;
-    moved.files[0].findings[0].span.column += 2;
+    moved.files[0].findings[0].diagnostic.span.line += 7;
+    moved.files[0].findings[0].diagnostic.span.column += 2;
     assert_eq!(fingerprint(&moved, 0), original);
     let mut reworded = base.clone();
-    reworded.files[0].findings[0].message.push('!');
+    reworded.files[0].findings[0].diagnostic.message.push('!');
     assert_ne!(fingerprint(&reworded, 0), original);
     let mut other_key = base.clone();
-    other_key.files[0].findings[0].key = Some("ProductNumber".into());
+    other_key.files[0].findings[0].diagnostic.key = Some("ProductNumber".into());
     assert_ne!(fingerprint(&other_key, 0), original);
     // The value is fixed across releases: changing the hash would reopen every alert.
     assert_eq!(original, "86ca412607de9f8a:1");

@@ -1,4 +1,4 @@
-//! Group D of `eds-format-and-checks.md` §10: `[DummyUsage]` (check 21).
+//! Group D of the check catalogue (`docs/check-catalogue.md`): `[DummyUsage]` (check 21).
 //!
 //! The loader keeps `[DummyUsage]` as free entries without looking at them, so everything about
 //! the section is checked here: its presence, the `Dummy<index>` keys, their 0/1 values, and
@@ -7,10 +7,10 @@
 use canopener_eds::section_name::SectionKind;
 use canopener_eds::{DataType, Severity};
 
+use super::reading::present;
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::group_b::present;
-use crate::registry::{CheckInfo, Group};
 
 const KEY_INVALID: CheckInfo = CheckInfo {
     code: "C351",

@@ -1,5 +1,5 @@
 //! The `P` series: what loading found (see [`canopener_eds::diag::Code`]), reported as findings
-//! unchanged. This module gives each loading diagnostic its registry entry: title, the §10 checks it
+//! unchanged. This module gives each loading diagnostic its registry entry: title, the catalogue checks it
 //! implements, the clause that justifies its severity, and its explanation page.
 //!
 //! Code, slug and severity are written out here and tested against [`Code::ALL`], so the registry
@@ -7,9 +7,9 @@
 
 use canopener_eds::Severity;
 
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 /// The loading diagnostics, in code order.
 pub(crate) const CHECKS: &[CheckInfo] = &[
@@ -1092,9 +1092,9 @@ mod tests {
         let mut out = Vec::new();
         run(&cx, &mut out);
         assert_eq!(out.len(), loaded.diagnostics.len());
-        let duplicate = out.iter().find(|f| f.code == "P021");
-        assert!(duplicate.is_some_and(|f| !f.fixable && f.severity == Severity::Error));
-        let spelling = out.iter().find(|f| f.code == "P031");
-        assert!(spelling.is_some_and(|f| f.fixable && f.section.as_deref() == Some("1000sub01")));
+        let duplicate = out.iter().find(|f| f.diagnostic.code == "P021");
+        assert!(duplicate.is_some_and(|f| !f.fixable && f.diagnostic.severity == Severity::Error));
+        let spelling = out.iter().find(|f| f.diagnostic.code == "P031");
+        assert!(spelling.is_some_and(|f| f.fixable && f.diagnostic.section.as_deref() == Some("1000sub01")));
     }
 }

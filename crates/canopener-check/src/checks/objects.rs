@@ -1,4 +1,4 @@
-//! Group F of `eds-format-and-checks.md` §10: object and sub-object sections (checks 28-44).
+//! Group F of the check catalogue (`docs/check-catalogue.md`): object and sub-object sections (checks 28-44).
 //!
 //! The loader already reports a missing `ParameterName` or other mandatory key (P073), unknown
 //! object, data and access types (P070-P072), a `SubNumber` that disagrees with the sub-sections
@@ -17,9 +17,9 @@ use canopener_eds::model::{Attributes, Object, Properties, int_of};
 use canopener_eds::section_name::{Companion, SectionKind};
 use canopener_eds::{DataType, ObjectType, Origin, Severity, TypeKind};
 
+use crate::check_info::{CheckInfo, Group};
 use crate::context::{Context, object_kind};
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 const PARAMETER_NAME_TOO_LONG: CheckInfo = CheckInfo {
     code: "C501",
@@ -1112,8 +1112,8 @@ mod tests {
         let record = findings(&mapping("2000", "0"), "C537");
         assert_eq!(record.len(), 1);
         assert!(record[0].fixable);
-        assert_eq!(record[0].key.as_deref(), Some("DefaultValue"));
-        assert_eq!(record[0].section.as_deref(), Some("2000sub0"));
+        assert_eq!(record[0].diagnostic.key.as_deref(), Some("DefaultValue"));
+        assert_eq!(record[0].diagnostic.section.as_deref(), Some("2000sub0"));
     }
 
     #[test]

@@ -1,19 +1,20 @@
-//! Group C of `eds-format-and-checks.md` §10: `[DeviceInfo]` and its cross-checks (checks 13-20).
+//! Group C of the check catalogue (`docs/check-catalogue.md`): `[DeviceInfo]` and its cross-checks (checks
+//! 13-20).
 //!
 //! The loader reads `[DeviceInfo]` into the model and reports reserved keys (P034), unknown keys
 //! (P033) and a missing section (P029), which is all of check 20. The checks here look at the
 //! values: mandatory keys, numbers and Booleans, the identity against 1018h, the bit rates,
 //! `Granularity`, the PDO counts against the PDO objects, and `[DynamicChannels]`.
 
-use canopener_eds::model::{DeviceInfo, strip_inline_comment};
+use canopener_eds::model::DeviceInfo;
 use canopener_eds::section_name::SectionKind;
-use canopener_eds::value::{self, mentions_nodeid};
-use canopener_eds::{Code, Origin, Severity};
+use canopener_eds::value::mentions_nodeid;
+use canopener_eds::{Origin, Severity};
 
+use super::reading::{lenient_int, present, strict_int};
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::group_b::present;
-use crate::registry::{CheckInfo, Group};
 
 const KEY_MISSING: CheckInfo = CheckInfo {
     code: "C301",
@@ -293,18 +294,6 @@ pub(crate) const CHECKS: &[CheckInfo] = &[
     DYNAMIC_CHANNELS_UNANNOUNCED,
 ];
 
-/// The bit rates `[DeviceInfo]` can declare, in kbit/s, with their keys (CiA 306 V1.3 §4.5).
-pub(crate) const BAUD_RATES: [(u32, &str); 8] = [
-    (10, "BaudRate_10"),
-    (20, "BaudRate_20"),
-    (50, "BaudRate_50"),
-    (125, "BaudRate_125"),
-    (250, "BaudRate_250"),
-    (500, "BaudRate_500"),
-    (800, "BaudRate_800"),
-    (1000, "BaudRate_1000"),
-];
-
 const CAPABILITY_KEYS: [&str; 9] = [
     "VendorNumber",
     "ProductNumber",
@@ -321,26 +310,6 @@ const MORE_CAPABILITY_KEYS: [&str; 2] = ["NrOfTXPDO", "LSS_Supported"];
 
 const NAME_KEYS: [&str; 3] = ["VendorName", "ProductName", "OrderCode"];
 
-const BOOLEAN_KEYS: [&str; 5] = [
-    "SimpleBootUpMaster",
-    "SimpleBootUpSlave",
-    "GroupMessaging",
-    "LSS_Supported",
-    "CANopenSafetySupported",
-];
-
-/// Numeric entries and their bit width (all unsigned).
-const NUMBER_KEYS: [(&str, u32); 8] = [
-    ("VendorNumber", 32),
-    ("ProductNumber", 32),
-    ("RevisionNumber", 32),
-    ("Granularity", 8),
-    ("DynamicChannelsSupported", 8),
-    ("CompactPDO", 8),
-    ("NrOfRXPDO", 16),
-    ("NrOfTXPDO", 16),
-];
-
 /// Runs the checks of this group.
 pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     // A missing [DeviceInfo] is P029; its keys are not reported again one by one.
@@ -352,7 +321,7 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
         .iter()
         .chain(&MORE_CAPABILITY_KEYS)
         .copied()
-        .chain(BAUD_RATES.iter().map(|&(_, key)| key));
+        .chain(DeviceInfo::BAUD_RATE_KEYS.map(|(_, key)| key));
     for key in capability {
         if present(info.get(key)).is_none() {
             out.push(missing(cx, &KEY_MISSING, info, key));
@@ -363,7 +332,7 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
             out.push(missing(cx, &NAME_MISSING, info, key));
         }
     }
-    for (key, bits) in NUMBER_KEYS {
+    for (key, bits) in DeviceInfo::NUMBER_KEYS {
         let Some(text) = present(info.get(key)) else {
             continue;
         };
@@ -398,10 +367,9 @@ fn missing(cx: &Context<'_>, check: &CheckInfo, info: &DeviceInfo, key: &str) ->
 }
 
 fn check_booleans(cx: &Context<'_>, out: &mut Vec<Finding>, info: &DeviceInfo) {
-    let keys = BOOLEAN_KEYS
-        .iter()
-        .copied()
-        .chain(BAUD_RATES.iter().map(|&(_, key)| key));
+    let keys = DeviceInfo::FLAG_KEYS
+        .into_iter()
+        .chain(DeviceInfo::BAUD_RATE_KEYS.map(|(_, key)| key));
     for key in keys {
         let Some(text) = present(info.get(key)) else {
             continue;
@@ -427,7 +395,7 @@ fn check_booleans(cx: &Context<'_>, out: &mut Vec<Finding>, info: &DeviceInfo) {
         };
         out.push(finding.with_help(format!("write {key}=0 or {key}=1")));
     }
-    let rates: Vec<Option<i128>> = BAUD_RATES
+    let rates: Vec<Option<i128>> = DeviceInfo::BAUD_RATE_KEYS
         .iter()
         .filter_map(|&(_, key)| present(info.get(key)))
         .map(strict_int)
@@ -612,42 +580,10 @@ fn check_dynamic_channels(cx: &Context<'_>, out: &mut Vec<Finding>, info: &Devic
     }
 }
 
-/// Reads a CiA 306 §4.2 integer: decimal, `0x` hexadecimal or octal with a leading `0`, optionally
-/// signed. The lenient forms the value parser also accepts (`FEh`, `08` read as decimal) are
-/// refused; an inline `; comment` is ignored, since group A reports it.
-pub(crate) fn strict_int(text: &str) -> Option<i128> {
-    let read = |t: &str| {
-        let mut issues = Vec::new();
-        let literal = value::parse_integer(t, &mut issues)?;
-        let lenient = issues
-            .iter()
-            .any(|i| matches!(i.code, Code::HexSuffix | Code::InvalidNumber));
-        (!lenient).then_some(literal.value)
-    };
-    read(text).or_else(|| read(strip_inline_comment(text)?))
-}
-
-/// Reads an integer the way the loader does (accepting `FEh`); for values whose notation other
-/// checks already report.
-pub(crate) fn lenient_int(text: &str) -> Option<i128> {
-    canopener_eds::model::int_of(text)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn strict_integers_follow_cia_306() {
-        assert_eq!(strict_int("0x00000ABC"), Some(2748));
-        assert_eq!(strict_int("2748"), Some(2748));
-        assert_eq!(strict_int("012"), Some(10));
-        assert_eq!(strict_int("0"), Some(0));
-        assert_eq!(strict_int("8 ; bits"), Some(8));
-        for bad in ["FEh", "08", "1.0", "", "e-RIO 8xx", "0x"] {
-            assert_eq!(strict_int(bad), None, "{bad}");
-        }
-    }
     fn findings(text: &str) -> Vec<Finding> {
         let loaded = canopener_eds::load(text.as_bytes());
         let cx = Context::new(&loaded, Some("x.eds"));
@@ -673,16 +609,19 @@ mod tests {
     #[test]
     fn booleans_in_another_notation_are_warnings_and_garbage_is_an_error() {
         let found = findings(&DEVICE.replace("BaudRate_250=1", "BaudRate_250=0x1"));
-        let severities: Vec<(&str, Severity)> = found.iter().map(|f| (f.code.as_str(), f.severity)).collect();
+        let severities: Vec<(&str, Severity)> = found
+            .iter()
+            .map(|f| (f.diagnostic.code.as_str(), f.diagnostic.severity))
+            .collect();
         // 0x1 still reads as 1, so the device supports a bit rate and C306 stays quiet.
         assert_eq!(severities, [("C305", Severity::Warning)]);
         let found = findings(&DEVICE.replace("GroupMessaging=0", "GroupMessaging=no"));
         assert_eq!(found.len(), 1);
         assert_eq!(
-            (found[0].code.as_str(), found[0].severity),
+            (found[0].diagnostic.code.as_str(), found[0].diagnostic.severity),
             ("C305", Severity::Error)
         );
-        assert_eq!(found[0].key.as_deref(), Some("GroupMessaging"));
+        assert_eq!(found[0].diagnostic.key.as_deref(), Some("GroupMessaging"));
     }
 
     #[test]
@@ -690,7 +629,7 @@ mod tests {
         let found = findings(&DEVICE.replace("DefaultValue=2748", "DefaultValue=0x00000ABD"));
         assert_eq!(found.len(), 1);
         assert_eq!(
-            found[0].message,
+            found[0].diagnostic.message,
             "VendorNumber 0x00000ABC differs from 1018sub1 DefaultValue 0x00000ABD"
         );
         let found = findings(&DEVICE.replace("DefaultValue=2748", "DefaultValue=$NODEID+0xABC"));

@@ -1,4 +1,4 @@
-//! Group J of `eds-format-and-checks.md` §10: modular devices (checks 62-64, CiA 306 §6).
+//! Group J of the check catalogue (`docs/check-catalogue.md`): modular devices (checks 62-64, CiA 306 §6).
 //!
 //! The loader reads the `M<x>` sections into [`canopener_eds::model::Module`]s and reports module
 //! numbers `[SupportedModules]` does not declare (P090, the second half of check 62). It checks
@@ -11,12 +11,11 @@ use canopener_eds::model::{Attributes, Module, Properties};
 use canopener_eds::section_name::{ModulePart, SectionKind};
 use canopener_eds::{ObjectType, Origin, Severity};
 
+use super::numbered_list::check_numbered_list;
+use super::reading::{present, strict_int};
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::group_b::present;
-use crate::group_c::strict_int;
-use crate::group_i::check_numbered_list;
-use crate::registry::{CheckInfo, Group};
 
 const MODULE_INFO_MISSING: CheckInfo = CheckInfo {
     code: "C851",
@@ -767,9 +766,9 @@ mod tests {
         let mut out = Vec::new();
         run(&cx, &mut out);
         assert_eq!(out.len(), 9);
-        assert!(out.iter().all(|f| f.code == "C851"));
+        assert!(out.iter().all(|f| f.diagnostic.code == "C851"));
         assert_eq!(
-            out.last().map(|f| f.message.as_str()),
+            out.last().map(|f| f.diagnostic.message.as_str()),
             Some("65527 more of the 65535 declared module types have no [M<x>ModuleInfo]")
         );
     }

@@ -1,4 +1,4 @@
-//! Group G of `eds-format-and-checks.md` §10: values (checks 45-50).
+//! Group G of the check catalogue (`docs/check-catalogue.md`): values (checks 45-50).
 //!
 //! The loader already reads every DefaultValue, LowLimit, HighLimit and ParameterValue with its data
 //! type and reports what does not parse (P050, P059-P061), what leaves the type's range, including
@@ -16,9 +16,9 @@ use canopener_eds::section_name::SectionKind;
 use canopener_eds::value::{Parsed, parse_value};
 use canopener_eds::{AccessType, DataType, ObjectType, Origin, Severity, TypeKind, Value};
 
+use crate::check_info::{CheckInfo, Group};
 use crate::context::{Context, object_kind};
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 const LOW_ABOVE_HIGH: CheckInfo = CheckInfo {
     code: "C601",
@@ -466,7 +466,10 @@ mod tests {
         let text = var("0x0008", "LowLimit=-1.5\nHighLimit=2.5\nDefaultValue=2.75\n");
         let found = findings(&text, "C602");
         assert_eq!(found.len(), 1);
-        assert_eq!(found[0].message, "DefaultValue 2.75 is above HighLimit 2.5");
+        assert_eq!(
+            found[0].diagnostic.message,
+            "DefaultValue 2.75 is above HighLimit 2.5"
+        );
         assert!(
             findings(
                 &var("0x0008", "LowLimit=-1.5\nHighLimit=2.5\nDefaultValue=-1.5\n"),
@@ -506,7 +509,12 @@ mod tests {
             "0x0007",
             "LowLimit=0x181\nHighLimit=0x1BF\nDefaultValue=$NODEID+0x180\n",
         );
-        assert!(findings(&eds, "C602")[0].message.contains("node-ID 127"));
+        assert!(
+            findings(&eds, "C602")[0]
+                .diagnostic
+                .message
+                .contains("node-ID 127")
+        );
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! Group K of `eds-format-and-checks.md` §10: standard objects against the shipped reference
+//! Group K of the check catalogue (`docs/check-catalogue.md`): standard objects against the shipped reference
 //! profiles (check 65).
 //!
 //! CiA 301 applies to every file; the device profile is chosen by 1000h bits 0-15 (CiA 401 for
@@ -8,11 +8,11 @@
 
 use canopener_eds::{Attributes, Object, ObjectType, Origin, Severity};
 
+use super::reading::{Int, entry_name, live_object, object_finding, reading, type_name, written};
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::group_h::{Int, entry_name, object_finding, present, reading, type_name, written};
 use crate::profile::{self, EntrySpec, PdoMapping, Profile, ProfileObject};
-use crate::registry::{CheckInfo, Group};
 
 const OBJECT_TYPE: CheckInfo = CheckInfo {
     code: "C901",
@@ -218,7 +218,7 @@ const LEFT_TO_GROUP_H: [u16; 3] = [0x1000, 0x1001, 0x1018];
 
 /// Runs the checks of this group.
 pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
-    let device_type = present(cx, 0x1000)
+    let device_type = live_object(cx, 0x1000)
         .and_then(|o| reading(cx, &o.attributes))
         .and_then(|r| match r.value {
             Int::Literal(v) => u32::try_from(v).ok(),

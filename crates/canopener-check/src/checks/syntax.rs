@@ -1,4 +1,4 @@
-//! Group A of `eds-format-and-checks.md` §10: syntax and lexical rules (checks 1-7).
+//! Group A of the check catalogue (`docs/check-catalogue.md`): syntax and lexical rules (checks 1-7).
 //!
 //! The loader already reports most of this group as `P0xx` diagnostics: encodings (P001-P004),
 //! malformed headers and lines (P010-P016), duplicates (P020, P021), spelling of section names and
@@ -13,9 +13,9 @@ use canopener_eds::section_name::{Companion, ModulePart, SectionKind};
 use canopener_eds::syntax::{LineKind, Section};
 use canopener_eds::{Severity, Span};
 
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 /// The longest line CiA 306 V1.3 §4.2 allows, in characters, without the line ending.
 const MAX_LINE: usize = 255;
@@ -629,21 +629,10 @@ fn is_untyped_number(kind: SectionKind, key: &str) -> bool {
         SectionKind::FileInfo => any(&["FileVersion", "FileRevision"]),
         SectionKind::DeviceInfo => {
             key.get(..9).is_some_and(|p| p.eq_ignore_ascii_case("BaudRate_"))
-                || any(&[
-                    "VendorNumber",
-                    "ProductNumber",
-                    "RevisionNumber",
-                    "SimpleBootUpMaster",
-                    "SimpleBootUpSlave",
-                    "Granularity",
-                    "DynamicChannelsSupported",
-                    "GroupMessaging",
-                    "NrOfRXPDO",
-                    "NrOfTXPDO",
-                    "LSS_Supported",
-                    "CompactPDO",
-                    "CANopenSafetySupported",
-                ])
+                || DeviceInfo::FLAG_KEYS
+                    .into_iter()
+                    .chain(DeviceInfo::NUMBER_KEYS.map(|(key, _)| key))
+                    .any(|k| k.eq_ignore_ascii_case(key))
         }
         SectionKind::DummyUsage
         | SectionKind::ObjectList(_)
@@ -859,37 +848,42 @@ mod tests {
     fn line_checks_point_at_the_offending_column() {
         let long = format!("[FileInfo]\nDescription={}\n", "x".repeat(250));
         let found = findings(&long);
-        let finding = found.iter().find(|f| f.code == "C101");
+        let finding = found.iter().find(|f| f.diagnostic.code == "C101");
         assert!(
-            finding.is_some_and(|f| f.span == Span::new(2, 256, 7)),
+            finding.is_some_and(|f| f.diagnostic.span == Span::new(2, 256, 7)),
             "{found:?}"
         );
 
         let found = findings("[FileInfo]\nDescription=Temperatur in °C\n");
-        let finding = found.iter().find(|f| f.code == "C102");
+        let finding = found.iter().find(|f| f.diagnostic.code == "C102");
         assert!(
-            finding.is_some_and(|f| f.span == Span::new(2, 27, 1) && f.message.contains("`Temperatur in`")),
+            finding.is_some_and(|f| f.diagnostic.span == Span::new(2, 27, 1)
+                && f.diagnostic.message.contains("`Temperatur in`")),
             "{found:?}"
         );
 
         let found = findings("[1000]\nParameterName=Device type #1\n");
-        let finding = found.iter().find(|f| f.code == "C103");
+        let finding = found.iter().find(|f| f.diagnostic.code == "C103");
         assert!(
-            finding.is_some_and(|f| f.span == Span::new(2, 27, 1) && f.severity == Severity::Info),
+            finding.is_some_and(
+                |f| f.diagnostic.span == Span::new(2, 27, 1) && f.diagnostic.severity == Severity::Info
+            ),
             "{found:?}"
         );
 
         let found = findings("[FileInfo]\nFileVersion=010\n");
-        let finding = found.iter().find(|f| f.code == "C104");
+        let finding = found.iter().find(|f| f.diagnostic.code == "C104");
         assert!(
-            finding.is_some_and(|f| f.span == Span::new(2, 13, 3) && f.severity == Severity::Warning),
+            finding
+                .is_some_and(|f| f.diagnostic.span == Span::new(2, 13, 3)
+                    && f.diagnostic.severity == Severity::Warning),
             "{found:?}"
         );
         let found = findings("[FileInfo]\nFileVersion=09\n");
         assert!(
             found
                 .iter()
-                .any(|f| f.code == "C104" && f.severity == Severity::Error),
+                .any(|f| f.diagnostic.code == "C104" && f.diagnostic.severity == Severity::Error),
             "{found:?}"
         );
     }
@@ -897,9 +891,9 @@ mod tests {
     #[test]
     fn control_characters_are_named_by_code_point() {
         let found = findings("[FileInfo]\nDescription=a\u{1}b\n");
-        let finding = found.iter().find(|f| f.code == "C102");
+        let finding = found.iter().find(|f| f.diagnostic.code == "C102");
         assert!(
-            finding.is_some_and(|f| f.message.starts_with("control character U+0001")),
+            finding.is_some_and(|f| f.diagnostic.message.starts_with("control character U+0001")),
             "{found:?}"
         );
     }

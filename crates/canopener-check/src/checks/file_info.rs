@@ -1,4 +1,4 @@
-//! Group B of `eds-format-and-checks.md` §10: `[FileInfo]` (checks 8-12).
+//! Group B of the check catalogue (`docs/check-catalogue.md`): `[FileInfo]` (checks 8-12).
 //!
 //! The loader only reads `[FileInfo]` (unknown keys are P033, a missing section P029); the checks
 //! here look at the values: mandatory keys, `FileVersion`/`FileRevision` as Unsigned8, `EDSVersion`,
@@ -11,11 +11,10 @@
 use canopener_eds::Severity;
 use canopener_eds::section_name::SectionKind;
 
+use super::reading::{is_dcf_file, present, strict_int};
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::group_c::strict_int;
-use crate::group_i::is_dcf_file;
-use crate::registry::{CheckInfo, Group};
 
 const KEY_MISSING: CheckInfo = CheckInfo {
     code: "C201",
@@ -611,11 +610,6 @@ fn check_last_eds(cx: &Context<'_>, out: &mut Vec<Finding>) {
             .with_help("delete the LastEDS line"),
         );
     }
-}
-
-/// A value that is present and not blank (CiA 306 §4.2: an empty value means the key is missing).
-pub(crate) fn present(value: Option<&str>) -> Option<&str> {
-    value.map(str::trim).filter(|v| !v.is_empty())
 }
 
 #[cfg(test)]

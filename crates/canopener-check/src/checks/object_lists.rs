@@ -1,4 +1,4 @@
-//! Group E of `eds-format-and-checks.md` §10: the object lists `[MandatoryObjects]`,
+//! Group E of the check catalogue (`docs/check-catalogue.md`): the object lists `[MandatoryObjects]`,
 //! `[OptionalObjects]` and `[ManufacturerObjects]` (checks 22-27).
 //!
 //! The loader already reports most list problems: a count that disagrees with the entries or is not
@@ -13,9 +13,9 @@ use canopener_eds::model::{ObjectListKind, int_of};
 use canopener_eds::section_name::SectionKind;
 use canopener_eds::{Origin, Severity};
 
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 const SUPPORTED_OBJECTS_MISSING: CheckInfo = CheckInfo {
     code: "C401",
@@ -335,12 +335,12 @@ mod tests {
     fn a_missing_identity_object_is_an_error_from_cia306_v4_and_a_warning_before() {
         let found = findings(MINIMAL, "C405");
         assert_eq!(found.len(), 1);
-        assert_eq!(found[0].severity, Severity::Error);
+        assert_eq!(found[0].diagnostic.severity, Severity::Error);
         for older in ["EDSVersion=3.0", "EDSVersion="] {
             let text = MINIMAL.replace("EDSVersion=4.0", older);
             let found = findings(&text, "C405");
             assert_eq!(found.len(), 1, "{older}");
-            assert_eq!(found[0].severity, Severity::Warning, "{older}");
+            assert_eq!(found[0].diagnostic.severity, Severity::Warning, "{older}");
         }
         assert!(findings(MINIMAL, "C404").is_empty());
     }
@@ -379,7 +379,11 @@ mod tests {
         let gap = MINIMAL.replace("1=0x1000\n2=0x1001", "1=0x1000\n3=0x1001");
         let found = findings(&gap, "C402");
         assert_eq!(found.len(), 1);
-        assert!(found[0].message.contains("3=0x1001"), "{}", found[0].message);
+        assert!(
+            found[0].diagnostic.message.contains("3=0x1001"),
+            "{}",
+            found[0].diagnostic.message
+        );
         // A count that disagrees is P044's finding, not this one's.
         let short = gap.replace("SupportedObjects=2", "SupportedObjects=3");
         assert!(findings(&short, "C402").is_empty());

@@ -1,4 +1,4 @@
-//! Group H of `eds-format-and-checks.md` §10: CiA 301 semantics (checks 51-58).
+//! Group H of the check catalogue (`docs/check-catalogue.md`): CiA 301 semantics (checks 51-58).
 //!
 //! What the loader already reports is not repeated: a PDO communication object without its mapping
 //! object (check 54) is P080, and values that do not parse or do not fit their type are P050/P054.
@@ -8,22 +8,22 @@
 //! are real objects of the device and are checked like written ones; findings about them point at
 //! `[DeviceInfo] CompactPDO`.
 //!
-//! The helpers at the end (reading values, pointing findings at what is written) are shared with
-//! group K.
+//! Reading values and pointing findings at what is written are shared with group K, in
+//! [`super::reading`].
 
 use std::collections::BTreeMap;
 use std::ops::RangeInclusive;
 
 use canopener_eds::model::int_of;
-use canopener_eds::section_name::{Companion, SectionKind};
-use canopener_eds::value::{self, Value};
+use canopener_eds::section_name::SectionKind;
 use canopener_eds::{
     AccessType, Attributes, DataType, ObjectListKind, ObjectType, Origin, Severity, TypeKind,
 };
 
+use super::reading::{Int, Reading, entry_name, live_object, object_finding, reading, type_name, written};
+use crate::check_info::{CheckInfo, Group};
 use crate::context::Context;
 use crate::finding::Finding;
-use crate::registry::{CheckInfo, Group};
 
 const MANDATORY_OBJECT: CheckInfo = CheckInfo {
     code: "C701",
@@ -544,7 +544,9 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
 // ---- 51: 1000h, 1001h, 1018h --------------------------------------------------------------------
 
 fn mandatory_var(cx: &Context<'_>, out: &mut Vec<Finding>, index: u16, what: &str, expected: DataType) {
-    let Some(object) = present(cx, index) else { return };
+    let Some(object) = live_object(cx, index) else {
+        return;
+    };
     let attributes = &object.attributes;
     match object.object_type() {
         Some(ObjectType::Var) | None => {}
@@ -572,7 +574,9 @@ fn mandatory_var(cx: &Context<'_>, out: &mut Vec<Finding>, index: u16, what: &st
 
 fn identity(cx: &Context<'_>, out: &mut Vec<Finding>) {
     const INDEX: u16 = 0x1018;
-    let Some(object) = present(cx, INDEX) else { return };
+    let Some(object) = live_object(cx, INDEX) else {
+        return;
+    };
     match object.object_type() {
         Some(ObjectType::Record) | None => {}
         Some(ObjectType::Array) => out.push(
@@ -736,7 +740,7 @@ fn read_only(
 // ---- 52: heartbeat or node guarding ---------------------------------------------------------------
 
 fn error_control(cx: &Context<'_>, out: &mut Vec<Finding>) {
-    let has = |index| present(cx, index).is_some();
+    let has = |index| live_object(cx, index).is_some();
     if has(0x1017) || (has(0x100C) && has(0x100D)) {
         return;
     }
@@ -773,7 +777,7 @@ fn is_master(cx: &Context<'_>) -> bool {
         .as_deref()
         .and_then(int_of)
         == Some(1);
-    let startup = present(cx, 0x1F80)
+    let startup = live_object(cx, 0x1F80)
         .and_then(|o| reading(cx, &o.attributes))
         .is_some_and(|r| matches!(r.value, Int::Literal(v) if v & 1 == 1));
     simple || startup
@@ -783,7 +787,9 @@ fn is_master(cx: &Context<'_>) -> bool {
 
 fn heartbeat_consumer(cx: &Context<'_>, out: &mut Vec<Finding>) {
     const INDEX: u16 = 0x1016;
-    let Some(object) = present(cx, INDEX) else { return };
+    let Some(object) = live_object(cx, INDEX) else {
+        return;
+    };
     let mut monitored: BTreeMap<i128, u8> = BTreeMap::new();
     for (&sub, sub_object) in object.subs.range(1..0xFF) {
         if sub_object.origin == Origin::Orphan {
@@ -964,7 +970,9 @@ impl CobEntry<'_> {
 fn cob_entries<'a>(cx: &Context<'a>) -> Vec<CobEntry<'a>> {
     let mut entries = Vec::new();
     let mut push = |service, index: u16, sub: Option<u8>| {
-        let Some(object) = present(cx, index) else { return };
+        let Some(object) = live_object(cx, index) else {
+            return;
+        };
         let attributes = match sub {
             None if object.subs.is_empty() => &object.attributes,
             None => return,
@@ -986,7 +994,7 @@ fn cob_entries<'a>(cx: &Context<'a>) -> Vec<CobEntry<'a>> {
     push(Service::Time, 0x1012, None);
     push(Service::Emcy, 0x1014, None);
     for n in 0..0x7F {
-        if present(cx, 0x1201 + n).is_some() {
+        if live_object(cx, 0x1201 + n).is_some() {
             push(Service::SdoServer(n + 1), 0x1201 + n, Some(1));
             push(Service::SdoServer(n + 1), 0x1201 + n, Some(2));
         }
@@ -1432,7 +1440,7 @@ fn check_mapping_entry(at: &EntryAt<'_, '_>, out: &mut Vec<Finding>, direction: 
             .values()
             .any(|m| m.fixed.contains_key(&target) || m.sub_ext.contains_key(&target));
         if !from_module {
-            let what = if present(cx, target).is_some() {
+            let what = if live_object(cx, target).is_some() {
                 format!("maps {name}, but {target:X}h has no sub-index {target_sub:X}")
             } else {
                 format!("maps {name}, but object {target:X}h is not described")
@@ -1508,7 +1516,7 @@ fn check_mapping_entry(at: &EntryAt<'_, '_>, out: &mut Vec<Finding>, direction: 
 
 /// The attributes of a mapped object or sub-object, if the device has it.
 fn mapped_attributes<'a>(cx: &Context<'a>, index: u16, sub: u8) -> Option<&'a Attributes> {
-    let object = present(cx, index)?;
+    let object = live_object(cx, index)?;
     if object.subs.is_empty() {
         return (sub == 0).then_some(&object.attributes);
     }
@@ -1519,7 +1527,9 @@ fn mapped_attributes<'a>(cx: &Context<'a>, index: u16, sub: u8) -> Option<&'a At
 
 fn sdo_server(cx: &Context<'_>, out: &mut Vec<Finding>) {
     const INDEX: u16 = 0x1200;
-    let Some(object) = present(cx, INDEX) else { return };
+    let Some(object) = live_object(cx, INDEX) else {
+        return;
+    };
     for (sub, expected, what) in [
         (1u8, 0x600i128, "client to server"),
         (2, 0x580, "server to client"),
@@ -1633,70 +1643,6 @@ impl Direction {
     }
 }
 
-/// An integer value as written: a number, or `$NODEID` plus an offset that may carry flag bits.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Int {
-    /// A plain number.
-    Literal(i128),
-    /// `$NODEID+offset`.
-    NodeRelative(i128),
-}
-
-impl Int {
-    /// The value for a node-ID.
-    pub(crate) fn at(self, node: u8) -> i128 {
-        match self {
-            Self::Literal(v) => v,
-            Self::NodeRelative(offset) => offset + i128::from(node),
-        }
-    }
-}
-
-/// The value a check reads from an entry, with the key it came from and the text as written.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Reading<'a> {
-    /// `ParameterValue` or `DefaultValue`.
-    pub(crate) key: &'static str,
-    /// The value as written.
-    pub(crate) text: &'a str,
-    /// The value.
-    pub(crate) value: Int,
-}
-
-impl Reading<'_> {
-    /// The value as written, followed by its hexadecimal form when it was written in decimal:
-    /// COB-IDs and mapping entries are bit fields that read in hex (`1614807056 (0x60400010)`).
-    pub(crate) fn shown(&self) -> String {
-        match self.value {
-            Int::Literal(v) if v > 9 && !self.text.to_ascii_lowercase().contains("0x") => {
-                format!("{} (0x{v:X})", self.text)
-            }
-            _ => self.text.to_owned(),
-        }
-    }
-}
-
-/// The value the device uses: in a DCF the configured `ParameterValue` when there is one, otherwise
-/// `DefaultValue` (CiA 306 §5.3.2), or `ParameterValue` when it is all there is. `None` when empty or
-/// not an integer (the loader reports those).
-pub(crate) fn reading<'a>(cx: &Context<'_>, attributes: &'a Attributes) -> Option<Reading<'a>> {
-    let non_empty = |v: &'a Option<String>| v.as_deref().map(str::trim).filter(|t| !t.is_empty());
-    let configured = non_empty(&attributes.parameter_value);
-    let (key, text) = match (configured, non_empty(&attributes.default_value)) {
-        (Some(text), _) if cx.is_dcf() => ("ParameterValue", text),
-        (_, Some(text)) => ("DefaultValue", text),
-        // Files that give only ParameterValue are DCFs in all but name (lely writes them).
-        (Some(text), None) => ("ParameterValue", text),
-        (None, None) => return None,
-    };
-    let value = match value::parse_value(text, DataType::UNSIGNED64).value? {
-        Value::Integer { value, .. } => Int::Literal(value),
-        Value::NodeRelative { offset, .. } => Int::NodeRelative(offset),
-        _ => return None,
-    };
-    Some(Reading { key, text, value })
-}
-
 /// The node-IDs a value must work for: the DCF's node-ID, or every node-ID an EDS may be used with.
 fn node_ids(cx: &Context<'_>) -> RangeInclusive<u8> {
     match cx.eds.node_id() {
@@ -1731,72 +1677,9 @@ fn node_scope(reading: &Reading<'_>, nodes: &[u8]) -> String {
     format!(" for node-ID{plural} {}", text.join(", "))
 }
 
-/// An object of the device (written or implied), not a placeholder for orphaned sub-sections.
-pub(crate) fn present<'a>(cx: &Context<'a>, index: u16) -> Option<&'a canopener_eds::Object> {
-    cx.eds.object(index).filter(|o| o.origin != Origin::Orphan)
-}
-
 /// A sub-object of the device, not an orphan placeholder.
 fn live_sub(object: &canopener_eds::Object, sub: u8) -> Option<&canopener_eds::SubObject> {
     object.subs.get(&sub).filter(|s| s.origin != Origin::Orphan)
-}
-
-/// `1018sub1` or `1000h`.
-pub(crate) fn entry_name(index: u16, sub: Option<u8>) -> String {
-    match sub {
-        Some(sub) => format!("{index:X}sub{sub:X}"),
-        None => format!("{index:X}h"),
-    }
-}
-
-/// A value as written, or `missing`.
-pub(crate) fn written(text: Option<&str>) -> &str {
-    text.map_or("missing", str::trim)
-}
-
-/// `UNSIGNED16` or `type 0x0042`.
-pub(crate) fn type_name(data_type: DataType) -> String {
-    data_type
-        .name()
-        .map_or_else(|| format!("type 0x{:04X}", data_type.0), str::to_owned)
-}
-
-/// A finding about an object (`sub` = `None`) or sub-object, pointing at what is written: the
-/// sub-object's section; for a `CompactSubObj` entry the object's section (or its `[xxxxValue]`
-/// entry for a DCF value); for objects implied by `CompactPDO` the `[DeviceInfo] CompactPDO` entry.
-pub(crate) fn object_finding(
-    cx: &Context<'_>,
-    info: &CheckInfo,
-    index: u16,
-    sub: Option<u8>,
-    key: Option<&str>,
-    message: impl Into<String>,
-) -> Finding {
-    let object = cx.eds.object(index);
-    let sub_object = sub.and_then(|s| object?.subs.get(&s));
-    let origin = sub_object.map_or(object.map(|o| o.origin), |s| Some(s.origin));
-    if origin == Some(Origin::CompactPdo) || object.is_some_and(|o| o.origin == Origin::CompactPdo) {
-        return cx.finding(info, SectionKind::DeviceInfo, Some("CompactPDO"), message);
-    }
-    if let Some(s) = sub {
-        let kind = SectionKind::Sub(index, s);
-        if cx.section(kind).is_some() {
-            return cx.finding(info, kind, key, message);
-        }
-        if origin == Some(Origin::CompactSubObj) {
-            let value_kind = SectionKind::Companion(index, Companion::Value);
-            let entry = s.to_string();
-            if key == Some("ParameterValue") && cx.entry(value_kind, &entry).is_some() {
-                return cx.finding(info, value_kind, Some(&entry), message);
-            }
-            return cx.finding(info, SectionKind::Object(index), key, message);
-        }
-    }
-    let kind = SectionKind::Object(index);
-    if cx.section(kind).is_some() {
-        return cx.finding(info, kind, if sub.is_none() { key } else { None }, message);
-    }
-    cx.file_finding(info, message)
 }
 
 #[cfg(test)]
@@ -1812,7 +1695,7 @@ mod tests {
     }
 
     fn with_code<'f>(found: &'f [Finding], code: &str) -> Vec<&'f Finding> {
-        found.iter().filter(|f| f.code == code).collect()
+        found.iter().filter(|f| f.diagnostic.code == code).collect()
     }
 
     #[test]
@@ -1870,7 +1753,9 @@ mod tests {
         let restricted = with_code(&eds, "C710");
         assert_eq!(restricted.len(), 1, "{eds:?}");
         assert!(
-            restricted.iter().all(|f| f.message.contains("node-IDs 64..95")),
+            restricted
+                .iter()
+                .all(|f| f.diagnostic.message.contains("node-IDs 64..95")),
             "{restricted:?}"
         );
         let dcf = |node: u8| format!("[DeviceComissioning]\nNodeID={node}\n{TPDO1}");
@@ -1888,7 +1773,7 @@ mod tests {
         assert!(
             highest
                 .iter()
-                .all(|f| f.span.line == 4 && f.key.as_deref() == Some("CompactPDO"))
+                .all(|f| f.diagnostic.span.line == 4 && f.diagnostic.key.as_deref() == Some("CompactPDO"))
         );
     }
 
@@ -1904,7 +1789,8 @@ DefaultValue=0\nCompactSubObj=2\n\
         assert!(
             reserved
                 .iter()
-                .all(|f| f.section.as_deref() == Some("1016Value") && f.key.as_deref() == Some("2")),
+                .all(|f| f.diagnostic.section.as_deref() == Some("1016Value")
+                    && f.diagnostic.key.as_deref() == Some("2")),
             "{reserved:?}"
         );
     }

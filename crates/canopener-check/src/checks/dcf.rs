@@ -1,22 +1,20 @@
-//! Group I of `eds-format-and-checks.md` §10: what a DCF adds (checks 59-61).
+//! Group I of the check catalogue (`docs/check-catalogue.md`): what a DCF adds (checks 59-61).
 //!
 //! The loader reads `[DeviceComissioning]` in both spellings (a second one is P020, which covers the
 //! "both spellings" part of check 59) and reports a spelling other than CiA 306's (P031); it does
 //! not look at the values. The checks here do: node-ID and bit rate, the LSS serial number against
 //! 1018h sub 4, `UploadFile`/`DownloadFile`, and `[ConnectedModules]`.
 
-use std::collections::BTreeSet;
-
-use canopener_eds::model::{Attributes, CommissioningSpelling, DeviceCommissioning, Properties, decimal_key};
+use canopener_eds::model::{Attributes, CommissioningSpelling, DeviceCommissioning, DeviceInfo};
 use canopener_eds::section_name::SectionKind;
 use canopener_eds::value::mentions_nodeid;
 use canopener_eds::{AccessType, ObjectType, Origin, Severity, TypeKind};
 
+use super::numbered_list::check_numbered_list;
+use super::reading::{is_dcf_file, present, strict_int};
+use crate::check_info::{CheckInfo, Group};
 use crate::context::{Context, object_kind};
 use crate::finding::Finding;
-use crate::group_b::present;
-use crate::group_c::{BAUD_RATES, strict_int};
-use crate::registry::{CheckInfo, Group};
 
 const COMMISSIONING_MISSING: CheckInfo = CheckInfo {
     code: "C801",
@@ -312,24 +310,6 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     check_connected_modules(cx, out, dcf);
 }
 
-/// Whether the file is a DCF: named `.dcf`, or with `[DeviceComissioning]`, or (named neither
-/// `.eds` nor `.dcf`) naming its template in `LastEDS` (CiA 306 §5). An `.eds` file with `LastEDS`
-/// but no commissioning is an EDS that a tool stamped with LastEDS (C210).
-pub(crate) fn is_dcf_file(cx: &Context<'_>) -> bool {
-    if cx.eds.commissioning.is_some() {
-        return true;
-    }
-    let extension = cx
-        .file_name
-        .and_then(|n| n.rsplit_once('.'))
-        .map(|(_, e)| e.to_ascii_lowercase());
-    match extension.as_deref() {
-        Some("dcf") => true,
-        Some("eds") => false,
-        _ => cx.is_dcf(),
-    }
-}
-
 fn check_commissioning(cx: &Context<'_>, out: &mut Vec<Finding>, c: &DeviceCommissioning) {
     let node_id = present(c.node_id.as_deref());
     let problem = match node_id.map(|t| (t, strict_int(t))) {
@@ -355,7 +335,7 @@ fn check_commissioning(cx: &Context<'_>, out: &mut Vec<Finding>, c: &DeviceCommi
     }
     let baudrate = present(c.baudrate.as_deref());
     let rate = baudrate.and_then(strict_int);
-    let standard = BAUD_RATES
+    let standard = DeviceInfo::BAUD_RATE_KEYS
         .iter()
         .find(|&&(kbit, _)| rate == Some(i128::from(kbit)));
     let problem = match (baudrate, rate) {
@@ -593,109 +573,6 @@ fn check_connected_modules(cx: &Context<'_>, out: &mut Vec<Finding>, dcf: bool) 
     }
 }
 
-/// Checks a `NrOfEntries` list (`[ConnectedModules]`, module object lists): the count is a number
-/// equal to the entries, the entries are numbered 1..=count in decimal, and no other key appears.
-pub(crate) fn check_numbered_list(
-    cx: &Context<'_>,
-    out: &mut Vec<Finding>,
-    section: SectionKind,
-    list: &Properties,
-    info: &CheckInfo,
-) {
-    let name = cx.display_name(section);
-    let numbers: Vec<u32> = list.numbered().map(|(n, _)| n).collect();
-    let help = format!(
-        "set NrOfEntries={} and number the entries 1, 2, ... in decimal",
-        numbers.len()
-    );
-    let count = match present(list.get("NrOfEntries")) {
-        None => {
-            out.push(
-                cx.finding(
-                    info,
-                    section,
-                    Some("NrOfEntries"),
-                    format!("[{name}] has no NrOfEntries for its {} entries", numbers.len()),
-                )
-                .with_help(help.clone()),
-            );
-            None
-        }
-        Some(text) => match strict_int(text) {
-            Some(count) if count != numbers.len() as i128 => {
-                out.push(
-                    cx.finding(
-                        info,
-                        section,
-                        Some("NrOfEntries"),
-                        format!(
-                            "NrOfEntries={text} but [{name}] has {} numbered entries",
-                            numbers.len()
-                        ),
-                    )
-                    .with_help(help.clone()),
-                );
-                None
-            }
-            Some(count) => Some(count),
-            None => {
-                out.push(
-                    cx.finding(
-                        info,
-                        section,
-                        Some("NrOfEntries"),
-                        format!("NrOfEntries `{text}` is not a number"),
-                    )
-                    .with_help(help.clone()),
-                );
-                None
-            }
-        },
-    };
-    for p in &list.0 {
-        if p.key.eq_ignore_ascii_case("NrOfEntries") || decimal_key(&p.key).is_some() {
-            continue;
-        }
-        out.push(
-            cx.finding(
-                info,
-                section,
-                Some(&p.key),
-                format!(
-                    "entry `{}` of [{name}] is not numbered 1, 2, ... in decimal",
-                    p.key
-                ),
-            )
-            .with_help(help.clone()),
-        );
-    }
-    // Numbering is only judged when the count matches; a count mismatch is reported above.
-    if let Some(count) = count {
-        let present: BTreeSet<u32> = numbers.iter().copied().collect();
-        for &n in &numbers {
-            if n == 0 || i128::from(n) > count {
-                let key = n.to_string();
-                out.push(
-                    cx.finding(
-                        info,
-                        section,
-                        Some(&key),
-                        format!("entry {n} of [{name}] is outside 1..={count}"),
-                    )
-                    .with_help(format!(
-                        "number the entries 1..={count}; missing: {}",
-                        (1..=numbers.len() as u32)
-                            .filter(|k| !present.contains(k))
-                            .map(|k| k.to_string())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )),
-                );
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -709,7 +586,10 @@ mod tests {
     }
 
     fn codes(found: &[Finding]) -> Vec<(&str, Severity)> {
-        found.iter().map(|f| (f.code.as_str(), f.severity)).collect()
+        found
+            .iter()
+            .map(|f| (f.diagnostic.code.as_str(), f.diagnostic.severity))
+            .collect()
     }
 
     const DCF: &str = "[FileInfo]\nLastEDS=x.eds\n[DeviceInfo]\nBaudRate_250=1\nBaudRate_500=0\n\
