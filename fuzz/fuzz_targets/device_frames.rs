@@ -11,6 +11,7 @@
 
 #![no_main]
 
+use canopener_can::Core;
 use canopener_can::{CanFrame, CanId, Instant, StandardId};
 use canopener_device::cia401::{Cia401Io, install_objects};
 use canopener_device::device::Device;

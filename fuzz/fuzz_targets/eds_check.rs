@@ -14,14 +14,26 @@ fuzz_target!(|data: &[u8]| {
     let lines = loaded.document.lines().len();
     for finding in &findings {
         let line = usize::try_from(finding.diagnostic.span.line).unwrap_or(usize::MAX);
-        assert!((1..=lines + 1).contains(&line), "finding outside the file: {finding:?}");
-        assert!(finding.diagnostic.span.column >= 1, "finding with column 0: {finding:?}");
+        assert!(
+            (1..=lines + 1).contains(&line),
+            "finding outside the file: {finding:?}"
+        );
+        assert!(
+            finding.diagnostic.span.column >= 1,
+            "finding with column 0: {finding:?}"
+        );
     }
     let none = |_: &canopener_check::Context<'_>| Vec::new();
     let fixed = fix::fix_file(data, Some("fuzz.eds"), &selection, &none);
-    assert!(fixed.errors_after <= fixed.errors_before, "fixing raised the errors: {fixed:?}");
+    assert!(
+        fixed.errors_after <= fixed.errors_before,
+        "fixing raised the errors: {fixed:?}"
+    );
     let again = fix::fix_file(&fixed.bytes, Some("fuzz.eds"), &selection, &none);
-    assert!(again.errors_after <= fixed.errors_after, "a second fix raised the errors");
+    assert!(
+        again.errors_after <= fixed.errors_after,
+        "a second fix raised the errors"
+    );
     // Without fixes left pending or refused, everything fixable was fixed: a second run changes nothing.
     if fixed.skipped.is_empty() {
         assert!(!again.changed, "fix is not idempotent: {:?}", again.fixes);

@@ -11,6 +11,7 @@
 
 #![no_main]
 
+use canopener_can::Core;
 use std::time::Duration;
 
 use canopener_can::{CanFrame, Instant, StandardId};

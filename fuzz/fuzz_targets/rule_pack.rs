@@ -11,8 +11,12 @@ SupportedObjects=1\n1=0x1000\n[1000]\nParameterName=Device type\nDataType=0x0007
 DefaultValue=0x191\n";
 
 fuzz_target!(|data: &[u8]| {
-    let Ok(text) = std::str::from_utf8(data) else { return };
-    let Ok(pack) = canopener_rules::parse_pack(text, "fuzz.toml") else { return };
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(pack) = canopener_rules::parse_pack(text, "fuzz.toml") else {
+        return;
+    };
     let loaded = canopener_eds::load(EDS.as_bytes());
     let cx = Context::new(&loaded, Some("f.eds"));
     let selection = Selection::default();

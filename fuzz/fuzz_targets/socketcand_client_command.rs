@@ -9,7 +9,9 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     // The first byte picks the element limit and how the rest is cut into TCP reads.
-    let Some((&control, stream)) = data.split_first() else { return };
+    let Some((&control, stream)) = data.split_first() else {
+        return;
+    };
     let mut reader = ElementReader::new(usize::from(control) * 2);
     let chunk = usize::from(control % 13) + 1;
     for piece in stream.chunks(chunk) {
@@ -21,7 +23,11 @@ fuzz_target!(|data: &[u8]| {
                 let mut written = Vec::new();
                 write_client_command(&mut written, &command);
                 let text = std::str::from_utf8(&written).expect("writers emit ASCII/UTF-8");
-                assert_eq!(parse_client_command(text).as_ref(), Ok(&command), "{element:?} -> {text:?}");
+                assert_eq!(
+                    parse_client_command(text).as_ref(),
+                    Ok(&command),
+                    "{element:?} -> {text:?}"
+                );
             }
         }
         assert!(reader.pending_len() < reader.max_element_len());

@@ -8,7 +8,9 @@ use canopener_socketcand::{ElementReader, parse_server_message, write_server_mes
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let Some((&control, stream)) = data.split_first() else { return };
+    let Some((&control, stream)) = data.split_first() else {
+        return;
+    };
     let mut reader = ElementReader::new(usize::from(control) * 2);
     let chunk = usize::from(control % 13) + 1;
     for piece in stream.chunks(chunk) {

@@ -1,7 +1,7 @@
 //! Writing to the terminal: whole blocks of text at once, flushed, with a closed pipe (`| head`) mapped to
 //! the quiet error that ends a command successfully.
 
-use std::io::Write;
+use std::io::{BufWriter, StdoutLock, Write};
 
 use crate::error::{CliResult, stdout_error};
 
@@ -16,4 +16,10 @@ pub(crate) fn write_stdout(bytes: &[u8]) -> CliResult {
     out.write_all(bytes)
         .and_then(|()| out.flush())
         .map_err(stdout_error)
+}
+
+/// Stdout locked and buffered for a stream of lines (a monitor printing frame by frame); the caller
+/// flushes where the reader must see the output at once.
+pub(crate) fn buffered_stdout() -> BufWriter<StdoutLock<'static>> {
+    BufWriter::new(std::io::stdout().lock())
 }

@@ -12,8 +12,7 @@ use crate::error::{CliError, CliResult, stdout_error};
 pub(crate) fn run(args: DecodeArgs) -> CliResult {
     let text = read_log(&args.file)?;
     let (records, errors) = parse_log(&text);
-    let stdout = std::io::stdout();
-    let mut out = std::io::BufWriter::new(stdout.lock());
+    let mut out = crate::output::buffered_stdout();
     let mut monitor = Monitor::new(args.format, false);
     for (_, record) in &records {
         monitor.print_record(&mut out, record).map_err(stdout_error)?;

@@ -4,7 +4,7 @@
 //! foundation runs end to end with no hardware. It exits non-zero if the monitor missed a frame or decoded
 //! anything as a protocol anomaly.
 
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::time::Duration;
 
 use canopener_can::bits::frame_bits;
@@ -61,8 +61,7 @@ pub(crate) fn run(args: DemoArgs) -> CliResult {
         eprintln!("{header}");
     }
 
-    let stdout = std::io::stdout();
-    let mut out = BufWriter::new(stdout.lock());
+    let mut out = crate::output::buffered_stdout();
     let mut monitor = Monitor::new(args.format, false);
     let quiet = args.quiet;
     let outcome = demo

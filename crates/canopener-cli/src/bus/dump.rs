@@ -1,6 +1,6 @@
 //! `canopener bus dump`: print live frames decoded as CANopen, optionally logging them in candump format.
 
-use std::io::{BufWriter, Write};
+use std::io::Write;
 
 use canopener_runtime::candump_file::{LogFileError, LogWriter};
 use canopener_runtime::capture::{CaptureError, CaptureEvent, CaptureLimits, capture, interface_name};
@@ -25,8 +25,7 @@ pub(crate) fn run(args: DumpArgs) -> CliResult {
         .transpose()
         .map_err(log_error)?;
     let interface = interface_name(bus.spec());
-    let stdout = std::io::stdout();
-    let mut out = BufWriter::new(stdout.lock());
+    let mut out = crate::output::buffered_stdout();
     let mut monitor = Monitor::new(args.format, args.raw);
     let limits = CaptureLimits {
         count: args.count,

@@ -17,17 +17,17 @@ use canopener_wire::error_register_text;
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::read_input;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::{NodeInfoArgs, NodeScanArgs};
 use crate::master::link::{checked_timeout, open_link, open_session};
 use crate::master::node_list::parse_node_list;
 use crate::master::output::{millis, print_json, session_error};
 use crate::output::print_stdout;
+use canopener_runtime::description::read_description;
 
 pub(crate) fn info(args: NodeInfoArgs) -> CliResult {
     let eds = match &args.eds {
-        Some(path) => Some((path.display().to_string(), read_input(path)?.eds)),
+        Some(path) => Some((path.display().to_string(), read_description(path)?.eds)),
         None => None,
     };
     let node = args.target.node;

@@ -14,12 +14,12 @@ use canopener_runtime::node_dump::{DumpError, dcf_time, read_entries, write_dcf}
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::eds::input::read_input;
 use crate::error::{CliError, CliResult};
 use crate::master::args::NodeDumpArgs;
 use crate::master::link::open_session;
 use crate::master::output::{count_bar, millis, output_error, print_json, refuse_existing, session_error};
 use crate::output::print_stdout;
+use canopener_runtime::description::read_description;
 
 pub(crate) fn run(args: NodeDumpArgs) -> CliResult {
     if args.output.is_none() && args.master.format == OutputFormat::Json {
@@ -40,7 +40,7 @@ pub(crate) fn run(args: NodeDumpArgs) -> CliResult {
         refuse_existing(out, args.force)?;
     }
     let node = args.target.node;
-    let input = read_input(&args.eds)?;
+    let input = read_description(&args.eds)?;
     let plan = plan(&input.eds);
     let mut session = open_session(&args.master, node, "node dump")?;
     let started = session.link_mut().now();

@@ -22,15 +22,15 @@ use canopener_runtime::sdo_session::SdoError;
 use serde_json::{Value, json};
 
 use crate::args::OutputFormat;
-use crate::eds::input::read_input;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::PdoWatchArgs;
 use crate::master::link::{open_link, open_session};
 use crate::master::output::{count_bar, hex_bytes, millis, session_error, spread_json};
 use crate::output::print_stdout;
+use canopener_runtime::description::read_description;
 
 pub(crate) fn run(args: PdoWatchArgs) -> CliResult {
-    let input = read_input(&args.eds)?;
+    let input = read_description(&args.eds)?;
     let eds = &input.eds;
     let numbers = tpdo_numbers(eds);
     if numbers.is_empty() {

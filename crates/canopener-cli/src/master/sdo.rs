@@ -281,7 +281,7 @@ impl Typing {
             return Ok(Typing::Fixed(ty));
         }
         if let Some(path) = eds {
-            let input = crate::eds::input::read_input(path)?;
+            let input = canopener_runtime::description::read_description(path)?;
             return Ok(Typing::Eds {
                 path: path.display().to_string(),
                 eds: Box::new(input.eds),

@@ -5,7 +5,6 @@
 //! the devices report: one line per event on stderr, or one JSON object per event on stdout with
 //! `--format json`.
 
-use std::io::Write;
 use std::time::Duration;
 
 use canopener_device::faults::Fault;
@@ -16,7 +15,8 @@ use canopener_runtime::simulator::simulation::Simulation;
 use serde_json::{Map, Value, json};
 
 use crate::bus_open::open_bus;
-use crate::error::{CliResult, stdout_error};
+use crate::error::CliResult;
+use crate::output::print_stdout;
 use crate::sim::args::{SimApp, SimArgs, SimFormat};
 use crate::stop::StopFlag;
 
@@ -97,15 +97,6 @@ fn json_line(elapsed: Duration, entry: LogEntry) -> Value {
         object.insert(name.into(), value);
     }
     Value::Object(object)
-}
-
-/// Writes to stdout at once (a reader of the JSON lines follows the simulation as it runs), ending
-/// quietly if the reader went away.
-fn print_stdout(text: &str) -> CliResult {
-    let mut out = std::io::stdout().lock();
-    out.write_all(text.as_bytes())
-        .and_then(|()| out.flush())
-        .map_err(stdout_error)
 }
 
 #[cfg(test)]
