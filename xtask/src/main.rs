@@ -9,6 +9,9 @@
 //!   python-can through the hub), writing JSON lines to `bench-results/`.
 //! - `fuzz`: run every fuzz target for a while with cargo-fuzz on the nightly toolchain (never in CI).
 
+// A developer tool run from a terminal: it reports on stdout and stderr.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
+
 use std::env;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode, Stdio};

@@ -7,9 +7,9 @@ fn docs_checks_md_is_up_to_date() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/checks.md");
     let wanted = canopener_check::registry::catalogue_markdown();
     if std::env::var_os("CANOPENER_UPDATE_DOCS").is_some() {
-        std::fs::write(path, &wanted).expect("write docs/checks.md");
+        canopener_testkit::fixture::write(path, &wanted).expect("write docs/checks.md");
     }
-    let current = std::fs::read_to_string(path).unwrap_or_default();
+    let current = canopener_testkit::fixture::read_to_string(path).unwrap_or_default();
     assert!(
         current == wanted,
         "docs/checks.md is stale; run `CANOPENER_UPDATE_DOCS=1 cargo test -p canopener-check --test docs`"
@@ -30,7 +30,7 @@ fn the_check_catalogue_names_the_codes_of_every_number() {
     use std::collections::{BTreeMap, BTreeSet};
 
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/check-catalogue.md");
-    let text = std::fs::read_to_string(path).expect("read docs/check-catalogue.md");
+    let text = canopener_testkit::fixture::read_to_string(path).expect("read docs/check-catalogue.md");
     let mut documented: BTreeMap<u8, BTreeSet<String>> = BTreeMap::new();
     for line in text.lines() {
         let Some(rest) = line.strip_prefix("| <a id=\"check-") else {

@@ -14,7 +14,8 @@ fn corpus() -> Vec<(String, Vec<u8>)> {
     corpus::eds_files()
         .into_iter()
         .map(|file| {
-            let bytes = std::fs::read(&file.path).unwrap_or_else(|e| panic!("{}: {e}", file.path.display()));
+            let bytes = canopener_testkit::fixture::read(&file.path)
+                .unwrap_or_else(|e| panic!("{}: {e}", file.path.display()));
             (file.name, bytes)
         })
         .collect()

@@ -48,7 +48,8 @@ fn hb(period_ms: u16) -> String {
 #[test]
 fn every_fault_has_a_test_here() {
     let text =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/faults.rs")).expect("this file");
+        canopener_testkit::fixture::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/faults.rs"))
+            .expect("this file");
     for fault in Fault::ALL {
         let name = format!("fn {}(", fault.name().replace('-', "_"));
         assert!(text.contains(&name), "no test `{name}`");

@@ -15,7 +15,7 @@ fn corpus_files() -> Vec<PathBuf> {
 }
 
 fn build_file(name: &str, node_id: u8) -> BuiltOd {
-    let bytes = std::fs::read(corpus::eds(name)).expect("corpus file");
+    let bytes = canopener_testkit::fixture::read(corpus::eds(name)).expect("corpus file");
     build_od(&canopener_eds::load(&bytes).eds, node_id).expect("builds")
 }
 
@@ -77,7 +77,7 @@ fn every_corpus_file_builds() {
     let (mut entries, mut notes, mut noted_files) = (0, 0, 0);
     let mut by_kind: BTreeMap<String, usize> = BTreeMap::new();
     for path in &files {
-        let bytes = std::fs::read(path).expect("corpus file");
+        let bytes = canopener_testkit::fixture::read(path).expect("corpus file");
         let eds = canopener_eds::load(&bytes).eds;
         for node_id in [1, 5, 127] {
             let built = build_od(&eds, node_id).unwrap_or_else(|err| panic!("{}: {err}", path.display()));

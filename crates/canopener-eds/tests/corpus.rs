@@ -22,7 +22,7 @@ fn every_corpus_file_loads_and_round_trips_byte_identical() {
     );
     let mut counts: BTreeMap<&'static str, usize> = BTreeMap::new();
     for path in &files {
-        let bytes = std::fs::read(path).unwrap();
+        let bytes = canopener_testkit::fixture::read(path).unwrap();
         let loaded = load(&bytes);
         assert_eq!(
             loaded.document.to_bytes().unwrap(),
@@ -47,7 +47,7 @@ fn every_corpus_file_loads_and_round_trips_byte_identical() {
 #[test]
 fn writers_keep_the_model_on_every_corpus_file() {
     for path in corpus_files() {
-        let bytes = std::fs::read(&path).unwrap();
+        let bytes = canopener_testkit::fixture::read(&path).unwrap();
         let loaded = load(&bytes);
         let name = path.display();
         // Lossless writer: an unchanged model writes the identical bytes.

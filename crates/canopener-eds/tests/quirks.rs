@@ -60,7 +60,8 @@ fn quirks_dir() -> PathBuf {
 
 fn read_fixture(name: &str) -> Vec<u8> {
     let path = quirks_dir().join(format!("{name}.eds"));
-    std::fs::read(&path).unwrap_or_else(|e| panic!("cannot read fixture {}: {e}", path.display()))
+    canopener_testkit::fixture::read(&path)
+        .unwrap_or_else(|e| panic!("cannot read fixture {}: {e}", path.display()))
 }
 
 /// A loaded fixture whose lossless round trip has been checked.
@@ -798,11 +799,11 @@ fn missing_final_newline_is_kept() {
 /// Guards the fixture set: every file is listed above, round-trips, and has a row in the README table.
 #[test]
 fn every_fixture_is_listed_round_trips_and_is_documented() {
-    let on_disk: BTreeSet<String> = std::fs::read_dir(quirks_dir())
+    let on_disk: BTreeSet<String> = canopener_testkit::fixture::list(quirks_dir())
         .expect("the fixture directory is readable")
-        .filter_map(|e| {
-            e.ok()?
-                .file_name()
+        .iter()
+        .filter_map(|path| {
+            path.file_name()?
                 .to_str()?
                 .strip_suffix(".eds")
                 .map(str::to_owned)
@@ -810,7 +811,8 @@ fn every_fixture_is_listed_round_trips_and_is_documented() {
         .collect();
     let listed: BTreeSet<String> = FIXTURES.iter().map(|s| (*s).to_owned()).collect();
     assert_eq!(on_disk, listed);
-    let readme = std::fs::read_to_string(quirks_dir().join("README.md")).expect("README.md is readable");
+    let readme = canopener_testkit::fixture::read_to_string(quirks_dir().join("README.md"))
+        .expect("README.md is readable");
     for name in FIXTURES {
         Quirk::load(name);
         assert!(

@@ -11,6 +11,9 @@
 //! with `--hub HOST:PORT` (then no hub CPU is reported). Clients are blocking sockets on threads and
 //! do the python-can handshake.
 
+// A load generator for bench/run.py: it prints its measurements.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
+
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::process::ExitCode;

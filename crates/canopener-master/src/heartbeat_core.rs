@@ -39,7 +39,12 @@ pub enum HeardKind {
     Monitor(MonitorEvent),
     /// A heartbeat carrying a known state other than boot-up (reported after the monitor's events
     /// for the same frame).
-    Heartbeat { node: NodeId, state: NmtState },
+    Heartbeat {
+        /// The node that sent it.
+        node: NodeId,
+        /// The NMT state it carried.
+        state: NmtState,
+    },
     /// An emergency message (or a malformed frame on an EMCY CAN-ID): a watcher wants to see why a
     /// node changed state or stopped, and devices say it with EMCY (CiA 301 §7.2.7).
     Emcy(EmcyEvent),

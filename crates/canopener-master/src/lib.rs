@@ -3,9 +3,11 @@
 //! Every core here follows the same discipline as `canopener-device`: frames and the current time go
 //! in (`handle_frame(now, &frame)`, `handle_timeout(now)`), frames, events and the next deadline come out
 //! (`poll_transmit()`, `poll_event()`, `poll_timeout()`). Nothing here opens a socket, starts a thread or
-//! reads a clock; the CLI drives the cores over a real bus and the tests drive them on virtual time.
+//! reads a clock; `canopener-runtime` drives the cores over a real bus or on virtual time.
 //!
 //! The cores share the frame codecs of `canopener-wire` with the device side, but no state.
+
+#![warn(missing_docs)]
 
 pub mod dcf_dump;
 pub mod emcy_consumer;

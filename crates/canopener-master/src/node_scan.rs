@@ -272,7 +272,7 @@ mod tests {
     );
 
     fn device(node: u8) -> Device {
-        let eds = canopener_eds::load(&std::fs::read(EDS).unwrap()).eds;
+        let eds = canopener_eds::load(&canopener_testkit::fixture::read(EDS).unwrap()).eds;
         let mut dev = Device::from_eds(&eds, node, Box::new(NoApplication)).unwrap();
         dev.boot(Instant::ZERO);
         while dev.poll_transmit().is_some() {}

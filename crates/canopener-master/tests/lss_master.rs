@@ -30,7 +30,7 @@ const REVISION_NUMBER: u32 = 0x0001_0002;
 const FRAME_TIME: Duration = Duration::from_millis(1);
 
 fn unconfigured_device(serial_number: u32) -> Device {
-    let eds = canopener_eds::load(&std::fs::read(BASE).expect("base.eds")).eds;
+    let eds = canopener_eds::load(&canopener_testkit::fixture::read(BASE).expect("base.eds")).eds;
     Device::from_eds(&eds, device::UNCONFIGURED, Box::new(NoApplication))
         .expect("device")
         .with_value(ObjectKey::new(0x1018, 4), &serial_number.to_le_bytes())

@@ -22,7 +22,7 @@ const BASE: &str = concat!(
 const IO: &str = "CANopenNode__CANopenNode__example__IO.eds";
 
 fn eds(path: &str) -> canopener_eds::Eds {
-    canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
+    canopener_eds::load(&canopener_testkit::fixture::read(path).expect("EDS file")).eds
 }
 
 /// Names and data types of the objects in an EDS, as `pdo watch --eds` looks them up.

@@ -34,7 +34,7 @@ fn domain_value() -> Vec<u8> {
 
 /// The fixture dictionary with the two large entries added.
 fn od() -> DynamicOd {
-    let eds = canopener_eds::load(&std::fs::read(BASE).expect("base.eds")).eds;
+    let eds = canopener_eds::load(&canopener_testkit::fixture::read(BASE).expect("base.eds")).eds;
     let built = build_od(&eds, 5).expect("dictionary");
     let extra = [
         Entry::new(DOMAIN, DataType::DOMAIN, Access::Rw, &domain_value()).expect("DOMAIN"),

@@ -40,7 +40,7 @@ fn vendored(name: &str) -> String {
 
 /// A device from `path` with dictionary values set before power-on (`(index, sub, bytes)`).
 fn device(path: &str, node: u8, values: &[(u16, u8, &[u8])]) -> Device {
-    let eds = canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds;
+    let eds = canopener_eds::load(&canopener_testkit::fixture::read(path).expect("EDS file")).eds;
     let mut built = build_od(&eds, node).expect("builds");
     for (index, sub, bytes) in values {
         built

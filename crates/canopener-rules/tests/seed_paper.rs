@@ -514,7 +514,7 @@ fn descriptions_list_every_rule_with_its_pack() {
 
 fn corpus_findings(name: &str) -> (Vec<Finding>, BTreeMap<String, usize>) {
     let path = corpus::eds(name);
-    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let bytes = canopener_testkit::fixture::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let loaded = canopener_eds::load(&bytes);
     let cx = Context::new(&loaded, Some(name));
     let found = pack().check(&cx, &Selection::default());
@@ -598,7 +598,8 @@ fn corpus_files() -> Vec<(String, Vec<u8>)> {
     corpus::eds_files()
         .into_iter()
         .map(|file| {
-            let bytes = std::fs::read(&file.path).unwrap_or_else(|e| panic!("{}: {e}", file.name));
+            let bytes =
+                canopener_testkit::fixture::read(&file.path).unwrap_or_else(|e| panic!("{}: {e}", file.name));
             (file.name, bytes)
         })
         .collect()
@@ -673,7 +674,8 @@ fn fixing_real_files_converges_and_is_idempotent() {
         "Daxbot__node-canopen__test__common__test.eds",
     ];
     for name in names {
-        let bytes = std::fs::read(corpus::eds(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let bytes =
+            canopener_testkit::fixture::read(corpus::eds(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
         let outcome = fix::fix_file(&bytes, Some(name), &selection, &|cx| pack.fixes(cx, &selection));
         assert!(outcome.changed, "{name}");
         assert!(outcome.errors_after <= outcome.errors_before, "{name}");

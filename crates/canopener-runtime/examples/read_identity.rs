@@ -4,6 +4,9 @@
 //! `cargo run -p canopener-runtime --example read_identity [EDS]`; without an argument it takes a real
 //! vendor's device from the corpus: Sevcon's Gen4 motor controller (vendor-ID 1Eh).
 
+// An example front end: it prints what it read.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
+
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;

@@ -5,12 +5,16 @@
 //! - [`net`]: many cores on one simulated bus on virtual time (the runtime's network loop), every frame
 //!   recorded as a trace line; [`cores!`] makes one core type of several kinds.
 //! - [`frames`]: proptest strategies for frames a CANopen core meets.
+//! - [`fixture`]: the file system as tests of sans-IO crates may use it (the workspace bans it there).
 //! - [`corpus`]: where the EDS/XDD corpus is: the files vendored in the repository, and the optional
 //!   extended corpus next to the checkout.
 
 #![warn(missing_docs)]
+// Test support reports on the test's own output (a corpus file skipped, and why).
+#![allow(clippy::print_stdout, clippy::print_stderr)]
 
 pub mod corpus;
+pub mod fixture;
 pub mod frames;
 pub mod net;
 pub mod trace;

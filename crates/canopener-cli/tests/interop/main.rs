@@ -3,6 +3,10 @@
 //!
 //! The Python peers come from the venv `cargo xtask setup` creates (pinned in tests/python/requirements.txt).
 
+// These tests run the binary and Python peers, wait for them and read the files they produce: the CLI's own bans on clocks, sleeping and files do not
+// apply to them.
+#![allow(clippy::disallowed_methods, clippy::print_stdout, clippy::print_stderr)]
+
 mod master_cli;
 mod sim_master;
 mod support;

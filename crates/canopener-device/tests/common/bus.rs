@@ -21,7 +21,7 @@ pub(crate) static DS301: LazyLock<String> = LazyLock::new(|| {
 });
 
 pub(crate) fn eds(path: impl AsRef<Path>) -> canopener_eds::model::Eds {
-    canopener_eds::load(&std::fs::read(path).expect("EDS file")).eds
+    canopener_eds::load(&canopener_testkit::fixture::read(path).expect("EDS file")).eds
 }
 
 /// A device on virtual time with what it sends recorded as `"<ms>.<µs> <frame>"`: the shared
