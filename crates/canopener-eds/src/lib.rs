@@ -31,6 +31,7 @@ pub mod text;
 pub mod types;
 pub mod value;
 pub mod write;
+pub mod xml_text;
 
 pub use diag::{Code, Diagnostic, DiagnosticCode, Severity, Span};
 

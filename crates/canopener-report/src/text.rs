@@ -2,6 +2,8 @@
 
 use std::fmt::Write as _;
 
+use canopener_eds::xml_text::{XmlPlace, XmlStyle, escape};
+
 /// Tab stops used when showing a source line (tabs are expanded so carets line up).
 const TAB_WIDTH: usize = 4;
 
@@ -92,37 +94,16 @@ pub(crate) fn terminal_safe(text: &str) -> String {
         .collect()
 }
 
-/// Whether XML 1.0 allows the character at all (§2.2 Char), escaped or not.
-fn xml_char(c: char) -> bool {
-    matches!(c, '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}' | '\u{10000}'..)
-}
-
-/// Escapes text for XML element content or (`attribute`) a quoted attribute value. Characters
-/// XML 1.0 forbids become U+FFFD; in attributes, tab and line breaks become character references so
-/// attribute normalisation keeps them.
-///
-/// `canopener-xdd` has its own escaper on purpose: it writes XDD exactly as CANopenEditor does
-/// (`'` unescaped, hexadecimal references such as `&#xA;`), while JUnit reports have always used
-/// `&apos;` and decimal references; sharing one would change the bytes of one of the two outputs.
+/// Escapes text for XML element content or (`attribute`) a quoted attribute value, with the decimal
+/// references and `&apos;` JUnit reports have always had (the escaper is the one the XDD writer uses,
+/// in its other style).
 pub(crate) fn xml_escape(text: &str, attribute: bool) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' if attribute => out.push_str("&quot;"),
-            '\'' if attribute => out.push_str("&apos;"),
-            '\n' if attribute => out.push_str("&#10;"),
-            '\r' if attribute => out.push_str("&#13;"),
-            '\t' if attribute => out.push_str("&#9;"),
-            // A bare CR in content would be normalised to LF by the parser.
-            '\r' => out.push_str("&#13;"),
-            c if !xml_char(c) => out.push('\u{FFFD}'),
-            c => out.push(c),
-        }
-    }
-    out
+    let place = if attribute {
+        XmlPlace::Attribute
+    } else {
+        XmlPlace::Content
+    };
+    escape(text, place, XmlStyle::DECIMAL)
 }
 
 /// Escapes text for HTML content or attribute values; control characters (other than tab and

@@ -6,10 +6,8 @@
 
 use std::fmt::Write as _;
 
-/// Whether XML 1.0 can carry a character at all (XML 1.0 §2.2 `Char`).
-pub(crate) fn is_xml_char(c: char) -> bool {
-    matches!(c, '\t' | '\n' | '\r' | '\u{20}'..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}' | '\u{10000}'..)
-}
+pub(crate) use canopener_eds::xml_text::is_xml_char;
+use canopener_eds::xml_text::{XmlPlace, XmlStyle, escape};
 
 /// Replaces characters XML cannot carry with U+FFFD (the side channel keeps the original).
 pub(crate) fn sanitize(text: &str) -> String {
@@ -18,42 +16,15 @@ pub(crate) fn sanitize(text: &str) -> String {
         .collect()
 }
 
-/// Escapes text for a double-quoted attribute value. Tab, CR and LF become character references so
-/// that attribute-value normalisation (XML 1.0 §3.3.3) gives them back unchanged. The references are
-/// hexadecimal and `'` stays as it is, as CANopenEditor's .NET writer has them (canopener-report's
-/// JUnit escaper differs in both, and keeps its own for its own output).
+/// Escapes text for a double-quoted attribute value, as CANopenEditor's .NET writer does (hexadecimal
+/// references, `'` left as it is).
 pub(crate) fn escape_attribute(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\t' => out.push_str("&#x9;"),
-            '\n' => out.push_str("&#xA;"),
-            '\r' => out.push_str("&#xD;"),
-            c if is_xml_char(c) => out.push(c),
-            _ => out.push('\u{FFFD}'),
-        }
-    }
-    out
+    escape(text, XmlPlace::Attribute, XmlStyle::CANOPEN_EDITOR)
 }
 
-/// Escapes element content. CR becomes a reference because parsers turn CR LF into LF (XML 1.0 §2.11).
+/// Escapes element content, as CANopenEditor's .NET writer does.
 pub(crate) fn escape_text(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '\r' => out.push_str("&#xD;"),
-            c if is_xml_char(c) => out.push(c),
-            _ => out.push('\u{FFFD}'),
-        }
-    }
-    out
+    escape(text, XmlPlace::Content, XmlStyle::CANOPEN_EDITOR)
 }
 
 /// Encodes a side-channel value so that it survives XML: `%` and characters XML cannot carry become
