@@ -142,11 +142,8 @@ mod tests {
 
     use super::*;
 
-    fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("canopener-runtime-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    fn temp_dir(name: &str) -> canopener_testkit::fixture::ScratchDir {
+        canopener_testkit::fixture::ScratchDir::new(&format!("runtime-{name}"))
     }
 
     fn record(id: u16, data: &[u8]) -> LogRecord {
@@ -174,7 +171,6 @@ mod tests {
         let (records, errors) = parse_log(&text);
         assert!(errors.is_empty());
         assert_eq!(records[1].1, record(0x000, &[0x01, 0x05]));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
@@ -192,7 +188,6 @@ mod tests {
         LogWriter::check_free(&path, true).unwrap();
         LogWriter::create(&path, true).unwrap().flush().unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
@@ -203,7 +198,6 @@ mod tests {
         assert_eq!(err.source.kind(), io::ErrorKind::NotFound);
         let err = LogWriter::create(&dir.join("no/such/dir.log"), false).unwrap_err();
         assert!(matches!(err, LogFileError::Create { .. }), "{err}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
@@ -214,6 +208,5 @@ mod tests {
         let text = read_log(&path).unwrap();
         assert!(text.starts_with("(1.000000) can0 123#00\n"));
         assert!(text.contains('\u{FFFD}'));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

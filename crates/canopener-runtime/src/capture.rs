@@ -163,8 +163,7 @@ mod tests {
         for id in [0x701, 0x181, 0x000] {
             sender.send(&frame(id, &[1, 2])).unwrap();
         }
-        let dir = std::env::temp_dir().join(format!("canopener-runtime-capture-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = canopener_testkit::fixture::ScratchDir::new("runtime-capture");
         let path = dir.join("count.log");
         let mut log = LogWriter::create(&path, true).unwrap();
         let mut seen = Vec::new();
@@ -196,7 +195,6 @@ mod tests {
             ["capture-count 701#0102", "capture-count 181#0102"],
             "{written}"
         );
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

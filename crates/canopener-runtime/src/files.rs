@@ -97,15 +97,14 @@ mod tests {
 
     #[test]
     fn writes_atomically_and_keeps_a_backup() {
-        let dir = std::env::temp_dir().join(format!("canopener-output-file-{}", std::process::id()));
-        fs::create_dir_all(&dir).unwrap();
+        let dir = canopener_testkit::fixture::ScratchDir::new("runtime-files");
         let path = dir.join("a.eds");
         fs::write(&path, "old").unwrap();
         write_atomic(&path, b"new", true).unwrap();
         assert_eq!(fs::read(&path).unwrap(), b"new");
         assert_eq!(fs::read(backup_path(&path)).unwrap(), b"old");
         assert!(same_file(&path, &dir.join("./a.eds")));
-        let leftovers: Vec<_> = fs::read_dir(&dir)
+        let leftovers: Vec<_> = fs::read_dir(&*dir)
             .unwrap()
             .filter_map(|e| e.ok())
             .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
@@ -115,6 +114,5 @@ mod tests {
         let err = write_atomic(&missing_dir, b"x", false).unwrap_err();
         assert_eq!(err.action, "create");
         assert!(err.to_string().starts_with("cannot create "), "{err}");
-        fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -338,10 +338,8 @@ fn parse_hex(hex: &str) -> Option<Vec<u8>> {
 mod tests {
     use super::*;
 
-    fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("canopener-state-store-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        dir
+    fn temp_dir(name: &str) -> canopener_testkit::fixture::ScratchDir {
+        canopener_testkit::fixture::ScratchDir::new(&format!("state-store-{name}"))
     }
 
     #[test]
@@ -377,13 +375,11 @@ mod tests {
         // Another node has its own file.
         let mut other = FileStore::open(&dir, 6).unwrap();
         assert_eq!(other.load(ParameterGroup::Manufacturer).unwrap(), None);
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
     fn a_corrupt_file_is_refused_naming_the_line() {
         let dir = temp_dir("corrupt");
-        std::fs::create_dir_all(&dir).unwrap();
         for (text, needle) in [
             (
                 "# c\ncommunication 1017 00 64\nbogus 1 2 3\n",
@@ -399,7 +395,6 @@ mod tests {
             assert!(matches!(err, StateStoreError::Corrupt { .. }), "{err:?}");
             assert!(err.to_string().contains(needle), "{err}");
         }
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
@@ -436,7 +431,6 @@ mod tests {
             ..address
         };
         assert_eq!(LssFile::open(&dir, &other).unwrap().node_id(), None);
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
@@ -463,6 +457,5 @@ mod tests {
             Some(vec![(ObjectKey::new(0x6200, 1), vec![1])])
         );
         assert!(store.clear(ParameterGroup::Application).is_err());
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

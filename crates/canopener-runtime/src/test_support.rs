@@ -1,6 +1,5 @@
-//! What the unit tests share: endpoints on a private in-process bus, and scratch directories.
-
-use std::path::{Path, PathBuf};
+//! What the unit tests share: endpoints on a private in-process bus, and scratch directories (the
+//! test kit's).
 
 use canopener_transport::{BusSpec, CanBus, open};
 
@@ -16,38 +15,4 @@ pub(crate) fn virtual_pair(name: &str) -> (Box<dyn CanBus>, Box<dyn CanBus>) {
     )
 }
 
-/// A directory for one test's files, removed when the test ends: a fresh directory under the system's
-/// temporary directory, unique to this process and name.
-#[derive(Debug)]
-pub(crate) struct ScratchDir(PathBuf);
-
-impl ScratchDir {
-    /// Creates (or empties) `canopener-runtime-NAME-PID` in the temporary directory.
-    pub(crate) fn new(name: &str) -> ScratchDir {
-        let dir = std::env::temp_dir().join(format!("canopener-runtime-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("create a scratch directory");
-        ScratchDir(dir)
-    }
-
-    /// The directory.
-    pub(crate) fn path(&self) -> &Path {
-        &self.0
-    }
-
-    /// Writes a file below the directory (creating its parents) and returns its path.
-    pub(crate) fn write(&self, relative: &str, bytes: &[u8]) -> PathBuf {
-        let path = self.0.join(relative);
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent).expect("create a scratch subdirectory");
-        }
-        std::fs::write(&path, bytes).expect("write a scratch file");
-        path
-    }
-}
-
-impl Drop for ScratchDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+pub(crate) use canopener_testkit::fixture::ScratchDir;

@@ -62,9 +62,29 @@ impl ScratchDir {
         &self.path
     }
 
-    /// A path inside the directory.
-    pub fn join(&self, name: impl AsRef<Path>) -> PathBuf {
-        self.path.join(name)
+    /// Writes a file below the directory (creating its parents) and returns its path.
+    ///
+    /// # Panics
+    /// When the file cannot be written: the test could not run anyway.
+    pub fn write(&self, relative: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> PathBuf {
+        let path = self.path.join(relative);
+        write(&path, bytes).unwrap_or_else(|err| panic!("cannot write {}: {err}", path.display()));
+        path
+    }
+}
+
+/// The directory's path, so a scratch directory goes wherever a `&Path` does.
+impl std::ops::Deref for ScratchDir {
+    type Target = Path;
+
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for ScratchDir {
+    fn as_ref(&self) -> &Path {
+        &self.path
     }
 }
 
@@ -81,7 +101,7 @@ mod tests {
     #[test]
     fn scratch_files_are_written_listed_read_and_removed() {
         let dir = ScratchDir::new("fixture-selftest");
-        write(dir.join("sub/b.txt"), "b").unwrap();
+        assert_eq!(dir.write("sub/b.txt", "b"), dir.join("sub/b.txt"));
         write(dir.join("a.txt"), "a").unwrap();
         assert_eq!(list(dir.path()).unwrap(), [dir.join("a.txt"), dir.join("sub")]);
         assert_eq!(read_to_string(dir.join("sub/b.txt")).unwrap(), "b");

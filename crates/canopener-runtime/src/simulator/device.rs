@@ -271,7 +271,7 @@ mod tests {
         let bare = dir.join("bare.eds");
         std::fs::write(&bare, &text[..cut]).unwrap();
         let options = DeviceOptions {
-            state_dir: Some(dir.clone()),
+            state_dir: Some(dir.to_path_buf()),
             ..options
         };
         let sim = SimulatedDevice::build(one(&bare), 0, &options).unwrap();
@@ -282,7 +282,6 @@ mod tests {
             );
         }
         assert!(sim.store_path().unwrap().ends_with("node-005.params"));
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// 1012h bit 30 makes the device a TIME producer (CiA 301 §7.5.2.6): it sends at once and then
@@ -316,6 +315,5 @@ mod tests {
                 "2500000 100#C40900001239",
             ]
         );
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

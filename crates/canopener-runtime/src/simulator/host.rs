@@ -274,6 +274,5 @@ mod tests {
             "{:?}",
             log[0]
         );
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

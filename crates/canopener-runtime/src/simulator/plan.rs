@@ -246,8 +246,7 @@ mod tests {
 
     #[test]
     fn files_without_objects_are_refused_naming_the_file() {
-        let dir = std::env::temp_dir().join(format!("canopener-runtime-plan-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = canopener_testkit::fixture::ScratchDir::new("runtime-plan");
         let junk = dir.join("junk.eds");
         std::fs::write(&junk, "this is not\x00 an EDS [at all\n").unwrap();
         let err = load(&junk).unwrap_err();
@@ -276,6 +275,5 @@ mod tests {
             empty.to_string().starts_with("empty is not a usable EDS/DCF"),
             "{empty}"
         );
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -266,7 +266,6 @@ mod tests {
             .expect("node 5 hears node 6's heartbeat");
         assert_eq!(heard.0, Instant::ZERO + Duration::from_millis(100));
         assert_eq!(heard.1.text, "heartbeat of node 6 started");
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
@@ -276,7 +275,7 @@ mod tests {
         let mut bus = Simulation::bit_accurate(Bitrate::M1)
             .devices(&[(&eds, 5), (&eds, 6)])
             .serial(Some(0x100))
-            .state_dir(Some(dir.clone()))
+            .state_dir(Some(dir.to_path_buf()))
             .fault(Fault::SdoSlow)
             .start()
             .unwrap();
@@ -292,7 +291,6 @@ mod tests {
             assert_eq!(session.read(0x1018, 4).unwrap(), serial.to_le_bytes());
             assert!(bus.now().saturating_duration_since(started) >= DEFAULT_SDO_DELAY);
         }
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
@@ -314,6 +312,5 @@ mod tests {
             matches!(clash, SimError::NodeIdClash { node_id: 5, .. }),
             "{clash:?}"
         );
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

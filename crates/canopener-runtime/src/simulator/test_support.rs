@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use canopener_can::CanFrame;
+use canopener_testkit::fixture::ScratchDir;
 
 /// A consumer heartbeat time 1016h with one entry, off.
 pub(crate) const CONSUMER_1016: &str = "\n[1016]\nParameterName=Consumer heartbeat time\nObjectType=0x8\n\
@@ -19,12 +20,9 @@ pub(crate) fn base_eds() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../canopener-check/test_data/checks/base.eds")
 }
 
-/// An empty directory of its own for test `name`.
-pub(crate) fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("canopener-runtime-sim-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temporary directory");
-    dir
+/// An empty directory of its own for test `name`, removed when the test ends.
+pub(crate) fn temp_dir(name: &str) -> ScratchDir {
+    ScratchDir::new(&format!("runtime-sim-{name}"))
 }
 
 /// base.eds with `extra` sections appended, written to `dir/name`.
