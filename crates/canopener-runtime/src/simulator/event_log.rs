@@ -263,6 +263,10 @@ fn describe(device: &Device, event: &DeviceEvent) -> Option<LogEntry> {
         DeviceEvent::Pdo(PdoEvent::Disabled { pdo, error }) => {
             LogEntry::new("pdo", format!("{pdo} disabled: {error}"))
         }
+        DeviceEvent::Pdo(PdoEvent::RpdoLate { number }) => LogEntry::new(
+            "pdo",
+            format!("RPDO{number} arrived after the synchronous window (1007h) and was discarded"),
+        ),
         DeviceEvent::Pdo(event) => LogEntry::new("pdo", format!("{event:?}")),
         DeviceEvent::Sync(SyncEvent::Sync { .. } | SyncEvent::WindowClosed) => return None,
         DeviceEvent::Sync(event) => LogEntry::new("sync", format!("{event:?}")),
