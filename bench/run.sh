@@ -16,6 +16,7 @@ mkdir -p bench-results
 "$python" bench/run.py "$@"
 "$python" bench/eds_load.py "$@"
 "$python" bench/eds_check.py "$@"
+"$python" bench/check_scaling.py "$@"
 "$python" bench/sdo_server.py "$@"
 "$python" bench/sdo_client.py "$@"
 "$python" bench/master_cli.py "$@"
