@@ -147,7 +147,11 @@ impl<'a> Context<'a> {
             }
             index.extend(lines.iter().filter_map(|&line| {
                 let (key, _) = self.document.entry(line)?;
-                Some((section.header_line, key.to_ascii_lowercase().into_boxed_str(), line))
+                Some((
+                    section.header_line,
+                    key.to_ascii_lowercase().into_boxed_str(),
+                    line,
+                ))
             }));
         }
         // Stable: equal keys keep file order, as `find_entry` returns the first.
@@ -265,8 +269,15 @@ mod tests {
                 "key {key}"
             );
         }
-        assert_eq!(cx.entry(list, "7"), Some(("7", "0x6007")), "the first of a duplicated key");
-        assert_eq!(cx.entry(list, "SUPPORTEDOBJECTS"), Some(("SupportedObjects", "40")));
+        assert_eq!(
+            cx.entry(list, "7"),
+            Some(("7", "0x6007")),
+            "the first of a duplicated key"
+        );
+        assert_eq!(
+            cx.entry(list, "SUPPORTEDOBJECTS"),
+            Some(("SupportedObjects", "40"))
+        );
         assert_eq!(cx.entry_line(list, "41"), None);
         let info = SectionKind::DeviceInfo;
         assert_eq!(cx.entry(info, "vendorname"), Some(("VendorName", "x")));

@@ -310,7 +310,8 @@ impl Cia401Io {
         let has = |key: ObjectKey, len: usize| od.get(key).is_some_and(|e| e.value().len() == len);
         // The factory test registers are the thesis's, not CiA 401's: a vendor's own 2000h–2002h
         // (a RECORD, a counter) must not switch the inputs over, so their types must match too.
-        let typed = |key: ObjectKey, data_type: DataType| od.get(key).is_some_and(|e| e.data_type() == data_type);
+        let typed =
+            |key: ObjectKey, data_type: DataType| od.get(key).is_some_and(|e| e.data_type() == data_type);
         let mut features = Vec::new();
         for (feature, key, len) in [
             (Feature::DigitalInputs, READ_INPUT, 1),
@@ -764,16 +765,29 @@ mod tests {
     fn a_cia401_io_device_is_profile_401_with_digital_io() {
         let with = |device_type: u32, index: Option<u16>| {
             let mut od = DynamicOd::with_capacity(4);
-            od.insert(Entry::new(DEVICE_TYPE, DataType::UNSIGNED32, Access::Ro, &device_type.to_le_bytes()).unwrap())
-                .unwrap();
+            od.insert(
+                Entry::new(
+                    DEVICE_TYPE,
+                    DataType::UNSIGNED32,
+                    Access::Ro,
+                    &device_type.to_le_bytes(),
+                )
+                .unwrap(),
+            )
+            .unwrap();
             if let Some(index) = index {
-                od.insert(Entry::new(ObjectKey::new(index, 1), DataType::UNSIGNED8, Access::Rw, &[0]).unwrap())
-                    .unwrap();
+                od.insert(
+                    Entry::new(ObjectKey::new(index, 1), DataType::UNSIGNED8, Access::Rw, &[0]).unwrap(),
+                )
+                .unwrap();
             }
             is_cia401_io(&od)
         };
         assert!(with(0x000F_0191, Some(0x6000)));
-        assert!(with(0x0000_0191, Some(0x6200)), "the I/O bits 23..16 do not decide");
+        assert!(
+            with(0x0000_0191, Some(0x6200)),
+            "the I/O bits 23..16 do not decide"
+        );
         assert!(!with(0x000F_0191, None), "no digital I/O object");
         assert!(!with(0x0002_0192, Some(0x6200)), "CiA 402 is not CiA 401");
         assert!(!with(0x0191_0000, Some(0x6000)), "401 in the wrong bits");
@@ -1196,16 +1210,36 @@ mod tests {
     #[test]
     fn install_objects_keeps_a_profile_401_device_type() {
         let mut od = DynamicOd::with_capacity(4);
-        od.insert(Entry::new(DEVICE_TYPE, DataType::UNSIGNED32, Access::Ro, &0x000F_0191u32.to_le_bytes()).unwrap())
-            .unwrap();
+        od.insert(
+            Entry::new(
+                DEVICE_TYPE,
+                DataType::UNSIGNED32,
+                Access::Ro,
+                &0x000F_0191u32.to_le_bytes(),
+            )
+            .unwrap(),
+        )
+        .unwrap();
         install_objects(&mut od, 5).unwrap();
         assert_eq!(read_uint(&od, DEVICE_TYPE), Some(0x000F_0191));
         let mut other = DynamicOd::with_capacity(4);
         other
-            .insert(Entry::new(DEVICE_TYPE, DataType::UNSIGNED32, Access::Ro, &0x0002_0192u32.to_le_bytes()).unwrap())
+            .insert(
+                Entry::new(
+                    DEVICE_TYPE,
+                    DataType::UNSIGNED32,
+                    Access::Ro,
+                    &0x0002_0192u32.to_le_bytes(),
+                )
+                .unwrap(),
+            )
             .unwrap();
         install_objects(&mut other, 5).unwrap();
-        assert_eq!(read_uint(&other, DEVICE_TYPE), Some(0x0007_0191), "another profile becomes 401");
+        assert_eq!(
+            read_uint(&other, DEVICE_TYPE),
+            Some(0x0007_0191),
+            "another profile becomes 401"
+        );
     }
 
     #[test]

@@ -93,7 +93,7 @@ pub(crate) fn run(args: PdoWatchArgs) -> CliResult {
         };
         return Err(CliError::Device(format!(
             "{whose}, so there is nothing to watch; map one, e.g. canopener pdo map --node {node} --tpdo 1 \
-             6000:01:8 --type 255 --event-timer 100"
+             6000:01:8 --transmission-type 255 --event-timer 100ms"
         )));
     }
     if std::io::stderr().is_terminal() {

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::{BusArg, parse_u32_number};
+use crate::args::{BusArg, parse_node_id, parse_u32_number};
 
 #[derive(Debug, Args)]
 pub(crate) struct SimArgs {
@@ -21,7 +21,7 @@ pub(crate) struct SimArgs {
     pub(crate) bus: BusArg,
     /// Node-ID of devices whose file is not a DCF with a node-ID (several files: N, N+1, ... in order).
     /// Without it such devices start LSS-unconfigured (node-ID FFh) and wait for an LSS master.
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=127), value_name = "N")]
+    #[arg(long, value_parser = parse_node_id, value_name = "N")]
     pub(crate) node_id: Option<u8>,
     /// Serial number 1018h:04 of the devices (several files: S, S+1, ... in order), so that devices from
     /// one EDS have distinct LSS addresses. Decimal or 0x-hex.

@@ -121,10 +121,10 @@ fn map_a_tpdo_start_the_node_and_watch_the_values_the_device_holds() {
         "1",
         "6000:01:8",
         "6401:01:16",
-        "--type",
+        "--transmission-type",
         "255",
         "--event-timer",
-        "100",
+        "100ms",
     ]);
     assert_eq!(map.status.code(), Some(0), "{}", stderr(&map));
     let text = stdout(&map);

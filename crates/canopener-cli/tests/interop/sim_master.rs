@@ -289,5 +289,10 @@ fn python_canopen_factory_test_round_trip_on_a_cia401_eds_without_app() {
             check["detail"], device.status, device.stderr
         );
     }
-    assert!(device.status.success(), "the simulator ended with {}: {}", device.status, device.stderr);
+    assert!(
+        device.status.success(),
+        "the simulator ended with {}: {}",
+        device.status,
+        device.stderr
+    );
 }

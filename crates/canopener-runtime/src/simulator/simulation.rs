@@ -281,13 +281,21 @@ mod tests {
     /// TPDO1. `ApplicationKind::None` turns it off.
     #[test]
     fn a_cia401_description_runs_the_cia401_application_by_default() {
-        let eds = canopener_testkit::corpus::eds("CANopenNode__CANopenSocket__examples__basicDevice__basicDevice.eds");
+        let eds = canopener_testkit::corpus::eds(
+            "CANopenNode__CANopenSocket__examples__basicDevice__basicDevice.eds",
+        );
         let mut bus = Simulation::ideal().device(&eds, 5).start().unwrap();
         let (_, sim) = bus.network().nodes().next().expect("one device");
         assert_eq!(sim.application(), ApplicationKind::Cia401);
         assert!(sim.application_is_auto());
         let started = LogEntry::started(sim, "virtual:test");
-        assert!(started.text.contains("CiA 401 I/O application: 1000h says profile 401"), "{}", started.text);
+        assert!(
+            started
+                .text
+                .contains("CiA 401 I/O application: 1000h says profile 401"),
+            "{}",
+            started.text
+        );
         bus.network_mut().record();
         bus.send(&frame("000#0105")).unwrap();
         let timeout = Duration::from_millis(100);
@@ -302,7 +310,11 @@ mod tests {
             .filter(|f| f.frame.id().as_raw() == 0x185)
             .map(|f| f.frame.to_string())
             .collect();
-        assert_eq!(tpdos, ["185#0000", "185#F000"], "TPDO1 at the start, then on the change");
+        assert_eq!(
+            tpdos,
+            ["185#0000", "185#F000"],
+            "TPDO1 at the start, then on the change"
+        );
 
         let bus = Simulation::ideal()
             .device(&eds, 5)
@@ -311,13 +323,20 @@ mod tests {
             .unwrap();
         let (_, sim) = bus.network().nodes().next().expect("one device");
         assert_eq!(sim.application(), ApplicationKind::None);
-        assert!(sim.device().od().object(0x2000).is_empty(), "no factory registers without the application");
+        assert!(
+            sim.device().od().object(0x2000).is_empty(),
+            "no factory registers without the application"
+        );
         // A description of another profile runs nothing, and says why.
         let other = canopener_testkit::corpus::eds("CANopenNode__CANopenNode__example__DS301_profile.eds");
         let bus = Simulation::ideal().device(&other, 5).start().unwrap();
         let (_, sim) = bus.network().nodes().next().expect("one device");
         assert_eq!(sim.application(), ApplicationKind::None);
-        assert!(LogEntry::started(sim, "virtual:test").text.contains("no application: not a CiA 401 I/O description"));
+        assert!(
+            LogEntry::started(sim, "virtual:test")
+                .text
+                .contains("no application: not a CiA 401 I/O description")
+        );
     }
 
     #[test]
