@@ -206,9 +206,10 @@ pub(crate) enum ReportFormat {
 pub(crate) enum ConvertTarget {
     /// canopener's versioned JSON form of the model (docs/eds-json.md).
     Json,
-    /// A CiA 306 EDS (from a DCF: the DCF additions removed).
+    /// A CiA 306 EDS (from a DCF/XDC: the DCF additions removed, each named on stderr).
     Eds,
-    /// A CiA 306 DCF for one node (needs --node-id and --bitrate unless the input is a DCF).
+    /// A CiA 306 DCF for one node: from an EDS/XDD, every value filled from its default (needs --node-id
+    /// and --bitrate); from a DCF/XDC, its values exactly as they are (--node-id/--bitrate replace its own).
     Dcf,
     /// A CiA 311 v1.1 XDD, or an XDC when the input is a DCF.
     Xdd,
