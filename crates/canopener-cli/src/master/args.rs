@@ -361,7 +361,8 @@ Mapping entries are INDEX:SUB:BITS in hexadecimal index and sub-index, decimal b
     /// Print the PDOs of a node live, decoded by its mapping (read from the device, named by the EDS).
     #[command(after_help = "Examples:
   canopener pdo watch --node 5 --eds device.eds
-  canopener pdo watch --node 5 --eds device.eds --format json --count 10")]
+  canopener pdo watch --node 5 --eds device.eds --format json --count 10
+  canopener pdo watch --node 5                       # TPDO 1..4 read from the device, values in hex")]
     Watch(PdoWatchArgs),
 }
 
@@ -437,11 +438,12 @@ fn duration_in_units(text: &str, unit_us: u128) -> Option<Result<u16, String>> {
 pub(crate) struct PdoWatchArgs {
     #[command(flatten)]
     pub(crate) target: NodeArg,
-    /// Name and type the mapped objects by this EDS or DCF.
+    /// Watch the TPDOs this EDS or DCF describes, named and typed by it; without it, TPDO 1..4 (the
+    /// pre-defined connection set) with their mapped bytes in hex.
     #[arg(long, value_name = "FILE")]
-    pub(crate) eds: PathBuf,
+    pub(crate) eds: Option<PathBuf>,
     /// Take the mapping from the EDS/DCF defaults instead of reading it from the device over SDO.
-    #[arg(long)]
+    #[arg(long, requires = "eds")]
     pub(crate) offline: bool,
     /// Stop after this many PDOs.
     #[arg(long, value_name = "N", value_parser = parse_u64)]
