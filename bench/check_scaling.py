@@ -15,13 +15,15 @@ where the misplaced-list case of issue 13 lives. Every index carries one defect 
 
 The slope is the least-squares fit of log(time) on log(objects) over the sizes: 1 is linear, 2 quadratic. A
 per-run fixed cost (process start, 25 ms or so) flattens the small sizes, so the slope of the largest half
-of the sizes is printed too. Each time is the median of N runs; the range is the fastest and slowest run.
+of the sizes is printed too. Each time is the median of N runs, wall clock and CPU (user + system, which the
+other users of a shared machine affect less); the range is the fastest and slowest run.
 Results: bench-results/check_scaling.md and .json.
 """
 
 import json
 import math
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -123,16 +125,25 @@ def generate(objects, series):
     return "\n".join(head + body) + "\n", index - first + 3
 
 
+def child_cpu_seconds():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def time_check(path, repeat):
-    times, findings = [], None
+    """Wall-clock and CPU seconds (user + system) of each of `repeat` runs, and the last run's report. CPU time
+    is what the other users of a shared machine leave least mark on."""
+    times, cpu, findings = [], [], None
     for _ in range(repeat):
+        cpu_before = child_cpu_seconds()
         start = time.perf_counter()
         done = subprocess.run([CANOPENER, "eds", "check", path, "--format", "json"], capture_output=True, text=True)
         times.append(time.perf_counter() - start)
+        cpu.append(child_cpu_seconds() - cpu_before)
         if done.returncode not in (0, 1):
             sys.exit(f"check_scaling.py: canopener eds check failed with exit {done.returncode}: {done.stderr[:500]}")
         findings = done.stdout
-    return times, findings
+    return times, cpu, findings
 
 
 def codes_of(report_text):
@@ -186,18 +197,21 @@ def main():
             text, indices = generate(objects, series)
             path = Path(scratch) / f"scaling_{series}_{objects}.eds"
             path.write_text(text)
-            times, report = time_check(str(path), repeat)
+            times, cpu, report = time_check(str(path), repeat)
             codes = codes_of(report)
             rows.append({"series": series, "objects": objects, "indices": indices, "bytes": len(text.encode()),
                          "median_s": statistics.median(times), "min_s": min(times), "max_s": max(times),
+                         "cpu_median_s": statistics.median(cpu), "cpu_min_s": min(cpu), "cpu_max_s": max(cpu),
                          "findings": sum(codes.values()), "codes": codes})
             print(f"check_scaling: {series}, {objects} objects: median {rows[-1]['median_s'] * 1e3:.1f} ms, "
                   f"{rows[-1]['findings']} findings", file=sys.stderr)
     slopes = {}
     for series in SERIES:
-        points = [(r["objects"], r["median_s"]) for r in rows if r["series"] == series]
-        upper = points[len(points) // 2:]
-        slopes[series] = {"all": slope(points), "upper_half": slope(upper) if len(upper) >= 2 else None}
+        for measure, key in [("wall", "median_s"), ("cpu", "cpu_median_s")]:
+            points = [(r["objects"], r[key]) for r in rows if r["series"] == series]
+            upper = points[len(points) // 2:]
+            slopes[f"{series}, {measure}"] = {"all": slope(points),
+                                              "upper_half": slope(upper) if len(upper) >= 2 else None}
     results = {"machine": dict(common.machine(), load_average_1min_before=load_before), "repeat": repeat,
                "binary": str(CANOPENER), "rows": rows, "slopes": slopes}
     OUT_DIR.mkdir(exist_ok=True)
@@ -215,17 +229,18 @@ def markdown(r):
         f"{m['load_average_1min_before']:.1f} before the run; {m['rustc']}; `canopener eds check FILE --format json`, "
         f"{r['repeat']} runs per size (median, fastest..slowest).",
         "",
-        "| file | objects | indices | size | check time (median) | range | findings |",
-        "|---|---:|---:|---:|---:|---:|---:|",
+        "| file | objects | indices | size | wall time (median) | range | CPU time (median) | range | findings |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for row in r["rows"]:
         lines.append(f"| {row['series']} | {row['objects']:,} | {row['indices']:,} | {row['bytes'] / 1e6:.1f} MB "
                      f"| {row['median_s'] * 1e3:,.1f} ms | {row['min_s'] * 1e3:,.1f}..{row['max_s'] * 1e3:,.1f} ms "
-                     f"| {row['findings']:,} |")
+                     f"| {row['cpu_median_s'] * 1e3:,.1f} ms "
+                     f"| {row['cpu_min_s'] * 1e3:,.1f}..{row['cpu_max_s'] * 1e3:,.1f} ms | {row['findings']:,} |")
     lines.append("")
     for series, fit in r["slopes"].items():
         upper = f", {fit['upper_half']:.2f} over the larger half" if fit["upper_half"] is not None else ""
-        lines.append(f"- {series}: log-log slope of time on objects {fit['all']:.2f} over all sizes{upper} "
+        lines.append(f"- {series} time: log-log slope on objects {fit['all']:.2f} over all sizes{upper} "
                      "(1 = linear, 2 = quadratic).")
     lines += ["", "Finding codes in the mixed files: " + ", ".join(all_codes) + "."]
     return "\n".join(lines) + "\n"
