@@ -38,8 +38,10 @@
 //! [`LssEvent::SwitchBitRate`] (switch now) and [`LssEvent::BitTimingSilenceEnded`];
 //! [`LssSlave::is_silent`] tells the `Device` to hold back every other core's frames meanwhile.
 //!
-//! Store configuration hands the pending node-ID and bit rate to an [`LssStorage`] the `Device`
-//! implements; `()` stores nothing and answers error code 1, "storing not supported".
+//! Store configuration hands the pending node-ID and bit rate to an [`LssStorage`]: the `Device`'s
+//! default keeps them in memory and starts with them again after NMT reset node (its power cycle),
+//! the simulator's keeps them in its state file; `()` stores nothing and answers error code 1,
+//! "storing not supported", for a slave without storage.
 
 use std::collections::VecDeque;
 use std::time::Duration;
