@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Benchmark suite (cargo xtask bench): release builds, then bench/run.py measures everything in one run and
-# writes bench-results/results.json plus the markdown tables for BENCHMARKS.md; bench/eds_load.py then times
-# EDS loading against python canopen (bench-results/eds_load.md and .json), and bench/eds_check.py times
-# checking the corpus against python canopen importing it (bench-results/eds_check.md and .json);
-# bench/sdo_server.py, bench/sdo_client.py and bench/master_cli.py time the device's SDO server, the SDO client
-# and the master commands (node scan, LSS fastscan) against the wire and python canopen (bench-results/*.md).
+# Benchmark suite (cargo xtask bench): release builds, then one script per part of BENCHMARKS.md, each writing its
+# raw results (bench-results/*.json) and its tables (bench-results/*.md) that the section of BENCHMARKS.md it
+# names is pasted from: bench/run.py the hub sections (hub.md), bench/eds_load.py EDS loading against python
+# canopen, bench/eds_check.py checking the corpus against python canopen importing it, bench/check_scaling.py how
+# `eds check` scales with file size, bench/sdo_server.py, bench/sdo_client.py and bench/master_cli.py the device's
+# SDO server, the SDO client and the master commands (node scan, LSS fastscan).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 python="${CANOPENER_PYTHON:-.venv/bin/python}"
@@ -16,6 +16,7 @@ mkdir -p bench-results
 "$python" bench/run.py "$@"
 "$python" bench/eds_load.py "$@"
 "$python" bench/eds_check.py "$@"
+"$python" bench/check_scaling.py "$@"
 "$python" bench/sdo_server.py "$@"
 "$python" bench/sdo_client.py "$@"
 "$python" bench/master_cli.py "$@"

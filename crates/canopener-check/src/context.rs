@@ -1,6 +1,8 @@
 //! One loaded file as the checks see it: the model, the lossless document, and lookups from a
 //! section's meaning to where it is written.
 
+use std::sync::OnceLock;
+
 use canopener_eds::section_name::{self, SectionKind};
 use canopener_eds::syntax::Section;
 use canopener_eds::{Diagnostic, Document, Eds, Loaded, Span};
@@ -34,7 +36,19 @@ pub struct Context<'a> {
     /// without hashing or one allocation per kind (nearly every object section is a kind of its own).
     sorted_kinds: Vec<SectionKind>,
     sorted_sections: Vec<usize>,
+    /// Entry lookups in sections longer than [`LINEAR_LOOKUP_MAX`], built on first use: a check that
+    /// reports one finding per entry of an object list would otherwise scan the whole list for each
+    /// (issue 13: 16 000 misplaced list entries took 1.25 s).
+    long_sections: OnceLock<EntryIndex>,
 }
+
+/// Sections with at most this many entries are searched line by line: cheaper than the index for
+/// the object sections that make up nearly every file.
+const LINEAR_LOOKUP_MAX: usize = 16;
+
+/// `(section header line, key in ASCII lower case, entry line)` of every entry of every long section,
+/// sorted by section and key, file order within equal keys (so the first match is the first written).
+type EntryIndex = Vec<(usize, Box<str>, usize)>;
 
 impl<'a> Context<'a> {
     /// Indexes a loaded file.
@@ -60,6 +74,7 @@ impl<'a> Context<'a> {
             kinds,
             sorted_kinds,
             sorted_sections,
+            long_sections: OnceLock::new(),
         }
     }
 
@@ -109,7 +124,39 @@ impl<'a> Context<'a> {
     /// The line index of the first entry with this key (case-insensitive) in the first section of
     /// this kind.
     pub fn entry_line(&self, kind: SectionKind, key: &str) -> Option<usize> {
-        self.document.find_entry(self.section(kind)?, key)
+        let section = self.section(kind)?;
+        if self.document.entries(section).len() <= LINEAR_LOOKUP_MAX {
+            return self.document.find_entry(section, key);
+        }
+        let index = self.long_sections.get_or_init(|| self.index_long_sections());
+        let key = key.to_ascii_lowercase();
+        let wanted = (section.header_line, key.as_str());
+        let first = index.partition_point(|(header, k, _)| (*header, &**k) < wanted);
+        index
+            .get(first)
+            .filter(|(header, k, _)| (*header, &**k) == wanted)
+            .map(|&(_, _, line)| line)
+    }
+
+    fn index_long_sections(&self) -> EntryIndex {
+        let mut index: EntryIndex = Vec::new();
+        for section in self.document.sections() {
+            let lines = self.document.entries(section);
+            if lines.len() <= LINEAR_LOOKUP_MAX {
+                continue;
+            }
+            index.extend(lines.iter().filter_map(|&line| {
+                let (key, _) = self.document.entry(line)?;
+                Some((
+                    section.header_line,
+                    key.to_ascii_lowercase().into_boxed_str(),
+                    line,
+                ))
+            }));
+        }
+        // Stable: equal keys keep file order, as `find_entry` returns the first.
+        index.sort_by(|a, b| (a.0, &a.1).cmp(&(b.0, &b.1)));
+        index
     }
 
     /// The key as written and the value of an entry.
@@ -200,6 +247,41 @@ pub(crate) fn object_kind(index: u16, sub: Option<u8>) -> SectionKind {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Lookups in long sections (the index) answer as the line-by-line search does: keys in any case,
+    /// the first of a duplicated key, nothing for a key the section lacks.
+    #[test]
+    fn entry_lookups_in_long_sections_match_the_linear_search() {
+        let mut text = String::from("[ManufacturerObjects]\nSupportedObjects=40\n");
+        for n in 1..=40 {
+            text.push_str(&format!("{n}=0x{:04X}\n", 0x6000 + n));
+        }
+        text.push_str("7=0x2000\n[DeviceInfo]\nVendorName=x\n");
+        let loaded = canopener_eds::load(text.as_bytes());
+        let cx = Context::new(&loaded, None);
+        let list = SectionKind::ObjectList(canopener_eds::model::ObjectListKind::Manufacturer);
+        let section = cx.section(list).expect("the list");
+        assert!(cx.document.entries(section).len() > LINEAR_LOOKUP_MAX);
+        for key in ["SupportedObjects", "supportedobjects", "1", "7", "40", "41", "x"] {
+            assert_eq!(
+                cx.entry_line(list, key),
+                cx.document.find_entry(section, key),
+                "key {key}"
+            );
+        }
+        assert_eq!(
+            cx.entry(list, "7"),
+            Some(("7", "0x6007")),
+            "the first of a duplicated key"
+        );
+        assert_eq!(
+            cx.entry(list, "SUPPORTEDOBJECTS"),
+            Some(("SupportedObjects", "40"))
+        );
+        assert_eq!(cx.entry_line(list, "41"), None);
+        let info = SectionKind::DeviceInfo;
+        assert_eq!(cx.entry(info, "vendorname"), Some(("VendorName", "x")));
+    }
 
     #[test]
     fn fast_object_kinds_agree_with_classify() {

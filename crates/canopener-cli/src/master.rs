@@ -7,7 +7,6 @@ pub(crate) mod lss;
 pub(crate) mod nmt;
 pub(crate) mod node;
 pub(crate) mod node_dump;
-pub(crate) mod node_list;
 pub(crate) mod output;
 pub(crate) mod pdo;
 pub(crate) mod pdo_watch;

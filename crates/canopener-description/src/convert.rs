@@ -33,6 +33,9 @@ pub struct Converted {
     /// For a DCF: the bit rate, when the description does not declare it supported
     /// (`BaudRate_<k>=1` missing). The DCF is written anyway; the caller should warn.
     pub undeclared_bitrate: Option<u16>,
+    /// For an EDS made from a configuration: the DCF keys and sections it no longer carries
+    /// ([`dcf::configuration_keys`]), for the caller to name; `--to dcf` keeps them.
+    pub dropped: Vec<String>,
 }
 
 /// Why a description cannot be written as asked.
@@ -55,6 +58,7 @@ pub enum ConvertError {
 /// Writes `description` in the `target` format.
 pub fn convert(description: &Description, target: Target) -> Result<Converted, ConvertError> {
     let eds = &description.eds;
+    let mut dropped = Vec::new();
     let (bytes, undeclared_bitrate) = match target {
         Target::Json => (
             format!("{}\n", canopener_eds::json::to_json(eds)).into_bytes(),
@@ -64,8 +68,18 @@ pub fn convert(description: &Description, target: Target) -> Result<Converted, C
             canopener_xdd::write(eds, &WriteOptions::CANOPEN_EDITOR).into_bytes(),
             None,
         ),
-        Target::Eds if eds.is_dcf() => (description.canonical_bytes(&dcf::to_eds(eds))?, None),
+        Target::Eds if eds.is_dcf() => {
+            dropped = dcf::configuration_keys(eds);
+            (description.canonical_bytes(&dcf::to_eds(eds))?, None)
+        }
         Target::Eds => (description.canonical_bytes(eds)?, None),
+        // A configuration stays exactly what it is (issue 13: DCF -> XDC -> DCF added a ParameterValue to
+        // every entry the DCF had left unset); only a template gets its values filled for one node.
+        Target::Dcf { node_id, bitrate } if dcf::is_configuration(eds) => {
+            let dcf = dcf::recommission(eds, node_id, bitrate)?;
+            let undeclared = bitrate.filter(|b| !dcf::supports_bitrate(eds, *b));
+            (description.canonical_bytes(&dcf)?, undeclared)
+        }
         Target::Dcf { node_id, bitrate } => {
             let node = node_id
                 .or_else(|| eds.node_id().map(u16::from))
@@ -84,6 +98,7 @@ pub fn convert(description: &Description, target: Target) -> Result<Converted, C
     Ok(Converted {
         bytes,
         undeclared_bitrate,
+        dropped,
     })
 }
 

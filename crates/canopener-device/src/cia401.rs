@@ -86,6 +86,14 @@ pub const WRITE_ANALOG_OUTPUT: u16 = 0x6411;
 /// Global interrupt enable analogue 6423h.
 pub const ANALOG_INTERRUPT_ENABLE: ObjectKey = ObjectKey::new(0x6423, 0);
 
+/// Whether `od` describes a CiA 401 generic I/O device the application can run: device type
+/// 1000h says profile 401 in bits 15..0 (0191h) and the dictionary has digital inputs 6000h or
+/// digital outputs 6200h. `canopener sim` runs [`Cia401Io`] on such a device unless told otherwise.
+pub fn is_cia401_io(od: &DynamicOd) -> bool {
+    let profile_401 = od.get(DEVICE_TYPE).is_some_and(|e| is_profile_401(e.value()));
+    profile_401 && (!od.object(READ_INPUT.index).is_empty() || !od.object(WRITE_OUTPUT.index).is_empty())
+}
+
 /// The analogue channels [`install_objects`] creates and TPDO2 maps (CiA 401 default: four per TPDO).
 pub const INSTALLED_ANALOG_CHANNELS: u8 = 4;
 
@@ -300,6 +308,10 @@ impl Cia401Io {
 
     fn detect(&mut self, od: &DynamicOd) {
         let has = |key: ObjectKey, len: usize| od.get(key).is_some_and(|e| e.value().len() == len);
+        // The factory test registers are the thesis's, not CiA 401's: a vendor's own 2000h–2002h
+        // (a RECORD, a counter) must not switch the inputs over, so their types must match too.
+        let typed =
+            |key: ObjectKey, data_type: DataType| od.get(key).is_some_and(|e| e.data_type() == data_type);
         let mut features = Vec::new();
         for (feature, key, len) in [
             (Feature::DigitalInputs, READ_INPUT, 1),
@@ -317,7 +329,13 @@ impl Cia401Io {
             (Feature::FactoryDigitalInputs, FACTORY_DIGITAL, 1),
             (Feature::FactoryAnalogInputs, ObjectKey::new(FACTORY_ANALOG, 1), 2),
         ] {
-            if has(key, len) {
+            let factory_type = match feature {
+                Feature::FactoryTest => Some(DataType::BOOLEAN),
+                Feature::FactoryDigitalInputs => Some(DataType::UNSIGNED8),
+                Feature::FactoryAnalogInputs => Some(DataType::INTEGER16),
+                _ => None,
+            };
+            if has(key, len) && factory_type.is_none_or(|data_type| typed(key, data_type)) {
                 features.push(feature);
             }
         }
@@ -501,8 +519,9 @@ fn read_i16(od: &DynamicOd, key: ObjectKey) -> Option<i16> {
 ///   invalid (COB-ID bit 31 set).
 ///
 /// 1000h is then set (or added) to [`Cia401Io::device_type`] of the result: 00070191h for the
-/// objects added here, 000F0191h if the dictionary also has analogue outputs (6411h). A dictionary
-/// too small for the new entries is rebuilt with a larger capacity.
+/// objects added here, 000F0191h if the dictionary also has analogue outputs (6411h); a 1000h that
+/// already says profile 401 (bits 15..0 = 0191h) is the description's own and is kept. A
+/// dictionary too small for the new entries is rebuilt with a larger capacity.
 pub fn install_objects(od: &mut DynamicOd, node_id: u8) -> Result<Vec<u16>, InstallError> {
     if !(1..=127).contains(&node_id) {
         return Err(InstallError::InvalidNodeId { node_id });
@@ -670,6 +689,7 @@ pub fn install_objects(od: &mut DynamicOd, node_id: u8) -> Result<Vec<u16>, Inst
     }
     let device_type = Cia401Io::device_type(od);
     match od.get(DEVICE_TYPE) {
+        Some(existing) if existing.data_type() == T::UNSIGNED32 && is_profile_401(existing.value()) => {}
         Some(existing) if existing.value().len() == 4 => {
             od.set_value(DEVICE_TYPE, &device_type.to_le_bytes())?
         }
@@ -688,6 +708,11 @@ pub fn install_objects(od: &mut DynamicOd, node_id: u8) -> Result<Vec<u16>, Inst
         }
     }
     Ok(added)
+}
+
+/// Whether a 1000h value says profile 401 in bits 15..0.
+fn is_profile_401(value: &[u8]) -> bool {
+    matches!(value, [lo, hi, _, _] if u32::from(u16::from_le_bytes([*lo, *hi])) == PROFILE_401)
 }
 
 /// A mapping entry for `key` with `bits` bits (`index << 16 | sub << 8 | bits`).
@@ -734,6 +759,60 @@ mod tests {
         let mut io = Cia401Io::new();
         assert!(io.reset(T0, &mut od).is_empty());
         (io, od)
+    }
+
+    #[test]
+    fn a_cia401_io_device_is_profile_401_with_digital_io() {
+        let with = |device_type: u32, index: Option<u16>| {
+            let mut od = DynamicOd::with_capacity(4);
+            od.insert(
+                Entry::new(
+                    DEVICE_TYPE,
+                    DataType::UNSIGNED32,
+                    Access::Ro,
+                    &device_type.to_le_bytes(),
+                )
+                .unwrap(),
+            )
+            .unwrap();
+            if let Some(index) = index {
+                od.insert(
+                    Entry::new(ObjectKey::new(index, 1), DataType::UNSIGNED8, Access::Rw, &[0]).unwrap(),
+                )
+                .unwrap();
+            }
+            is_cia401_io(&od)
+        };
+        assert!(with(0x000F_0191, Some(0x6000)));
+        assert!(
+            with(0x0000_0191, Some(0x6200)),
+            "the I/O bits 23..16 do not decide"
+        );
+        assert!(!with(0x000F_0191, None), "no digital I/O object");
+        assert!(!with(0x0002_0192, Some(0x6200)), "CiA 402 is not CiA 401");
+        assert!(!with(0x0191_0000, Some(0x6000)), "401 in the wrong bits");
+    }
+
+    /// A vendor's own 2000h–2002h (Elcom's e-RIO has a RECORD "Layer Settings" at 2000h) are not the
+    /// factory test registers: the inputs keep coming from the terminals.
+    #[test]
+    fn factory_registers_of_another_type_are_not_taken_for_the_test_registers() {
+        let mut od = base_od();
+        let record = [
+            Entry::new(FACTORY_TEST, DataType::UNSIGNED8, Access::Const, &[2]).unwrap(),
+            Entry::new(FACTORY_DIGITAL, DataType::UNSIGNED32, Access::Rw, &[0; 4]).unwrap(),
+        ];
+        for entry in record {
+            od.insert(entry).unwrap();
+        }
+        install_objects(&mut od, 5).unwrap();
+        let mut io = Cia401Io::new();
+        io.reset(T0, &mut od);
+        assert!(!io.supports(Feature::FactoryTest));
+        assert!(!io.supports(Feature::FactoryDigitalInputs));
+        assert!(!io.factory_test_active(&od));
+        io.set_digital_inputs(T0, 0x21, &mut od).unwrap();
+        assert_eq!(od.read(READ_INPUT).unwrap(), [0x21]);
     }
 
     /// An SDO download of `data` to `key`, then the application's reaction.
@@ -1123,6 +1202,44 @@ mod tests {
         );
         assert_eq!(read_uint(&od, ObjectKey::new(0x1801, 1)), Some(0x2FF));
         assert!(od.get(ObjectKey::new(FACTORY_ANALOG, 4)).is_some());
+    }
+
+    /// A description that says it is a CiA 401 device keeps its 1000h (all four I/O kinds here,
+    /// though it has digital I/O only): the application adds objects, it does not rewrite the
+    /// identity a master reads.
+    #[test]
+    fn install_objects_keeps_a_profile_401_device_type() {
+        let mut od = DynamicOd::with_capacity(4);
+        od.insert(
+            Entry::new(
+                DEVICE_TYPE,
+                DataType::UNSIGNED32,
+                Access::Ro,
+                &0x000F_0191u32.to_le_bytes(),
+            )
+            .unwrap(),
+        )
+        .unwrap();
+        install_objects(&mut od, 5).unwrap();
+        assert_eq!(read_uint(&od, DEVICE_TYPE), Some(0x000F_0191));
+        let mut other = DynamicOd::with_capacity(4);
+        other
+            .insert(
+                Entry::new(
+                    DEVICE_TYPE,
+                    DataType::UNSIGNED32,
+                    Access::Ro,
+                    &0x0002_0192u32.to_le_bytes(),
+                )
+                .unwrap(),
+            )
+            .unwrap();
+        install_objects(&mut other, 5).unwrap();
+        assert_eq!(
+            read_uint(&other, DEVICE_TYPE),
+            Some(0x0007_0191),
+            "another profile becomes 401"
+        );
     }
 
     #[test]

@@ -43,7 +43,9 @@
 //! Choices:
 //! - The LSS slave always runs when 1018h:01 exists, whatever the EDS's `LSS_Supported` says: a
 //!   simulated device is more useful with LSS, and the fault catalogue switches it off. Store
-//!   configuration answers "not supported" (no LSS storage yet).
+//!   configuration succeeds: the default storage keeps the node-ID and bit rate in memory (a
+//!   simulated device keeps them in its state file, [`Device::with_lss_storage`]), and NMT reset
+//!   node, the device's power cycle, starts it with them again.
 //! - Frames from other cores during the silence of an LSS bit rate switch are dropped, not held:
 //!   CiA 305 forbids sending then, and a late heartbeat is worse than a missing one.
 //! - The pristine copy of a device built with [`Device::from_eds`] is rebuilt with the new
@@ -55,8 +57,9 @@
 //! Faults ([`Device::with_faults`], the catalogue in [`crate::faults`]) are applied around the
 //! cores, never inside them: received frames pass the fault layer before routing, sent frames
 //! pass it (tagged with the core that made them) after collection, and the three "accepted
-//! anyway" faults and `store-ignored` act in the device's own SDO download checks. Without faults
-//! every one of these steps is the identity.
+//! anyway" faults and `store-ignored` act in the device's own SDO download hooks, which the SDO
+//! server calls at the end of every download, expedited, segmented or block. Without faults every
+//! one of these steps is the identity.
 
 use std::collections::{BTreeSet, VecDeque};
 
@@ -70,10 +73,10 @@ use crate::application::{AppChanges, Application};
 use crate::emcy::{EmcyEvent, EmcyProducer};
 use crate::faults::{Fault, FaultLayer, FaultSet, Source};
 use crate::heartbeat::{ConsumerEvent, ErrorControl, ErrorControlEvent, HeartbeatConsumer};
-use crate::lss_slave::{BitTiming, LssEvent, LssSlave, LssStorage, LssStoreError};
+use crate::lss_slave::{BitTiming, LssEvent, LssSlave, LssStorage, LssStoreError, StoredConfiguration};
 use crate::nmt_slave::{CommService, NmtEvent, NmtSlave, NmtSlaveState};
 use crate::od_build::{BuildNote, OdBuildError, build_od};
-use crate::pdo::{Direction, DummyUsage, Mapped, PdoEngine, PdoEvent, PdoRef};
+use crate::pdo::{Direction, DummyUsage, Mapped, PdoConfigError, PdoEngine, PdoEvent, PdoRef};
 use crate::sdo_server::{self, SdoHooks, SdoServer};
 use crate::store::{MemoryStore, ParameterGroup, ParameterStore, StorageError, StoreEvent, StoreRestore};
 use crate::sync::{EMCY_SYNC_LENGTH, SyncEvent, SyncService};
@@ -214,6 +217,8 @@ pub struct Device {
     /// Sources of the active 8130h EMCY: consumed nodes lost, and 0 for life guarding.
     lost: BTreeSet<u8>,
     reset_application: bool,
+    /// SDO downloads are refused with 0800 0022h while Operational.
+    downloads_refused_in_operational: bool,
     booted: bool,
     faults: FaultLayer,
     transmit: VecDeque<CanFrame>,
@@ -311,6 +316,7 @@ impl Device {
             app,
             lost: BTreeSet::new(),
             reset_application: false,
+            downloads_refused_in_operational: false,
             booted: false,
             faults: FaultLayer::new(FaultSet::none()),
             transmit: VecDeque::new(),
@@ -344,6 +350,16 @@ impl Device {
     /// accepts the store and keeps the node-ID and bit rate for as long as the `Device` lives.
     pub fn with_lss_storage(mut self, storage: Box<dyn LssStorage>) -> Device {
         self.lss_storage = storage;
+        self
+    }
+
+    /// Makes the device refuse every SDO download while Operational with 0800 0022h ("data cannot
+    /// be transferred or stored to the application because of the present device state", CiA 301),
+    /// as devices do that take parameters only in Pre-operational; uploads still work, and so do
+    /// downloads in Pre-operational.
+    pub fn with_downloads_refused_in_operational(mut self) -> Device {
+        self.downloads_refused_in_operational = true;
+        self.lock_downloads();
         self
     }
 
@@ -500,7 +516,7 @@ impl Device {
                         [expected, received, 0, 0, 0],
                     );
                 }
-                SyncEvent::WindowClosed => {}
+                SyncEvent::WindowClosed => self.pdo.window_closed(),
             }
             self.events.push_back(DeviceEvent::Sync(event));
         }
@@ -577,75 +593,6 @@ impl Device {
         self.transmit.extend(frames);
     }
 
-    /// `limit-not-enforced`, `unmappable-accepted`, `pdo-cob-id-unchecked`: an expedited download
-    /// a correct device refuses for that reason is stored and confirmed anyway. `true` when the
-    /// frame was taken so.
-    fn fault_accepts(&mut self, now: Instant, frame: &CanFrame) -> bool {
-        let wanted = [
-            Fault::LimitNotEnforced,
-            Fault::UnmappableAccepted,
-            Fault::PdoCobIdUnchecked,
-        ];
-        if !wanted.iter().any(|f| self.faults.has(*f)) {
-            return false;
-        }
-        let Some((server_index, server)) = self.sdo.iter().find(|(_, s)| s.rx_id() == frame.id()) else {
-            return false;
-        };
-        let (server_index, tx) = (*server_index, server.tx_id());
-        let &[command, lo, hi, sub, ref payload @ ..] = frame.data() else {
-            return false;
-        };
-        // Expedited download initiate only (ccs 1, e = 1), while the server is idle.
-        if command & 0xE2 != 0x22 || payload.len() != 4 || server.is_busy() {
-            return false;
-        }
-        let len = if command & 0x01 != 0 {
-            4 - usize::from((command >> 2) & 0x03)
-        } else {
-            4
-        };
-        let key = ObjectKey::new(u16::from_le_bytes([lo, hi]), sub);
-        let data = &payload[..len];
-        let refused = match self.pdo.check_write(key, data, &self.od) {
-            Err(crate::pdo::PdoConfigError::NotMappable { .. }) => self.faults.has(Fault::UnmappableAccepted),
-            Err(crate::pdo::PdoConfigError::RestrictedCanId { .. }) => {
-                self.faults.has(Fault::PdoCobIdUnchecked)
-            }
-            Err(_) => false,
-            Ok(()) => {
-                // Probe the dictionary's own checks, then put the old value back.
-                let Some(old) = self.od.get(key).map(|e| e.value().to_vec()) else {
-                    return false;
-                };
-                match self.od.write(key, data) {
-                    Ok(()) => {
-                        let _ = self.od.set_value(key, &old);
-                        false
-                    }
-                    Err(error) => {
-                        self.faults.has(Fault::LimitNotEnforced)
-                            && matches!(error.abort_code(), abort::VALUE_TOO_HIGH | abort::VALUE_TOO_LOW)
-                    }
-                }
-            }
-        };
-        if !refused || self.od.set_value(key, data).is_err() {
-            return false;
-        }
-        if let Ok(response) = CanFrame::new(tx, &[0x60, lo, hi, sub, 0, 0, 0, 0]) {
-            let mut out = Vec::new();
-            self.faults.outbound(now, Source::Sdo, response, &mut out);
-            self.transmit.extend(out);
-        }
-        self.events.push_back(DeviceEvent::Sdo {
-            server: server_index,
-            event: sdo_server::Event::Written { key },
-        });
-        self.after_download(now, key);
-        true
-    }
-
     /// `guarding-and-heartbeat`: a node guarding request is answered even while heartbeat runs
     /// (error control ignores it then, as CiA 301 wants).
     fn fault_guarding(&mut self, now: Instant, frame: &CanFrame) {
@@ -674,13 +621,20 @@ impl Device {
                 self.sync.set_state(now, to);
                 self.time.set_state(now, to);
                 self.pdo.set_state(now, to);
+                self.lock_downloads();
                 if !to.is_active(CommService::Sdo) {
                     for (_, server) in &mut self.sdo {
                         server.reset();
                     }
                 }
             }
-            NmtEvent::ResetApplication => self.reset_application = true,
+            NmtEvent::ResetApplication => {
+                self.reset_application = true;
+                // Reset node is the device's power cycle: it starts with what LSS stored.
+                if let (Some(lss), Some(stored)) = (&mut self.lss, self.lss_storage.stored()) {
+                    lss.restore_stored(stored);
+                }
+            }
             NmtEvent::ResetCommunication => {
                 let application = std::mem::take(&mut self.reset_application);
                 self.reset(now, application);
@@ -746,12 +700,15 @@ impl Device {
 
     /// CiA 301 1029h sub 1, the reaction to a communication error (heartbeat or life guarding
     /// lost; reference §2.8): 0 = Pre-operational if Operational, 1 = no change, 2 = Stopped.
-    /// Without 1029h (or with a reserved value) the state is left alone: CiA 301 makes the reaction
-    /// of such a device manufacturer-specific, and changing state unasked would surprise a tester.
+    /// Without 1029h sub 1 the device reacts as CiA 301 describes for every device: a serious
+    /// failure detected while Operational makes it enter Pre-operational; 1029h only makes that
+    /// configurable. CCT Heartbeat 07 expects EMCY 8130h and that change. Values 3 and up are
+    /// reserved or manufacturer-specific: no change.
     fn error_behaviour(&mut self) {
+        const PRE_OPERATIONAL_IF_OPERATIONAL: u8 = 0;
         let reaction = match self.od.get(ObjectKey::new(0x1029, 1)).map(|e| e.value()) {
             Some(&[value]) => value,
-            _ => return,
+            _ => PRE_OPERATIONAL_IF_OPERATIONAL,
         };
         match (reaction, self.nmt.state()) {
             (0, NmtSlaveState::Operational) => self.nmt.enter_local(NmtSlaveState::PreOperational),
@@ -963,6 +920,15 @@ impl Device {
         self.nmt.set_auto_start(self_starting);
     }
 
+    /// Tells every SDO server whether the present NMT state lets downloads through
+    /// ([`Device::with_downloads_refused_in_operational`]).
+    fn lock_downloads(&mut self) {
+        let locked = self.downloads_refused_in_operational && self.nmt.state() == NmtSlaveState::Operational;
+        for (_, server) in &mut self.sdo {
+            server.set_downloads_allowed(!locked);
+        }
+    }
+
     fn refused(&mut self, key: ObjectKey, abort_code: u32) {
         self.events
             .push_back(DeviceEvent::ConfigRefused(ConfigRefused { key, abort_code }));
@@ -1005,6 +971,7 @@ impl Device {
             };
             self.sdo.push((index, server));
         }
+        self.lock_downloads();
         // Servers that went away may still hold a response to the download that removed them.
         for (_, mut server) in old {
             self.transmit
@@ -1020,9 +987,11 @@ impl Core for Device {
     /// 301 runs that service.
     fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
         if !self.configured {
-            // CiA 305: a node without a node-ID takes part in LSS only.
-            if let Some(lss) = &mut self.lss {
-                lss.handle_frame_with(now, frame, &mut *self.lss_storage);
+            // CiA 305: a node without a node-ID takes part in LSS only; its LSS faults hold too.
+            if let Some(frame) = self.faults.inbound(frame, self.node, false)
+                && let Some(lss) = &mut self.lss
+            {
+                lss.handle_frame_with(now, &frame, &mut *self.lss_storage);
             }
             self.pump(now);
             return;
@@ -1033,10 +1002,6 @@ impl Core for Device {
         };
         let frame = &frame;
         let state = self.nmt.state();
-        if sdo_request && state.is_active(CommService::Sdo) && self.fault_accepts(now, frame) {
-            self.pump(now);
-            return;
-        }
         if state.is_active(CommService::ErrorControl) {
             self.fault_guarding(now, frame);
         }
@@ -1057,7 +1022,7 @@ impl Core for Device {
                 consumer: &self.consumer,
                 store: &mut self.store,
                 params: &mut *self.params,
-                store_ignored: self.faults.has(Fault::StoreIgnored),
+                faults: self.faults.faults(),
             };
             for (_, server) in &mut self.sdo {
                 server.handle_frame_with(now, frame, &mut self.od, &mut hooks);
@@ -1168,13 +1133,21 @@ struct Hooks<'a> {
     consumer: &'a HeartbeatConsumer,
     store: &'a mut StoreRestore,
     params: &'a mut dyn ParameterStore,
-    /// `store-ignored`: `save` to 1010h is confirmed without storing.
-    store_ignored: bool,
+    /// The device's defects: `store-ignored` confirms `save` to 1010h without storing;
+    /// `unmappable-accepted` and `pdo-cob-id-unchecked` let a mapping or COB-ID the PDO rules refuse
+    /// through; `limit-not-enforced` stores values outside LowLimit..HighLimit. All hold in every
+    /// transfer mode, since the SDO server calls these hooks at the end of each.
+    faults: FaultSet,
 }
 
 impl SdoHooks for Hooks<'_> {
     fn check_download(&mut self, key: ObjectKey, data: &[u8], od: &DynamicOd) -> Result<(), u32> {
-        self.pdo.check_write(key, data, od).map_err(|e| e.abort_code())?;
+        match self.pdo.check_write(key, data, od) {
+            Err(PdoConfigError::NotMappable { .. }) if self.faults.contains(Fault::UnmappableAccepted) => {}
+            Err(PdoConfigError::RestrictedCanId { .. }) if self.faults.contains(Fault::PdoCobIdUnchecked) => {
+            }
+            result => result.map_err(|e| e.abort_code())?,
+        }
         self.sync.check_download(key, data).map_err(|e| e.abort_code())?;
         self.time.check_download(key, data).map_err(|e| e.abort_code())?;
         match (key.index, key.sub, data) {
@@ -1195,13 +1168,24 @@ impl SdoHooks for Hooks<'_> {
             }
             _ => {}
         }
-        if self.store_ignored && key.index == 0x1010 && data == b"save" {
+        if self.faults.contains(Fault::StoreIgnored) && key.index == 0x1010 && data == b"save" {
             return Ok(());
         }
         // Last: a `save` here stores the dictionary at once, so every other check must have passed.
         self.store
             .check_download(key, data, od, self.params)
             .map_err(|e| e.abort_code())
+    }
+
+    fn write(&mut self, key: ObjectKey, data: &[u8], od: &mut DynamicOd) -> Result<(), OdError> {
+        match od.write(key, data) {
+            Err(OdError::ValueTooHigh { .. } | OdError::ValueTooLow { .. })
+                if self.faults.contains(Fault::LimitNotEnforced) =>
+            {
+                od.set_value(key, data)
+            }
+            result => result,
+        }
     }
 
     fn check_upload(&mut self, key: ObjectKey, _od: &DynamicOd) -> Result<(), u32> {
@@ -1218,16 +1202,21 @@ impl SdoHooks for Hooks<'_> {
     }
 }
 
-/// The default LSS storage: accepts store configuration and keeps what was stored in memory.
+/// The default LSS storage: accepts store configuration and keeps what was stored in memory for as
+/// long as the `Device` lives, so NMT reset node starts the device with it again.
 #[derive(Debug, Default)]
 struct StoredLss {
-    stored: Option<(Option<NodeId>, Option<BitTiming>)>,
+    stored: Option<StoredConfiguration>,
 }
 
 impl LssStorage for StoredLss {
     fn store(&mut self, node_id: Option<NodeId>, bit_timing: Option<BitTiming>) -> Result<(), LssStoreError> {
-        self.stored = Some((node_id, bit_timing));
+        self.stored = Some(StoredConfiguration { node_id, bit_timing });
         Ok(())
+    }
+
+    fn stored(&self) -> Option<StoredConfiguration> {
+        self.stored
     }
 }
 

@@ -43,7 +43,7 @@ pub enum Fault {
     NoBootUp,
     /// The boot-up message on 700h + node-ID + 1.
     BootUpWrongId,
-    /// Heartbeat and guarding answers report the NMT command specifier instead of the state.
+    /// Heartbeat and guarding answers report a valid but wrong NMT state.
     HeartbeatStateWrong,
     /// Every heartbeat is sent twice, 1 ms apart.
     HeartbeatTooFast,
@@ -163,10 +163,11 @@ impl Fault {
                  boot-up's CAN-ID against the node-ID it set. Field experience."
             }
             Fault::HeartbeatStateWrong => {
-                "Heartbeats and node guarding answers carry the NMT command specifier instead of the \
-                 state: 01h for Operational, 02h for Stopped, 80h for Pre-operational (guarding answers \
-                 keep their toggle bit in Operational and Stopped). A test should check the state \
-                 byte in every NMT state. Field experience (command and state codes confused)."
+                "Heartbeats and node guarding answers carry a valid but wrong state, as from a state \
+                 table read one row off: 05h (Operational) in Pre-operational, 04h (Stopped) in \
+                 Operational, 7Fh (Pre-operational) in Stopped; guarding answers keep their toggle bit. \
+                 A consumer sees the node in the wrong state, never a lost heartbeat. A test should \
+                 check the state byte in every NMT state. Field experience."
             }
             Fault::HeartbeatTooFast => {
                 "Every heartbeat is followed by a copy 1 ms later, so the measured interval drops to \
@@ -272,9 +273,10 @@ impl Fault {
             }
             Fault::LssStateNotChanged => {
                 "The LSS slave never changes from waiting to configuration: switch state global and \
-                 selective are ignored, so configuration commands are not answered. A test should \
-                 switch to configuration and configure the node-ID. From the EnergyBus paper (missing \
-                 state change in the LSS state machine during configuration)."
+                 selective, and the last fastscan step that selects a device, are ignored, so \
+                 configuration commands are not answered and `lss scan --assign` configures nothing. \
+                 A test should switch to configuration (each way) and configure the node-ID. From the \
+                 EnergyBus paper (missing state change in the LSS state machine during configuration)."
             }
         }
     }
@@ -473,7 +475,15 @@ impl FaultLayer {
             if self.has(Fault::NoLss) {
                 return None;
             }
-            if self.has(Fault::LssStateNotChanged) && matches!(data, [0x04, 0x01, ..] | [0x40..=0x43, ..]) {
+            // Every request that would move the slave to configuration: switch state global to
+            // configuration, switch state selective, and the last fastscan step (bit checked 0 on
+            // the last part, LSSNext wrapping back), which selects the device it matches.
+            let to_configuration = match *data {
+                [0x04, 0x01, ..] | [0x40..=0x43, ..] => true,
+                [0x51, _, _, _, _, 0, sub, next] => next < sub,
+                _ => false,
+            };
+            if self.has(Fault::LssStateNotChanged) && to_configuration {
                 return None;
             }
         }
@@ -583,18 +593,14 @@ impl FaultLayer {
         if self.has(Fault::HeartbeatStateWrong)
             && let [byte] = bytes
         {
+            // Valid states only: a consumer must not be able to drop the frame as malformed.
             let state = match *byte & 0x7F {
-                0x05 => 0x01,
-                0x04 => 0x02,
-                0x7F => 0x80,
+                0x7F => 0x05,
+                0x05 => 0x04,
+                0x04 => 0x7F,
                 other => other,
             };
-            // Pre-operational's 80h takes the place of the toggle bit; the other states keep it.
-            *byte = if state == 0x80 {
-                state
-            } else {
-                (*byte & 0x80) | state
-            };
+            *byte = (*byte & 0x80) | state;
         }
     }
 

@@ -38,8 +38,10 @@
 //! [`LssEvent::SwitchBitRate`] (switch now) and [`LssEvent::BitTimingSilenceEnded`];
 //! [`LssSlave::is_silent`] tells the `Device` to hold back every other core's frames meanwhile.
 //!
-//! Store configuration hands the pending node-ID and bit rate to an [`LssStorage`] the `Device`
-//! implements; `()` stores nothing and answers error code 1, "storing not supported".
+//! Store configuration hands the pending node-ID and bit rate to an [`LssStorage`]: the `Device`'s
+//! default keeps them in memory and starts with them again after NMT reset node (its power cycle),
+//! the simulator's keeps them in its state file; `()` stores nothing and answers error code 1,
+//! "storing not supported", for a slave without storage.
 
 use std::collections::VecDeque;
 use std::time::Duration;
@@ -140,12 +142,27 @@ impl LssStoreError {
     }
 }
 
-/// Where store configuration (17h) puts the pending LSS configuration; the `Device` implements it
-/// (for example in the file of the simulated device). `()` supports no storing.
+/// What store configuration (17h) saved: the node-ID and bit rate a device starts with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct StoredConfiguration {
+    /// The node-ID (`None` = unconfigured, FFh).
+    pub node_id: Option<NodeId>,
+    /// The bit rate, if one was configured or known.
+    pub bit_timing: Option<BitTiming>,
+}
+
+/// Where store configuration (17h) puts the pending LSS configuration; the `Device` holds one (in
+/// memory by default, in a file for the simulated device). `()` supports no storing.
 pub trait LssStorage {
     /// Stores the pending node-ID (`None` = unconfigured, FFh) and the pending bit rate (`None`
     /// when none was ever configured or known), to be used at the next power-on.
     fn store(&mut self, node_id: Option<NodeId>, bit_timing: Option<BitTiming>) -> Result<(), LssStoreError>;
+
+    /// What was stored last, which the next power-on (and NMT reset node, a device's software power
+    /// cycle) makes pending again; `None` while nothing was stored.
+    fn stored(&self) -> Option<StoredConfiguration> {
+        None
+    }
 }
 
 impl LssStorage for () {
@@ -351,6 +368,16 @@ impl LssSlave {
     /// The bit rate configure bit timing set, if any (else the active one).
     pub fn pending_bit_timing(&self) -> Option<BitTiming> {
         self.pending_timing
+    }
+
+    /// Power-on with what store configuration saved (`Device` calls it at NMT reset node): the stored
+    /// node-ID and bit rate become pending, as a device reads them from its non-volatile memory at
+    /// start-up; the next reset communication makes them active.
+    pub fn restore_stored(&mut self, stored: StoredConfiguration) {
+        self.pending_node = stored.node_id;
+        if stored.bit_timing.is_some() {
+            self.pending_timing = stored.bit_timing;
+        }
     }
 
     /// NMT reset communication: the pending node-ID becomes active (CiA 305). Returns the node-ID

@@ -31,7 +31,9 @@
 //! inhibit time.
 //!
 //! RPDO transmission types 0–240 buffer the received data and write it into the mapped entries on
-//! the next SYNC; 254 and 255 write it at once. An RPDO shorter than its mapping is not processed
+//! the next SYNC; 254 and 255 write it at once. With a synchronous window (1007h), synchronous
+//! RPDOs that arrive after the window has closed are discarded until the next SYNC
+//! ([`PdoEvent::RpdoLate`]; CiA 301 §7.2.5.1, as lely does). An RPDO shorter than its mapping is not processed
 //! and one longer than its mapping is processed (extra bytes ignored); both are reported as
 //! [`PdoEvent::RpdoTooShort`] / [`PdoEvent::RpdoTooLong`] for the `Device` to send EMCY 8210h /
 //! 8220h, and [`PdoEvent::RpdoLengthOk`] reports the next correct one. A non-zero RPDO event timer
@@ -52,11 +54,13 @@
 //!   (CANopenNode; in the CCT's accepted set; lely answers 0609 0030h);
 //! - a mapped object or sub-index that does not exist: 0602 0000h for both (0609 0011h is not in the
 //!   set the CCT accepts for this step);
-//! - a mapping length larger than the object: 0604 0041h (CANopenNode); a length of 0, a
-//!   variable-length object (strings, DOMAIN) and MPDO (sub-index 0 = FEh/FFh): 0604 0043h, general
-//!   parameter incompatibility;
-//! - sub-index 0 above the number of mapping entries the object has, or above 40h, and more than 64
-//!   bits in total: 0604 0042h (CANopenNode, in the CCT set);
+//! - a mapping length larger than the object (CANopenNode), a length of 0 and a variable-length
+//!   object (strings, DOMAIN): 0604 0041h, the object cannot be mapped so (in the set the CCT
+//!   accepts for a mapping entry, reference §3.4);
+//! - sub-index 0 above the number of mapping entries the object has, or above 40h, MPDO (sub-index
+//!   0 = FEh/FFh, not supported) and more than 64 bits in total: 0604 0042h (CANopenNode, in the
+//!   CCT set for enabling a mapping);
+//! - every refusal with its code and reason is tabled in `docs/pdo-mapping-refusals.md`;
 //! - transmission types 252 and 253 are supported (lely) rather than refused (CANopenNode), but
 //!   refused with 0609 0030h while COB-ID bit 30 forbids RTR, and bit 30 cannot be set while the
 //!   type is 252 or 253 (lely);
@@ -303,16 +307,31 @@ pub enum PdoConfigError {
         /// The total length in bits.
         bits: u32,
     },
-    /// A mapping the device cannot carry out: length 0, a variable-length object, or MPDO
-    /// (0604 0043h).
-    #[error("{pdo}: mapping entry {entry:#010X} is incompatible with this device ({reason})")]
-    Incompatible {
+    /// Sub-index 0 = FEh or FFh, a multiplexed PDO, which the device does not support
+    /// (0604 0042h: a number of mapped objects the PDO cannot take).
+    #[error("{pdo}: sub-index 0 = {count:02X}h asks for an MPDO, which this device does not support")]
+    MpdoNotSupported {
         /// The PDO.
         pdo: PdoRef,
-        /// The mapping entry (or the sub-index 0 value for MPDO).
+        /// The value written to sub-index 0.
+        count: u8,
+    },
+    /// A mapping entry with length 0 (0604 0041h: nothing of the object can be mapped so).
+    #[error("{pdo}: mapping entry {entry:#010X} has length 0; give the length in bits")]
+    ZeroLength {
+        /// The PDO.
+        pdo: PdoRef,
+        /// The mapping entry.
         entry: u32,
-        /// Why.
-        reason: &'static str,
+    },
+    /// A variable-length object (strings, DOMAIN) in a mapping (0604 0041h: only fixed-size objects
+    /// can be mapped).
+    #[error("{pdo}: {key} has no fixed size, so it cannot be mapped into a PDO")]
+    VariableLength {
+        /// The PDO.
+        pdo: PdoRef,
+        /// The object mapped.
+        key: ObjectKey,
     },
 }
 
@@ -331,13 +350,13 @@ impl PdoConfigError {
                 abort::UNSUPPORTED_ACCESS
             }
             PdoConfigError::ObjectDoesNotExist { .. } => abort::OBJECT_DOES_NOT_EXIST,
-            PdoConfigError::NotMappable { .. } | PdoConfigError::MappingLengthTooLong { .. } => {
-                abort::OBJECT_NOT_MAPPABLE
-            }
-            PdoConfigError::TooManyObjects { .. } | PdoConfigError::LengthExceeded { .. } => {
-                abort::PDO_LENGTH_EXCEEDED
-            }
-            PdoConfigError::Incompatible { .. } => abort::PARAMETER_INCOMPATIBLE,
+            PdoConfigError::NotMappable { .. }
+            | PdoConfigError::MappingLengthTooLong { .. }
+            | PdoConfigError::ZeroLength { .. }
+            | PdoConfigError::VariableLength { .. } => abort::OBJECT_NOT_MAPPABLE,
+            PdoConfigError::TooManyObjects { .. }
+            | PdoConfigError::LengthExceeded { .. }
+            | PdoConfigError::MpdoNotSupported { .. } => abort::PDO_LENGTH_EXCEEDED,
         }
     }
 }
@@ -395,6 +414,12 @@ pub enum PdoEvent {
     },
     /// An RPDO of the right length arrived after a length error: clear 8210h / 8220h.
     RpdoLengthOk {
+        /// The RPDO number.
+        number: u16,
+    },
+    /// A synchronous RPDO arrived after the synchronous window (1007h) had closed and was
+    /// discarded; synchronous RPDOs count again from the next SYNC (CiA 301 §7.2.5.1).
+    RpdoLate {
         /// The RPDO number.
         number: u16,
     },
@@ -547,6 +572,9 @@ pub struct PdoEngine {
     dummies: DummyUsage,
     rpdos: Vec<Rpdo>,
     tpdos: Vec<Tpdo>,
+    /// The synchronous window (1007h) after the last SYNC has closed: synchronous RPDOs are
+    /// discarded until the next SYNC.
+    window_closed: bool,
     transmit: VecDeque<CanFrame>,
     events: VecDeque<PdoEvent>,
 }
@@ -566,6 +594,7 @@ impl PdoEngine {
             dummies: DummyUsage::NONE,
             rpdos: Vec::new(),
             tpdos: Vec::new(),
+            window_closed: false,
             transmit: VecDeque::new(),
             events: VecDeque::new(),
         }
@@ -703,6 +732,7 @@ impl PdoEngine {
         let was = self.operational();
         self.state = state;
         let is = self.operational();
+        self.window_closed = false;
         if was && !is {
             for tpdo in &mut self.tpdos {
                 tpdo.stop();
@@ -836,11 +866,7 @@ impl PdoEngine {
         entries: &[u32],
     ) -> Result<Vec<Mapped>, PdoConfigError> {
         if count >= 0xFE {
-            return Err(PdoConfigError::Incompatible {
-                pdo,
-                entry: u32::from(count),
-                reason: "MPDO is not supported",
-            });
+            return Err(PdoConfigError::MpdoNotSupported { pdo, count });
         }
         let available = od
             .object(pdo.mapping_index())
@@ -871,18 +897,13 @@ impl PdoEngine {
     fn check_entry(&self, od: &DynamicOd, pdo: PdoRef, raw: u32) -> Result<Mapped, PdoConfigError> {
         let key = ObjectKey::new((raw >> 16) as u16, (raw >> 8) as u8);
         let bits = raw as u8;
-        let incompatible = |reason| PdoConfigError::Incompatible {
-            pdo,
-            entry: raw,
-            reason,
-        };
         if matches!(key.index, 1..=7) && key.sub == 0 && od.object(key.index).is_empty() {
             if !self.dummies.allows(key.index) {
                 return Err(PdoConfigError::ObjectDoesNotExist { pdo, key });
             }
             let max = canopener_od::DataType(key.index).byte_size().unwrap_or(0) as u32 * 8;
             if bits == 0 {
-                return Err(incompatible("mapping length 0"));
+                return Err(PdoConfigError::ZeroLength { pdo, entry: raw });
             }
             if u32::from(bits) > max {
                 return Err(PdoConfigError::MappingLengthTooLong { pdo, key, bits, max });
@@ -900,10 +921,10 @@ impl PdoEngine {
             return Err(PdoConfigError::NotMappable { pdo, key });
         }
         if entry.data_type().is_variable_length() || entry.data_type().byte_size().is_none() {
-            return Err(incompatible("only fixed-size objects can be mapped"));
+            return Err(PdoConfigError::VariableLength { pdo, key });
         }
         if bits == 0 {
-            return Err(incompatible("mapping length 0"));
+            return Err(PdoConfigError::ZeroLength { pdo, entry: raw });
         }
         // The stored bytes bound the length, so a BOOLEAN maps as 1 or 8 bits.
         let max = (entry.value().len().min(8) * 8) as u32;
@@ -1073,7 +1094,11 @@ impl PdoEngine {
         let n = rpdo.bytes.min(8);
         buf[..n].copy_from_slice(&data[..n]);
         if rpdo.comm.transmission_type <= 240 {
-            rpdo.buffered = Some(buf);
+            if self.window_closed {
+                self.events.push_back(PdoEvent::RpdoLate { number });
+            } else {
+                rpdo.buffered = Some(buf);
+            }
         } else {
             write_mapped(od, &rpdo.map, buf);
             self.events.push_back(PdoEvent::RpdoWritten { number });
@@ -1087,6 +1112,7 @@ impl PdoEngine {
         if !self.operational() {
             return;
         }
+        self.window_closed = false;
         for rpdo in &mut self.rpdos {
             if let Some(buf) = rpdo.buffered.take() {
                 write_mapped(od, &rpdo.map, buf);
@@ -1132,6 +1158,15 @@ impl PdoEngine {
                 self.transmit.push_back(frame);
             }
         }
+    }
+
+    /// The synchronous window (1007h) after the last SYNC has closed (CiA 301 §7.2.5.1,
+    /// [`SyncEvent::WindowClosed`](crate::sync::SyncEvent::WindowClosed)): synchronous RPDOs that
+    /// arrive from now until the next SYNC are discarded ([`PdoEvent::RpdoLate`]). Synchronous
+    /// TPDOs need nothing here: the engine sends them the moment the SYNC is handled, inside the
+    /// window, so none is ever pending when it closes.
+    pub fn window_closed(&mut self) {
+        self.window_closed = true;
     }
 
     /// Runs the timers due at `now`: event-driven TPDOs (event timer, end of inhibit time,
@@ -1887,10 +1922,10 @@ mod tests {
             (0x1A00, 0x2002_0020, 0x0604_0041),
             (0x1A00, 0x6000_0110, 0x0604_0041),
             (0x1A00, 0x2004_0009, 0x0604_0041),
-            // 0604 0043h: length 0, variable-length object.
-            (0x1A00, 0x6000_0100, 0x0604_0043),
-            (0x1A00, 0x2001_0010, 0x0604_0043),
-            (0x1600, 0x2001_0010, 0x0604_0043),
+            // 0604 0041h too (in the CCT's set for a mapping entry): length 0, variable-length object.
+            (0x1A00, 0x6000_0100, 0x0604_0041),
+            (0x1A00, 0x2001_0010, 0x0604_0041),
+            (0x1600, 0x2001_0010, 0x0604_0041),
             // accepted: BOOLEAN as 1 or 8 bits, a write-only object into an RPDO
             (0x1A00, 0x2004_0001, 0),
             (0x1600, 0x2002_0020, 0),
@@ -1914,9 +1949,10 @@ mod tests {
         assert_eq!(sdo_write(&mut trace, 0x1A00, 0, 2), Err(0x0604_0042));
         assert_eq!(sdo_write(&mut trace, 0x1A00, 0, 1), Ok(()), "64 bits fit");
         sdo_write(&mut trace, 0x1A00, 0, 0).unwrap();
-        // 0604 0043h: MPDO; enabling re-checks the entries (0602 0000h for an empty one).
-        assert_eq!(sdo_write(&mut trace, 0x1A00, 0, 0xFE), Err(0x0604_0043));
-        assert_eq!(sdo_write(&mut trace, 0x1A00, 0, 0xFF), Err(0x0604_0043));
+        // 0604 0042h: MPDO (in the CCT's set for enabling); enabling re-checks the entries
+        // (0602 0000h for an empty one).
+        assert_eq!(sdo_write(&mut trace, 0x1A00, 0, 0xFE), Err(0x0604_0042));
+        assert_eq!(sdo_write(&mut trace, 0x1A00, 0, 0xFF), Err(0x0604_0042));
         assert_eq!(sdo_write(&mut trace, 0x1A00, 0, 3), Err(0x0602_0000));
         // the errors themselves
         let pdo = PdoRef {
@@ -2079,7 +2115,7 @@ mod tests {
             Err(0x0604_0041),
             "longer than the type"
         );
-        assert_eq!(sdo_write(&mut trace, 0x1600, 1, 0x0005_0000), Err(0x0604_0043));
+        assert_eq!(sdo_write(&mut trace, 0x1600, 1, 0x0005_0000), Err(0x0604_0041));
     }
 
     #[test]

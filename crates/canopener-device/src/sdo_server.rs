@@ -99,6 +99,13 @@ pub trait SdoHooks {
         let _ = (key, od);
         Ok(())
     }
+
+    /// Stores a download that passed [`SdoHooks::check_download`], in every transfer mode; by
+    /// default the dictionary's own write, which applies access, length and limits
+    /// ([`DynamicOd::write`]).
+    fn write(&mut self, key: ObjectKey, data: &[u8], od: &mut DynamicOd) -> Result<(), OdError> {
+        od.write(key, data)
+    }
 }
 
 /// No additional checks.
@@ -968,7 +975,7 @@ impl SdoServer {
             return Err(abort::CANNOT_TRANSFER_DEVICE_STATE);
         }
         hooks.check_download(key, value, od)?;
-        od.write(key, value).map_err(|e: OdError| e.abort_code())
+        hooks.write(key, value, od).map_err(|e: OdError| e.abort_code())
     }
 
     /// Sends an abort for `key` and ends the transfer.

@@ -9,8 +9,9 @@
 //! - Communication cycle period 1006h (µs, 0 = no SYNC produced): a producer sends SYNC exactly
 //!   every period on virtual time, the first one a full period after production starts.
 //! - Synchronous window length 1007h (µs, 0 = none): after each SYNC (received or produced) the
-//!   service reports [`SyncEvent::WindowClosed`] when the window ends, so the PDO engine stops
-//!   sending synchronous PDOs.
+//!   service reports [`SyncEvent::WindowClosed`] when the window ends; the `Device` tells the PDO
+//!   engine, which discards synchronous RPDOs until the next SYNC (its synchronous TPDOs go out at
+//!   the SYNC itself, inside the window).
 //! - Synchronous counter overflow value 1019h: 0 = SYNC carries no data (DLC 0); 2..240 = SYNC
 //!   carries a counter byte that starts at 1 and wraps from the overflow value back to 1; 1 and
 //!   241..255 are reserved (0609 0030h). 1019h cannot be written while 1006h ≠ 0 (0800 0022h).
@@ -119,8 +120,9 @@ pub enum SyncEvent {
         /// The counter byte (1..=1019h), if the SYNC carries one.
         counter: Option<u8>,
     },
-    /// The synchronous window (1007h) after the last SYNC has ended: synchronous PDOs not yet sent
-    /// must not be sent for this SYNC any more.
+    /// The synchronous window (1007h) after the last SYNC has ended: synchronous PDOs must not be
+    /// sent or processed for this SYNC any more (CiA 301 §7.2.5.1); RPDOs received from now until
+    /// the next SYNC are discarded.
     WindowClosed,
     /// A SYNC of the wrong length was received and ignored; the `Device` raises EMCY
     /// [`EMCY_SYNC_LENGTH`].

@@ -516,13 +516,39 @@ fn error_behaviour_1029h_on_a_lost_heartbeat() {
         assert_eq!(bus.core.state(), after, "1029h sub 1 = {reaction}");
         assert!(bus.sent().iter().any(|f| f.ends_with("08A#3081110300000000")));
     }
-    // Without 1029h the state stays.
+}
+
+/// CiA 301 1029h: a device that detects a communication error while operational enters
+/// pre-operational by default; 1029h only makes the reaction configurable. CCT Heartbeat 07 expects
+/// EMCY 8130h and that change from a device without 1029h.
+#[test]
+fn a_missing_1029h_enters_pre_operational_on_a_lost_heartbeat() {
     let mut bus = booted(ds301_device(10));
+    assert!(
+        bus.core.od().object(0x1029).is_empty(),
+        "the fixture has no 1029h"
+    );
     bus.rx(ms(0), "000#010A");
     bus.rx(ms(1), &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
     bus.rx(ms(10), "703#05");
-    bus.advance(ms(200));
     assert_eq!(bus.core.state(), NmtSlaveState::Operational);
+    bus.advance(ms(200));
+    assert_eq!(bus.core.state(), NmtSlaveState::PreOperational);
+    let sent = bus.sent();
+    assert!(
+        sent.contains(&"110.000 08A#3081110300000000".to_string()),
+        "{sent:?}"
+    );
+    // A lost heartbeat in pre-operational or stopped changes nothing.
+    for command in ["000#800A", "000#020A"] {
+        let mut bus = booted(ds301_device(10));
+        bus.rx(ms(0), &download(10, 0x1016, 1, &0x0003_0064u32.to_le_bytes()));
+        bus.rx(ms(1), command);
+        let before = bus.core.state();
+        bus.rx(ms(10), "703#05");
+        bus.advance(ms(200));
+        assert_eq!(bus.core.state(), before, "after {command}");
+    }
 }
 
 #[test]
@@ -579,4 +605,140 @@ fn a_time_producer_sends_the_time_its_driver_gives() {
     // Stopped runs no TIME.
     bus.rx(ms(2), "000#020A");
     assert!(bus.core.produce_time(bus.now, time).is_err());
+}
+
+/// CiA 301 §7.2.5.1 and 1007h: synchronous RPDOs that arrive after the synchronous window has closed
+/// are discarded until the next SYNC (lely's RPDO does so); one inside the window is written at the
+/// next SYNC.
+#[test]
+fn a_synchronous_rpdo_after_the_window_is_discarded_until_the_next_sync() {
+    use canopener_od::{Access, DataType, Entry};
+    let window = Entry::new(
+        ObjectKey::new(0x1007, 0),
+        DataType::UNSIGNED32,
+        Access::Rw,
+        &5_000u32.to_le_bytes(),
+    )
+    .expect("1007h");
+    let mut bus = booted(device_with(BASE, 5, vec![window]));
+    // RPDO1 (200h + 5, 6200h:01) synchronous, then Operational.
+    bus.rx(ms(0), &download(5, 0x1400, 2, &[1]));
+    bus.rx(ms(1), "000#0105");
+    bus.rx(ms(10), "080#");
+    bus.rx(ms(12), "205#AA");
+    bus.rx(ms(20), "080#");
+    assert_eq!(
+        bus.value(0x6200, 1),
+        [0xAA],
+        "inside the window: written at the next SYNC"
+    );
+    // The window after the SYNC at 20 ms closed at 25 ms.
+    bus.rx(ms(26), "205#55");
+    bus.rx(ms(30), "080#");
+    assert_eq!(bus.value(0x6200, 1), [0xAA], "after the window: discarded");
+    // The SYNC at 30 ms opened a new window: RPDOs count again.
+    bus.rx(ms(31), "205#0F");
+    bus.rx(ms(40), "080#");
+    assert_eq!(bus.value(0x6200, 1), [0x0F]);
+    let events = bus.take_events();
+    assert!(
+        events.iter().any(|e| matches!(
+            e,
+            DeviceEvent::Pdo(canopener_device::pdo::PdoEvent::RpdoLate { number: 1 })
+        )),
+        "{events:?}"
+    );
+}
+
+/// The mapping refusals that used 0604 0043h answer with a code of the set CiA's CCT accepts for
+/// that mapping step (reference §3.4, CCT PDO 23–32): sub-index 0 = FEh/FFh (MPDO) is a count the
+/// device cannot take, 0604 0042h; a mapping length of 0 and a variable-length object are entries
+/// that cannot be mapped, 0604 0041h.
+#[test]
+fn pdo_mapping_refusals_use_codes_the_cct_accepts() {
+    use canopener_od::{Access, DataType, Entry};
+    let text = Entry::new(
+        ObjectKey::new(0x2100, 0),
+        DataType::VISIBLE_STRING,
+        Access::Rw,
+        b"abcd",
+    )
+    .expect("entry")
+    .with_pdo_mapping(true);
+    let mut bus = booted(device_with(BASE, 5, vec![text]));
+    bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+    bus.rx(ms(2), &download(5, 0x1A00, 0, &[0]));
+    bus.rx(ms(3), &download(5, 0x1A00, 0, &[0xFE]));
+    bus.rx(ms(4), &download(5, 0x1A00, 0, &[0xFF]));
+    bus.rx(ms(5), &download(5, 0x1A00, 1, &0x6000_0100u32.to_le_bytes()));
+    bus.rx(ms(6), &download(5, 0x1A00, 1, &0x2100_0020u32.to_le_bytes()));
+    let sent = bus.sent();
+    assert_eq!(
+        sent[3..],
+        [
+            "3.000 585#80001A0042000406",
+            "4.000 585#80001A0042000406",
+            "5.000 585#80001A0141000406",
+            "6.000 585#80001A0141000406",
+        ]
+    );
+}
+
+/// CiA 305 store configuration with the default (in-memory) storage: the stored node-ID is what
+/// the device starts with again after NMT reset node, its power cycle, even when another node-ID
+/// was configured (and not stored) since.
+#[test]
+fn an_lss_stored_node_id_survives_reset_node_in_the_default_storage() {
+    let mut bus = booted(base_device(5));
+    bus.rx(ms(1), "7E5#0401000000000000");
+    bus.rx(ms(2), "7E5#1120000000000000");
+    bus.rx(ms(3), "7E5#1700000000000000");
+    bus.rx(ms(4), "7E5#1130000000000000");
+    bus.rx(ms(5), "7E5#0400000000000000");
+    assert_eq!(
+        bus.sent()[1..],
+        [
+            "2.000 7E4#1100000000000000",
+            "3.000 7E4#1700000000000000",
+            "4.000 7E4#1100000000000000",
+        ]
+    );
+    bus.rx(ms(6), "000#8105");
+    assert_eq!(
+        bus.core.node_id().get(),
+        0x20,
+        "the stored node-ID, not the pending 30h"
+    );
+    assert_eq!(bus.sent(), ["6.000 720#00"]);
+    // Reset communication keeps the stored one (nothing new pending).
+    bus.rx(ms(7), "000#8220");
+    assert_eq!(bus.core.node_id().get(), 0x20);
+}
+
+/// A device that takes SDO downloads only outside Operational refuses them there with 0800 0022h
+/// (data cannot be transferred or stored because of the present device state), in every transfer
+/// mode; uploads still work, and Pre-operational takes downloads again.
+#[test]
+fn a_device_locked_in_operational_refuses_downloads_with_0800_0022h() {
+    let mut bus = booted(base_device(5).with_downloads_refused_in_operational());
+    bus.rx(ms(1), &download(5, 0x1017, 0, &100u16.to_le_bytes()));
+    bus.rx(ms(2), "000#0105");
+    bus.rx(ms(3), &download(5, 0x1017, 0, &200u16.to_le_bytes()));
+    bus.rx(ms(4), "605#2117100002000000");
+    bus.rx(ms(5), "605#C617100002000000");
+    bus.rx(ms(6), "605#4017100000000000");
+    bus.rx(ms(7), "000#8005");
+    bus.rx(ms(8), &download(5, 0x1017, 0, &0u16.to_le_bytes()));
+    let sdo: Vec<String> = bus.sent().into_iter().filter(|f| f.contains(" 585#")).collect();
+    assert_eq!(
+        sdo,
+        [
+            "1.000 585#6017100000000000",
+            "3.000 585#8017100022000008",
+            "4.000 585#8017100022000008",
+            "5.000 585#8017100022000008",
+            "6.000 585#4B17100064000000",
+            "8.000 585#6017100000000000",
+        ]
+    );
 }

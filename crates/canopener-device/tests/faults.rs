@@ -98,16 +98,37 @@ fn heartbeat_state_wrong() {
             "360.000 705#04"
         ]
     );
+    // A wrong but valid state in every NMT state (a state table read one row off): a consumer sees
+    // the node in the wrong state, never a frame it must drop as invalid.
     assert_eq!(
         heartbeats(bad),
         [
-            "100.000 705#80",
-            "150.000 705#01",
-            "250.000 705#01",
-            "260.000 705#02",
-            "360.000 705#02"
+            "100.000 705#05",
+            "150.000 705#04",
+            "250.000 705#04",
+            "260.000 705#7F",
+            "360.000 705#7F"
         ]
     );
+}
+
+#[test]
+fn heartbeat_state_wrong_guarding_answers_keep_the_toggle_bit() {
+    let (ok, bad) = base(Fault::HeartbeatStateWrong, |bus| {
+        bus.rx(ms(10), "705#R1");
+        bus.rx(ms(20), "705#R1");
+        bus.rx(ms(30), "000#0105");
+        bus.rx(ms(40), "705#R1");
+    });
+    let answers = |trace: Vec<String>| -> Vec<String> {
+        trace
+            .into_iter()
+            .skip(1)
+            .filter(|s| s.contains(" 705#"))
+            .collect()
+    };
+    assert_eq!(answers(ok), ["10.000 705#7F", "20.000 705#FF", "40.000 705#05"]);
+    assert_eq!(answers(bad), ["10.000 705#05", "20.000 705#85", "40.000 705#04"]);
 }
 
 #[test]
@@ -318,6 +339,117 @@ fn block_crc_wrong() {
     // CRC-16-CCITT (XModem) of BC 0A 00 00.
     assert_eq!(crc(good_end), 0x7922, "{good_end}");
     assert_eq!(crc(bad_end), !0x7922, "{bad_end}");
+}
+
+/// How an SDO download is carried out.
+#[derive(Debug, Clone, Copy)]
+enum Mode {
+    Expedited,
+    Segmented,
+    Block,
+}
+
+const MODES: [Mode; 3] = [Mode::Expedited, Mode::Segmented, Mode::Block];
+
+/// The client's frames of a download of `data` (at most 7 bytes) to node 5 in `mode`: segmented
+/// and block downloads carry it in one segment, the block download without CRC.
+fn requests(mode: Mode, index: u16, sub: u8, data: &[u8]) -> Vec<String> {
+    let frame = |mut bytes: Vec<u8>| {
+        bytes.resize(8, 0);
+        let hex: String = bytes.iter().map(|b| format!("{b:02X}")).collect();
+        format!("605#{hex}")
+    };
+    let initiate = |command: u8| {
+        let mut bytes = vec![command, index as u8, (index >> 8) as u8, sub];
+        bytes.extend((data.len() as u32).to_le_bytes());
+        frame(bytes)
+    };
+    let unused = 7 - data.len() as u8;
+    match mode {
+        Mode::Expedited => vec![download(5, index, sub, data)],
+        Mode::Segmented => vec![initiate(0x21), frame([&[unused << 1 | 1][..], data].concat())],
+        Mode::Block => vec![
+            initiate(0xC2),
+            frame([&[0x81][..], data].concat()),
+            frame(vec![0xC1 | unused << 2]),
+        ],
+    }
+}
+
+/// Carries out the download on `bus` from time `at` (one frame a millisecond); returns the
+/// server's last answer.
+fn download_in(bus: &mut Bus, at: u64, mode: Mode, index: u16, sub: u8, data: &[u8]) -> String {
+    for (i, request) in (0..).zip(requests(mode, index, sub, data)) {
+        bus.rx(ms(at + i), &request);
+    }
+    let answers: Vec<String> = bus.sent().into_iter().filter(|f| f.contains(" 585#")).collect();
+    let last = answers.last().expect("an answer");
+    last.split_once(' ').expect("stamped").1.to_string()
+}
+
+/// What the server answers when it took the download in `mode`.
+fn confirmed(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Expedited => "585#60",
+        Mode::Segmented => "585#20",
+        Mode::Block => "585#A1",
+    }
+}
+
+/// A fault that makes the device accept a download it must refuse holds in every transfer mode:
+/// `prepare` writes what the refused download needs (expedited), then the download goes in each
+/// mode to a correct device (refused with `abort`) and to the faulty one (confirmed and stored).
+fn accepted_in_every_mode(fault: Fault, prepare: &[(u16, u8, &[u8])], refused: (u16, u8, &[u8]), abort: u32) {
+    let (index, sub, data) = refused;
+    for mode in MODES {
+        for faults in [FaultSet::none(), FaultSet::from(fault)] {
+            let mut bus = booted(device(BASE, 5, faults));
+            for (i, (index, sub, data)) in (1..).zip(prepare) {
+                bus.rx(ms(i), &download(5, *index, *sub, data));
+            }
+            let answer = download_in(&mut bus, 10, mode, index, sub, data);
+            if faults.is_empty() {
+                let code: String = abort.to_le_bytes().iter().map(|b| format!("{b:02X}")).collect();
+                assert!(
+                    answer.starts_with("585#80") && answer.ends_with(&code),
+                    "{mode:?}: {answer}"
+                );
+            } else {
+                assert!(answer.starts_with(confirmed(mode)), "{fault} {mode:?}: {answer}");
+                assert_eq!(bus.value(index, sub), data, "{fault} {mode:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn limit_not_enforced_in_every_transfer_mode() {
+    accepted_in_every_mode(
+        Fault::LimitNotEnforced,
+        &[],
+        (0x2000, 0, &2000u16.to_le_bytes()),
+        0x0609_0031,
+    );
+}
+
+#[test]
+fn unmappable_accepted_in_every_transfer_mode() {
+    accepted_in_every_mode(
+        Fault::UnmappableAccepted,
+        &[(0x1800, 1, &0x8000_0185u32.to_le_bytes()), (0x1A00, 0, &[0])],
+        (0x1A00, 1, &0x2000_0010u32.to_le_bytes()),
+        0x0604_0041,
+    );
+}
+
+#[test]
+fn pdo_cob_id_unchecked_in_every_transfer_mode() {
+    accepted_in_every_mode(
+        Fault::PdoCobIdUnchecked,
+        &[(0x1800, 1, &0x8000_0185u32.to_le_bytes())],
+        (0x1800, 1, &0x701u32.to_le_bytes()),
+        0x0609_0030,
+    );
 }
 
 #[test]

@@ -77,6 +77,46 @@ pub fn to_dcf(eds: &Eds, node_id: u16, bitrate_kbit: u16) -> Result<Eds, DcfErro
     Ok(dcf)
 }
 
+/// Whether a description already is a configuration: a DCF ([`Eds::is_dcf`]), or any entry carries a
+/// `ParameterValue` or `Denotation` (an XDC read back, an EDS with DCF keys).
+pub fn is_configuration(eds: &Eds) -> bool {
+    let configured = |a: &Attributes| {
+        [&a.parameter_value, &a.denotation]
+            .into_iter()
+            .any(|v| v.as_deref().is_some_and(|v| !v.trim().is_empty()))
+    };
+    eds.is_dcf()
+        || eds
+            .objects
+            .values()
+            .any(|o| configured(&o.attributes) || o.subs.values().any(|s| configured(&s.attributes)))
+}
+
+/// A configuration ([`is_configuration`]) written as a DCF again: its values exactly as they are (an
+/// entry without `ParameterValue` stays without one: the configuration did not set it), with the
+/// node-ID and bit rate replaced only where given. [`to_dcf`] instead makes a configuration from a
+/// template, filling every value from its default.
+pub fn recommission(dcf: &Eds, node_id: Option<u16>, bitrate_kbit: Option<u16>) -> Result<Eds, DcfError> {
+    let mut dcf = dcf.clone();
+    if let Some(node_id) = node_id {
+        if !(1..=127).contains(&node_id) {
+            return Err(DcfError::NodeId(node_id));
+        }
+        dcf.commissioning
+            .get_or_insert_with(DeviceCommissioning::default)
+            .node_id = Some(node_id.to_string());
+    }
+    if let Some(bitrate) = bitrate_kbit {
+        if !BITRATES_KBIT.contains(&bitrate) {
+            return Err(DcfError::Bitrate(bitrate));
+        }
+        dcf.commissioning
+            .get_or_insert_with(DeviceCommissioning::default)
+            .baudrate = Some(bitrate.to_string());
+    }
+    Ok(dcf)
+}
+
 /// Whether the EDS marks a bit rate as supported (`BaudRate_<k>=1`).
 pub fn supports_bitrate(eds: &Eds, bitrate_kbit: u16) -> bool {
     eds.device_info
@@ -115,6 +155,55 @@ pub fn to_eds(dcf: &Eds) -> Eds {
         }
     }
     eds
+}
+
+/// What [`to_eds`] removes from `dcf`, one item per key or section as `eds diff` names them
+/// (`[1017] ParameterValue`, `[DeviceComissioning]`), in object order: for a message that says what
+/// a conversion to EDS dropped instead of dropping it silently.
+pub fn configuration_keys(dcf: &Eds) -> Vec<String> {
+    let mut keys = Vec::new();
+    if dcf.commissioning.is_some() {
+        keys.push("[DeviceComissioning]".to_owned());
+    }
+    if dcf
+        .file_info
+        .last_eds
+        .as_deref()
+        .is_some_and(|s| !s.trim().is_empty())
+    {
+        keys.push("[FileInfo] LastEDS".to_owned());
+    }
+    if dcf.connected_modules.is_some() {
+        keys.push("[ConnectedModules]".to_owned());
+    }
+    let mut named = |section: String, a: &Attributes| {
+        let values = [
+            ("ParameterValue", &a.parameter_value),
+            ("Denotation", &a.denotation),
+            ("UploadFile", &a.upload_file),
+            ("DownloadFile", &a.download_file),
+        ];
+        for (key, value) in values {
+            if value.is_some() {
+                keys.push(format!("[{section}] {key}"));
+            }
+        }
+    };
+    for (index, object) in &dcf.objects {
+        named(format!("{index:04X}"), &object.attributes);
+        for (sub, entry) in &object.subs {
+            named(format!("{index:04X}sub{sub:X}"), &entry.attributes);
+        }
+    }
+    for (index, object) in &dcf.objects {
+        if object.values.is_some() {
+            keys.push(format!("[{index:04X}Value]"));
+        }
+        if object.denotations.is_some() {
+            keys.push(format!("[{index:04X}Denotation]"));
+        }
+    }
+    keys
 }
 
 fn configure(a: &mut Attributes, data_type: Option<DataType>, node: u8) {
@@ -162,6 +251,36 @@ mod tests {
         [1800sub0]\nParameterName=n\nDataType=0x0005\nAccessType=ro\nDefaultValue=1\n\
         [1800sub1]\nParameterName=COB-ID\nDataType=0x0007\nAccessType=rw\nDefaultValue=$NODEID+0x180\n\
         [1017]\nParameterName=HB\nDataType=0x0006\nAccessType=rw\nDefaultValue=0\nParameterValue=100\n";
+
+    /// A configuration written as a DCF again keeps its values as they are (issue 13: every default
+    /// became a ParameterValue), takes a node-ID or bit rate only when given, and is what it was.
+    #[test]
+    fn a_configuration_is_recommissioned_not_refilled() {
+        let eds = load(EDS.as_bytes()).eds;
+        assert!(is_configuration(&eds), "1017h has a ParameterValue");
+        let same = recommission(&eds, None, None).unwrap();
+        assert_eq!(same, eds);
+        assert_eq!(same.objects[&0x1800].subs[&1].attributes.parameter_value, None);
+        let moved = recommission(&eds, Some(9), Some(500)).unwrap();
+        let commissioning = moved.commissioning.clone().unwrap();
+        assert_eq!(
+            (
+                commissioning.node_id.as_deref(),
+                commissioning.baudrate.as_deref()
+            ),
+            (Some("9"), Some("500"))
+        );
+        assert_eq!(recommission(&eds, Some(128), None), Err(DcfError::NodeId(128)));
+        assert_eq!(recommission(&eds, None, Some(100)), Err(DcfError::Bitrate(100)));
+        let template = load(b"[1000]\nParameterName=t\nDataType=0x0007\nAccessType=ro\nDefaultValue=1\n").eds;
+        assert!(!is_configuration(&template));
+        assert!(configuration_keys(&template).is_empty());
+        let made = to_dcf(&eds, 5, 250).unwrap();
+        let keys = configuration_keys(&made);
+        assert_eq!(keys.first().map(String::as_str), Some("[DeviceComissioning]"));
+        assert!(keys.contains(&"[1800sub1] ParameterValue".to_owned()), "{keys:?}");
+        assert!(keys.contains(&"[1017] ParameterValue".to_owned()), "{keys:?}");
+    }
 
     #[test]
     fn eds_to_dcf_resolves_nodeid_and_keeps_existing_values() {

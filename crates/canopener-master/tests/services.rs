@@ -578,10 +578,13 @@ fn faulty_heartbeats_are_reported() {
     assert_eq!(
         node5,
         [
+            // The fault reports a wrong but valid state (operational while
+            // pre-operational, stopped while operational), so a consumer sees
+            // state changes that never happened, not a lost heartbeat.
             "0.000 node 5: boot-up",
-            "100.000 node 5: unknown NMT state byte 80h",
-            "150.000 node 5: unknown NMT state byte 01h",
-            "250.000 node 5: unknown NMT state byte 01h",
+            "100.000 node 5: BOOT-UP -> OPERATIONAL",
+            "150.000 node 5: OPERATIONAL -> STOPPED",
+            "250.000 node 5: heartbeat interval 100.000 ms",
         ]
     );
     // Heartbeats 1 ms apart pull the minimum interval down to 1 ms.

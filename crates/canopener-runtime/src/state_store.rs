@@ -17,7 +17,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use canopener_device::lss_slave::{BitTiming, LssStorage, LssStoreError};
+use canopener_device::lss_slave::{BitTiming, LssStorage, LssStoreError, StoredConfiguration};
 use canopener_device::store::{ParameterGroup, ParameterStore, Snapshot, StorageError};
 use canopener_od::ObjectKey;
 use canopener_wire::LssAddress;
@@ -137,6 +137,8 @@ impl ParameterStore for FileStore {
 #[derive(Debug)]
 pub struct LssFile {
     path: PathBuf,
+    /// Whether the file holds a `node-id` line: something was stored.
+    stored: bool,
     node_id: Option<NodeId>,
     bit_timing: Option<BitTiming>,
 }
@@ -149,6 +151,7 @@ impl LssFile {
         let path = dir.join(format!("{}.lss", lss_stem(address)));
         let mut file = LssFile {
             path,
+            stored: false,
             node_id: None,
             bit_timing: None,
         };
@@ -169,8 +172,12 @@ impl LssFile {
             }
             let words: Vec<&str> = line.split_whitespace().collect();
             match words.as_slice() {
-                ["node-id", "none"] => file.node_id = None,
+                ["node-id", "none"] => {
+                    file.stored = true;
+                    file.node_id = None;
+                }
                 ["node-id", id] => {
+                    file.stored = true;
                     file.node_id = Some(id.parse().ok().and_then(NodeId::new).ok_or_else(|| {
                         bad_lss_line(&file.path, number, "the node-ID must be 1 to 127 or `none`")
                     })?);
@@ -218,9 +225,17 @@ impl LssStorage for LssFile {
             let _ = writeln!(text, "bit-timing {} {}", timing.table, timing.index);
         }
         write_atomic(&self.path, text.as_bytes(), false).map_err(|_| LssStoreError::MediaAccess)?;
+        self.stored = true;
         self.node_id = node_id;
         self.bit_timing = bit_timing;
         Ok(())
+    }
+
+    fn stored(&self) -> Option<StoredConfiguration> {
+        self.stored.then_some(StoredConfiguration {
+            node_id: self.node_id,
+            bit_timing: self.bit_timing,
+        })
     }
 }
 
@@ -408,6 +423,7 @@ mod tests {
         };
         let mut file = LssFile::open(&dir, &address).unwrap();
         assert_eq!(file.node_id(), None, "nothing stored yet");
+        assert_eq!(file.stored(), None);
         let timing = BitTiming { table: 0, index: 4 };
         file.store(NodeId::new(12), Some(timing)).unwrap();
         let path = dir.join("lss-00000ABC-00000401-00010002-00000007.lss");
@@ -422,9 +438,22 @@ mod tests {
         let again = LssFile::open(&dir, &address).unwrap();
         assert_eq!(again.node_id(), NodeId::new(12));
         assert_eq!(again.bit_timing, Some(timing));
+        let stored = StoredConfiguration {
+            node_id: NodeId::new(12),
+            bit_timing: Some(timing),
+        };
+        assert_eq!((file.stored(), again.stored()), (Some(stored), Some(stored)));
         // Storing "unconfigured" (FFh) is kept as such.
         file.store(None, None).unwrap();
-        assert_eq!(LssFile::open(&dir, &address).unwrap().node_id(), None);
+        let unconfigured = LssFile::open(&dir, &address).unwrap();
+        assert_eq!(unconfigured.node_id(), None);
+        assert_eq!(
+            unconfigured.stored(),
+            Some(StoredConfiguration {
+                node_id: None,
+                bit_timing: None
+            })
+        );
         // Another serial number is another device.
         let other = LssAddress {
             serial_number: 8,

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use crate::args::{BUS_HELP, BusArg, OutputFormat, parse_duration};
+use crate::args::{BUS_HELP, BusArg, OutputFormat, parse_duration, parse_u8, parse_u64};
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum BusCommand {
@@ -82,7 +82,7 @@ pub(crate) struct DumpArgs {
     #[arg(long, value_enum, default_value_t = OutputFormat::Text)]
     pub(crate) format: OutputFormat,
     /// Stop after this many frames.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_u64)]
     pub(crate) count: Option<u64>,
     /// Stop after this long.
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
@@ -100,7 +100,7 @@ pub(crate) struct SendArgs {
     #[arg(long, default_value = "0s", value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) gap: std::time::Duration,
     /// Send the whole list this many times.
-    #[arg(long, default_value_t = 1, value_name = "N")]
+    #[arg(long, default_value = "1", value_name = "N", value_parser = parse_u64)]
     pub(crate) repeat: u64,
 }
 
@@ -124,7 +124,7 @@ pub(crate) struct ReplayArgs {
     #[arg(long)]
     pub(crate) skip_invalid: bool,
     /// Replay the file this many times.
-    #[arg(long = "loop", default_value_t = 1, value_name = "N")]
+    #[arg(long = "loop", default_value = "1", value_name = "N", value_parser = parse_u64)]
     pub(crate) loops: u64,
 }
 
@@ -136,13 +136,13 @@ pub(crate) struct GenArgs {
     #[arg(long, default_value = "123", value_name = "HEXID")]
     pub(crate) id: String,
     /// Data length of each frame (0-8); bytes 0-3 carry a little-endian counter when DLC >= 4.
-    #[arg(long, default_value_t = 8, value_name = "0-8")]
+    #[arg(long, default_value = "8", value_name = "0-8", value_parser = parse_u8)]
     pub(crate) dlc: u8,
     /// Frames per second (0 = as fast as the bus accepts them).
     #[arg(long, default_value_t = 0.0, value_name = "FRAMES_PER_S")]
     pub(crate) rate: f64,
     /// Stop after this many frames.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_u64)]
     pub(crate) count: Option<u64>,
     /// Stop after this long.
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]

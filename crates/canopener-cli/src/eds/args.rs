@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::parse_index;
+use crate::args::{parse_cia_bitrate, parse_index, parse_node_id};
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum EdsCommand {
@@ -206,9 +206,10 @@ pub(crate) enum ReportFormat {
 pub(crate) enum ConvertTarget {
     /// canopener's versioned JSON form of the model (docs/eds-json.md).
     Json,
-    /// A CiA 306 EDS (from a DCF: the DCF additions removed).
+    /// A CiA 306 EDS (from a DCF/XDC: the DCF additions removed, each named on stderr).
     Eds,
-    /// A CiA 306 DCF for one node (needs --node-id and --bitrate unless the input is a DCF).
+    /// A CiA 306 DCF for one node: from an EDS/XDD, every value filled from its default (needs --node-id
+    /// and --bitrate); from a DCF/XDC, its values exactly as they are (--node-id/--bitrate replace its own).
     Dcf,
     /// A CiA 311 v1.1 XDD, or an XDC when the input is a DCF.
     Xdd,
@@ -222,7 +223,7 @@ pub(crate) struct EdsShowArgs {
     #[arg(long, value_parser = parse_index, value_name = "INDEX")]
     pub(crate) object: Option<u16>,
     /// Resolve $NODEID formulas for this node-ID (a DCF's own node-ID is used by default).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=127), value_name = "N")]
+    #[arg(long, value_parser = parse_node_id, value_name = "N")]
     pub(crate) node_id: Option<u8>,
     /// List every loading diagnostic, not just the summary.
     #[arg(long)]
@@ -242,10 +243,10 @@ pub(crate) struct EdsConvertArgs {
     #[arg(short, long, value_name = "OUT")]
     pub(crate) output: Option<PathBuf>,
     /// Node-ID of the DCF (1..127).
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=127), value_name = "N")]
+    #[arg(long, value_parser = |t: &str| parse_node_id(t).map(u16::from), value_name = "N")]
     pub(crate) node_id: Option<u16>,
     /// Bit rate of the DCF in kbit/s (10, 20, 50, 125, 250, 500, 800, 1000).
-    #[arg(long, value_name = "KBIT")]
+    #[arg(long, value_name = "KBIT", value_parser = parse_cia_bitrate)]
     pub(crate) bitrate: Option<u16>,
     /// List every loading diagnostic, not just the summary.
     #[arg(long)]

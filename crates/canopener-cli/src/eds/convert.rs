@@ -49,8 +49,32 @@ pub(crate) fn run(args: EdsConvertArgs) -> CliResult {
             args.file.display()
         );
     }
+    if !converted.dropped.is_empty() {
+        eprintln!(
+            "warning: {} is a configuration; an EDS carries none of it, so {} DCF {} dropped: {}; \
+             `--to dcf` keeps them",
+            args.file.display(),
+            converted.dropped.len(),
+            if converted.dropped.len() == 1 {
+                "key was"
+            } else {
+                "keys were"
+            },
+            summary(&converted.dropped)
+        );
+    }
     match &args.output {
         Some(out) => Ok(write_atomic(out, &converted.bytes, false)?),
         None => print_stdout(&String::from_utf8_lossy(&converted.bytes)),
     }
+}
+
+/// The first few dropped keys, and how many more.
+fn summary(keys: &[String]) -> String {
+    const SHOWN: usize = 5;
+    let mut text = keys.iter().take(SHOWN).cloned().collect::<Vec<_>>().join(", ");
+    if keys.len() > SHOWN {
+        text.push_str(&format!(" and {} more", keys.len() - SHOWN));
+    }
+    text
 }

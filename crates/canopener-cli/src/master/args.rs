@@ -1,18 +1,23 @@
 //! Command-line grammar of the master-side commands: `sdo`, `nmt`, `node`, `lss`, `pdo`, `sync` and
-//! `heartbeat`. Every one talks to devices on `--bus SPEC` and prints JSON with `--format json`.
+//! `heartbeat`. Every one talks to devices on `--bus SPEC` and prints JSON with `--format json`; the
+//! notations (node-IDs, integers, durations) are the shared ones of `crate::args`, documented in
+//! `docs/master.md`, "One grammar".
 
 use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::{BusArg, OutputFormat, parse_duration};
+use crate::args::{
+    BusArg, OutputFormat, parse_cia_bitrate, parse_duration, parse_in_range, parse_node_id, parse_u8,
+    parse_u16, parse_u64,
+};
 
 /// How long a device may take to answer one request unless `--timeout` says otherwise: CiA 301 leaves
 /// the SDO timeout to the implementation; 1 s covers slow devices and loaded hubs.
 pub(crate) const DEFAULT_TIMEOUT: &str = "1s";
 
-/// Options every master command shares.
+/// Options every master command that waits for answers shares.
 #[derive(Debug, Args)]
 pub(crate) struct MasterArgs {
     #[command(flatten)]
@@ -20,6 +25,16 @@ pub(crate) struct MasterArgs {
     /// How long to wait for each answer (e.g. 500ms, 2s).
     #[arg(long, default_value = DEFAULT_TIMEOUT, value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) timeout: Duration,
+    #[arg(long, value_enum, default_value_t = OutputFormat::Text)]
+    pub(crate) format: OutputFormat,
+}
+
+/// Options of the commands that send or listen and wait for no answer (`sync`, `heartbeat watch`): no
+/// `--timeout`, which they would accept and ignore; `--duration` and `--count` end them.
+#[derive(Debug, Args)]
+pub(crate) struct ListenArgs {
+    #[command(flatten)]
+    pub(crate) bus: BusArg,
     #[arg(long, value_enum, default_value_t = OutputFormat::Text)]
     pub(crate) format: OutputFormat,
 }
@@ -58,16 +73,16 @@ Exit status: 0 written, 7 the device aborted or did not answer, 2 bad arguments,
 /// The device a command talks to.
 #[derive(Debug, Args)]
 pub(crate) struct NodeArg {
-    /// Node-ID of the device (1..127).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=127), value_name = "N")]
+    /// Node-ID of the device (1..127, decimal or 0x hex).
+    #[arg(long, value_parser = parse_node_id, value_name = "N")]
     pub(crate) node: u8,
 }
 
 /// One object of one device.
 #[derive(Debug, Args)]
 pub(crate) struct ObjectArgs {
-    /// Node-ID of the device (1..127).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=127), value_name = "N")]
+    /// Node-ID of the device (1..127, decimal or 0x hex).
+    #[arg(long, value_parser = parse_node_id, value_name = "N")]
     pub(crate) node: u8,
     /// Object index, hexadecimal unless written otherwise: 1018, 0x1018 or 1018h.
     #[arg(value_name = "INDEX")]
@@ -157,15 +172,28 @@ pub(crate) struct NmtArgs {
     /// start, stop, preop, reset (reset node) or reset-comm (reset communication).
     #[arg(value_enum, value_name = "COMMAND")]
     pub(crate) command: NmtVerb,
-    /// A node-ID 1..127, or `all`.
-    #[arg(value_name = "NODE|all")]
-    pub(crate) target: String,
+    /// A node-ID 1..127 (decimal or 0x hex), or `all`; `--node` says the same.
+    #[arg(value_name = "NODE|all", required_unless_present = "node")]
+    pub(crate) target: Option<String>,
+    /// The node (1..127) or `all`, as every other command names its device.
+    #[arg(long, value_name = "NODE|all", conflicts_with = "target")]
+    pub(crate) node: Option<String>,
     /// Wait for the node's boot-up or heartbeat to confirm the new state (needs a heartbeat producer
     /// for start/stop/preop).
     #[arg(long)]
     pub(crate) confirm: bool,
     #[command(flatten)]
     pub(crate) master: MasterArgs,
+}
+
+impl NmtArgs {
+    /// The node or `all`, from the positional argument or `--node` (clap requires exactly one).
+    pub(crate) fn target(&self) -> &str {
+        self.node
+            .as_deref()
+            .or(self.target.as_deref())
+            .unwrap_or_default()
+    }
 }
 
 /// The NMT module-control commands (CiA 301 §7.2.8.3.1).
@@ -193,7 +221,7 @@ pub(crate) enum NodeCommand {
     /// Which node-IDs answer (SDO upload of 1000h), with their identities.
     #[command(after_help = "Examples:
   canopener node scan
-  canopener node scan --range 1-32 --timeout 50ms --format json")]
+  canopener node scan --nodes 1-32 --timeout 50ms --format json")]
     Scan(NodeScanArgs),
     /// Read every readable object an EDS lists from a device into a DCF.
     #[command(after_help = "Examples:
@@ -216,11 +244,12 @@ pub(crate) struct NodeInfoArgs {
 
 #[derive(Debug, Args)]
 pub(crate) struct NodeScanArgs {
-    /// Node-IDs to try, e.g. 1-127 or 1-10,20,30.
-    #[arg(long, default_value = "1-127", value_name = "LIST")]
-    pub(crate) range: String,
+    /// Node-IDs to try, e.g. 1-127 or 1-10,20,0x30.
+    // `--range` was its name before one grammar: a hidden alias, so scripts keep working.
+    #[arg(long = "nodes", alias = "range", default_value = "1-127", value_name = "LIST")]
+    pub(crate) nodes: String,
     /// How many nodes are asked at once (SDO requests in flight).
-    #[arg(long, default_value_t = 127, value_parser = clap::value_parser!(u8).range(1..=127))]
+    #[arg(long, default_value = "127", value_parser = |t: &str| parse_in_range(t, 1, 127, "--parallel").map(|v| v as u8))]
     pub(crate) parallel: u8,
     #[command(flatten)]
     pub(crate) master: MasterArgs,
@@ -245,18 +274,6 @@ pub(crate) struct NodeDumpArgs {
     pub(crate) bitrate: Option<u16>,
     #[command(flatten)]
     pub(crate) master: MasterArgs,
-}
-
-/// A CiA 301 bit rate in kbit/s (the rates of the CiA 305 bit timing table).
-fn parse_cia_bitrate(text: &str) -> Result<u16, String> {
-    const RATES: [u16; 8] = [10, 20, 50, 125, 250, 500, 800, 1000];
-    text.trim()
-        .parse()
-        .ok()
-        .filter(|rate| RATES.contains(rate))
-        .ok_or_else(|| {
-            format!("'{text}' is not a CANopen bit rate in kbit/s; use one of {RATES:?}, e.g. --bitrate 250")
-        })
 }
 
 #[derive(Debug, Subcommand)]
@@ -311,11 +328,11 @@ pub(crate) struct LssScanArgs {
 pub(crate) struct LssConfigureArgs {
     #[command(flatten)]
     pub(crate) address: LssAddressArgs,
-    /// The node-ID to give (1..127, or 255 for unconfigured).
-    #[arg(long, value_name = "N")]
+    /// The node-ID to give (1..127, or 255 for unconfigured; decimal or 0x hex).
+    #[arg(long, value_name = "N", value_parser = parse_u8)]
     pub(crate) node_id: u8,
     /// Also set the bit rate in kbit/s (1000, 800, 500, 250, 125, 50, 20, 10; CiA 305 table 0).
-    #[arg(long, value_name = "KBIT")]
+    #[arg(long, value_name = "KBIT", value_parser = parse_cia_bitrate)]
     pub(crate) bitrate: Option<u16>,
     /// Store the configuration in the device (LSS store configuration).
     #[arg(long)]
@@ -336,15 +353,16 @@ pub(crate) struct LssInquireArgs {
 pub(crate) enum PdoCommand {
     /// Map objects into a PDO with the CiA 301 procedure (invalidate, clear, map, count, validate).
     #[command(after_help = "Examples:
-  canopener pdo map --node 5 --tpdo 1 6000:01:8 6401:01:16 --type 255 --event-timer 100
+  canopener pdo map --node 5 --tpdo 1 6000:01:8 6401:01:16 --transmission-type 255 --event-timer 100ms
   canopener pdo map --node 5 --rpdo 1 6200:01:8
-  canopener pdo map --node 5 --tpdo 2 6401:01:16 --type 1            # on every SYNC
+  canopener pdo map --node 5 --tpdo 2 6401:01:16 --transmission-type 1 --inhibit 5ms   # on every SYNC
 Mapping entries are INDEX:SUB:BITS in hexadecimal index and sub-index, decimal bits.")]
     Map(PdoMapArgs),
     /// Print the PDOs of a node live, decoded by its mapping (read from the device, named by the EDS).
     #[command(after_help = "Examples:
   canopener pdo watch --node 5 --eds device.eds
-  canopener pdo watch --node 5 --eds device.eds --format json --count 10")]
+  canopener pdo watch --node 5 --eds device.eds --format json --count 10
+  canopener pdo watch --node 5                       # TPDO 1..4 read from the device, values in hex")]
     Watch(PdoWatchArgs),
 }
 
@@ -356,27 +374,31 @@ pub(crate) struct PdoMapArgs {
     #[arg(
         long,
         value_name = "N",
+        value_parser = parse_u16,
         conflicts_with = "rpdo",
         required_unless_present = "rpdo"
     )]
     pub(crate) tpdo: Option<u16>,
     /// Configure RPDO N (1..512).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_u16)]
     pub(crate) rpdo: Option<u16>,
     /// Mapping entries INDEX:SUB:BITS, in PDO order.
     #[arg(value_name = "INDEX:SUB:BITS", required = true)]
     pub(crate) mapping: Vec<String>,
     /// Transmission type (0 acyclic SYNC, 1-240 every n-th SYNC, 252/253 RTR, 254/255 event-driven).
-    #[arg(long = "type", value_name = "TYPE")]
+    /// `--type` is the old spelling (`sdo`'s `--type` is a data type).
+    #[arg(long = "transmission-type", alias = "type", value_name = "TYPE", value_parser = parse_u8)]
     pub(crate) transmission_type: Option<u8>,
-    /// Event timer in ms (0 = off).
-    #[arg(long, value_name = "MS")]
+    /// Event timer, whole milliseconds up to 65535ms (e.g. 100ms, 1s; 0ms = off). Holds 1800h+n sub 5's
+    /// value in ms.
+    #[arg(long, value_name = "DURATION", value_parser = parse_event_timer)]
     pub(crate) event_timer: Option<u16>,
-    /// Inhibit time in units of 100 µs (TPDO).
-    #[arg(long, value_name = "N100US")]
+    /// Inhibit time (TPDO), a multiple of 100us up to 6553.5ms (e.g. 500us, 10ms). Holds 1800h+n sub 3's
+    /// value in units of 100 µs.
+    #[arg(long, value_name = "DURATION", value_parser = parse_inhibit)]
     pub(crate) inhibit: Option<u16>,
     /// SYNC start value (TPDO, 0 = off).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_u8)]
     pub(crate) sync_start: Option<u8>,
     /// COB-ID (default: the pre-defined connection set's for PDO 1..4).
     #[arg(long, value_name = "ID")]
@@ -385,18 +407,46 @@ pub(crate) struct PdoMapArgs {
     pub(crate) master: MasterArgs,
 }
 
+/// A PDO event timer as a duration, in the unit of 1800h sub 5: whole milliseconds (CiA 301 §7.5.2.35).
+fn parse_event_timer(text: &str) -> Result<u16, String> {
+    duration_in_units(text, 1000).ok_or_else(|| {
+        format!("the event timer counts whole milliseconds up to 65535ms; '{text}' is not one, e.g. --event-timer 100ms")
+    })?
+}
+
+/// A PDO inhibit time as a duration, in the unit of 1800h sub 3: multiples of 100 µs (CiA 301 §7.5.2.35).
+fn parse_inhibit(text: &str) -> Result<u16, String> {
+    duration_in_units(text, 100).ok_or_else(|| {
+        format!("the inhibit time counts multiples of 100us up to 6553.5ms; '{text}' is not one, e.g. --inhibit 500us")
+    })?
+}
+
+/// A duration as a whole number of `unit_us` microseconds that fits an UNSIGNED16: `None` when it does
+/// not, the duration's own error when it is none.
+fn duration_in_units(text: &str, unit_us: u128) -> Option<Result<u16, String>> {
+    let micros = match parse_duration(text) {
+        Ok(duration) => duration.as_micros(),
+        Err(err) => return Some(Err(err)),
+    };
+    if micros % unit_us != 0 {
+        return None;
+    }
+    u16::try_from(micros / unit_us).ok().map(Ok)
+}
+
 #[derive(Debug, Args)]
 pub(crate) struct PdoWatchArgs {
     #[command(flatten)]
     pub(crate) target: NodeArg,
-    /// Name and type the mapped objects by this EDS or DCF.
+    /// Watch the TPDOs this EDS or DCF describes, named and typed by it; without it, TPDO 1..4 (the
+    /// pre-defined connection set) with their mapped bytes in hex.
     #[arg(long, value_name = "FILE")]
-    pub(crate) eds: PathBuf,
+    pub(crate) eds: Option<PathBuf>,
     /// Take the mapping from the EDS/DCF defaults instead of reading it from the device over SDO.
-    #[arg(long)]
+    #[arg(long, requires = "eds")]
     pub(crate) offline: bool,
     /// Stop after this many PDOs.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_u64)]
     pub(crate) count: Option<u64>,
     /// Stop after this long (e.g. 10s).
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
@@ -412,16 +462,16 @@ pub(crate) struct SyncArgs {
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) period: Duration,
     /// SYNC counter overflow value 2..240 (1019h); none sends SYNC without a counter.
-    #[arg(long, value_parser = clap::value_parser!(u8).range(2..=240), value_name = "N")]
+    #[arg(long, value_parser = |t: &str| parse_in_range(t, 2, 240, "--counter").map(|v| v as u8), value_name = "N")]
     pub(crate) counter: Option<u8>,
     /// Stop after this many SYNCs.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_u64)]
     pub(crate) count: Option<u64>,
     /// Stop after this long.
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) duration: Option<Duration>,
     #[command(flatten)]
-    pub(crate) master: MasterArgs,
+    pub(crate) master: ListenArgs,
 }
 
 #[derive(Debug, Subcommand)]
@@ -455,11 +505,11 @@ pub(crate) struct HeartbeatWatchArgs {
     #[arg(long, default_value = "100ms", value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) guard_time: Duration,
     /// A guarded node is lost after this many guard times without a correct answer (100Dh).
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(1..), value_name = "N")]
+    #[arg(long, default_value = "3", value_parser = |t: &str| parse_in_range(t, 1, 255, "--life-time-factor").map(|v| v as u8), value_name = "N")]
     pub(crate) life_time_factor: u8,
     /// Exit with status 6 when a heartbeat (or a guarded node) was lost.
     #[arg(long)]
     pub(crate) fail_on_loss: bool,
     #[command(flatten)]
-    pub(crate) master: MasterArgs,
+    pub(crate) master: ListenArgs,
 }

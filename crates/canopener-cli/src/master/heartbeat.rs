@@ -15,10 +15,10 @@ use canopener_wire::NodeId;
 use serde_json::json;
 
 use crate::args::OutputFormat;
+use crate::args::parse_node_list;
 use crate::error::{CliError, CliResult};
 use crate::master::args::HeartbeatWatchArgs;
 use crate::master::link::open_link;
-use crate::master::node_list::parse_node_list;
 use crate::master::output::{millis, spread_json, state_key};
 use crate::output::print_stdout;
 

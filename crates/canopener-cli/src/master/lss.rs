@@ -24,10 +24,10 @@ use canopener_wire::{LssAddress, NodeId};
 use serde_json::json;
 
 use crate::args::OutputFormat;
+use crate::args::parse_node_list;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::{LssAddressArgs, LssConfigureArgs, LssInquireArgs, LssScanArgs, MasterArgs};
 use crate::master::link::open_link;
-use crate::master::node_list::parse_node_list;
 use crate::master::output::{millis, spinner};
 use crate::output::print_stdout;
 

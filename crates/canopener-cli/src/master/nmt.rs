@@ -19,7 +19,7 @@ use crate::master::output::{millis, state_key};
 use crate::output::print_stdout;
 
 pub(crate) fn run(args: NmtArgs) -> CliResult {
-    let target = parse_target(&args.target)?;
+    let target = parse_target(args.target())?;
     let command = nmt_command(args.command);
     let mut link = open_link(args.master.bus.spec.as_deref(), "nmt")?;
     let format = args.master.format;

@@ -17,10 +17,10 @@ use canopener_wire::error_register_text;
 use serde_json::json;
 
 use crate::args::OutputFormat;
+use crate::args::parse_node_list;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::master::args::{NodeInfoArgs, NodeScanArgs};
 use crate::master::link::{checked_timeout, open_link, open_session};
-use crate::master::node_list::parse_node_list;
 use crate::master::output::{millis, print_json, session_error};
 use crate::output::print_stdout;
 use canopener_runtime::description::read_description;
@@ -45,7 +45,7 @@ pub(crate) fn info(args: NodeInfoArgs) -> CliResult {
 
 pub(crate) fn scan(args: NodeScanArgs) -> CliResult {
     let mut nodes: Vec<u8> =
-        parse_node_list(&args.range, "--range", "canopener node scan --range 1-10,20,30")?
+        parse_node_list(&args.nodes, "--nodes", "canopener node scan --nodes 1-10,20,30")?
             .into_iter()
             .map(|node| node.get())
             .collect();
@@ -56,7 +56,7 @@ pub(crate) fn scan(args: NodeScanArgs) -> CliResult {
     let scanned =
         scan_nodes(&mut link, &nodes, usize::from(args.parallel), timeout).map_err(|err| match err {
             ScanError::Setup(SessionError::Client(err)) => {
-                CliError::Usage(format!("{err}; e.g. --range 1-127"))
+                CliError::Usage(format!("{err}; e.g. --nodes 1-127"))
             }
             ScanError::Setup(SessionError::ZeroTimeout) => {
                 CliError::Usage("--timeout must be longer than 0, e.g. --timeout 500ms".to_owned())

@@ -155,12 +155,12 @@ impl MapRequest {
                 )
             }
             (Direction::Tpdo, _) => format!(
-                "canopener pdo map --node {} {pdo} 6000:01:8 6401:01:16 --type 255 --event-timer 100",
+                "canopener pdo map --node {} {pdo} 6000:01:8 6401:01:16 --transmission-type 255 --event-timer 100ms",
                 self.node
             ),
             (Direction::Rpdo, _) => {
                 format!(
-                    "canopener pdo map --node {} {pdo} 6200:01:8 --type 255",
+                    "canopener pdo map --node {} {pdo} 6200:01:8 --transmission-type 255",
                     self.node
                 )
             }
@@ -322,12 +322,12 @@ mod tests {
                 "6000:01:1"
             ]),
             "the mapping takes 65 bits; a classical CAN PDO carries at most 64 (8 bytes)\n\
-             example: canopener pdo map --node 5 --tpdo 1 6000:01:8 6401:01:16 --type 255 --event-timer 100"
+             example: canopener pdo map --node 5 --tpdo 1 6000:01:8 6401:01:16 --transmission-type 255 --event-timer 100ms"
         );
         assert_eq!(
-            refused(&["--node", "5", "--rpdo", "2", "6200:01:8", "--inhibit", "10"]),
+            refused(&["--node", "5", "--rpdo", "2", "6200:01:8", "--inhibit", "1ms"]),
             "RPDO2 has no inhibit time: it applies to TPDOs only\n\
-             example: canopener pdo map --node 5 --rpdo 2 6200:01:8 --type 255"
+             example: canopener pdo map --node 5 --rpdo 2 6200:01:8 --transmission-type 255"
         );
         assert_eq!(
             refused(&["--node", "5", "--tpdo", "1", "6000:01:8", "--cob-id", "0x585"]),

@@ -29,25 +29,29 @@ use crate::master::output::{count_bar, hex_bytes, millis, session_error, spread_
 use crate::output::print_stdout;
 use canopener_runtime::description::read_description;
 
+/// The TPDOs watched without an EDS: those of the pre-defined connection set (CiA 301 §7.3.5,
+/// COB-IDs 180h/280h/380h/480h + node-ID), whose configuration is read from the device.
+const PREDEFINED_TPDOS: [u16; 4] = [1, 2, 3, 4];
+
 pub(crate) fn run(args: PdoWatchArgs) -> CliResult {
-    let input = read_description(&args.eds)?;
-    let eds = &input.eds;
-    let numbers = tpdo_numbers(eds);
-    if numbers.is_empty() {
+    let input = args.eds.as_deref().map(read_description).transpose()?;
+    let eds = input.as_ref().map(|input| &input.eds);
+    let numbers = eds.map_or_else(|| PREDEFINED_TPDOS.to_vec(), tpdo_numbers);
+    if let (Some(path), true) = (&args.eds, numbers.is_empty()) {
         return Err(CliError::InvalidInput(format!(
             "{} describes no TPDO (no object 1800h to 19FFh), so there is nothing to watch; give the EDS of \
              the device, e.g. canopener pdo watch --node {} --eds device.eds",
-            args.eds.display(),
+            path.display(),
             args.target.node
         )));
     }
     let node = args.target.node;
     let format = args.master.format;
-    let (mut link, found) = if args.offline {
+    let (mut link, found) = if let (true, Some(eds), Some(path)) = (args.offline, eds, &args.eds) {
         let found = from_eds(eds, node, &numbers).map_err(|err| {
             CliError::InvalidInput(format!(
                 "{}: cannot build the object dictionary: {err}",
-                args.eds.display()
+                path.display()
             ))
         })?;
         (open_link(args.master.bus.spec.as_deref(), "pdo watch")?, found)
@@ -74,7 +78,10 @@ pub(crate) fn run(args: PdoWatchArgs) -> CliResult {
     for found in found {
         match found {
             Found::Watch(mut pdo) => {
-                pdo.layout = pdo.layout.typed(eds_lookup(eds));
+                // Without an EDS the fields stay untyped: their bytes are shown in hex.
+                if let Some(eds) = eds {
+                    pdo.layout = pdo.layout.typed(eds_lookup(eds));
+                }
                 print_line(format, &layout_text(&pdo), || layout_json(&pdo, source))?;
                 watched.push(pdo);
             }
@@ -93,7 +100,7 @@ pub(crate) fn run(args: PdoWatchArgs) -> CliResult {
         };
         return Err(CliError::Device(format!(
             "{whose}, so there is nothing to watch; map one, e.g. canopener pdo map --node {node} --tpdo 1 \
-             6000:01:8 --type 255 --event-timer 100"
+             6000:01:8 --transmission-type 255 --event-timer 100ms"
         )));
     }
     if std::io::stderr().is_terminal() {

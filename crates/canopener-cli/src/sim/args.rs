@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::{BusArg, parse_u32_number};
+use crate::args::{BusArg, parse_node_id, parse_u32_number};
 
 #[derive(Debug, Args)]
 pub(crate) struct SimArgs {
@@ -21,7 +21,7 @@ pub(crate) struct SimArgs {
     pub(crate) bus: BusArg,
     /// Node-ID of devices whose file is not a DCF with a node-ID (several files: N, N+1, ... in order).
     /// Without it such devices start LSS-unconfigured (node-ID FFh) and wait for an LSS master.
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=127), value_name = "N")]
+    #[arg(long, value_parser = parse_node_id, value_name = "N")]
     pub(crate) node_id: Option<u8>,
     /// Serial number 1018h:04 of the devices (several files: S, S+1, ... in order), so that devices from
     /// one EDS have distinct LSS addresses. Decimal or 0x-hex.
@@ -31,9 +31,14 @@ pub(crate) struct SimArgs {
     /// "save", 1011h "load") and the LSS configuration (store configuration: the node-ID to start with).
     #[arg(long, value_name = "DIR")]
     pub(crate) state_dir: Option<PathBuf>,
-    /// The application behind each device's object dictionary.
-    #[arg(long, value_enum, default_value_t = SimApp::None)]
+    /// The application behind each device's object dictionary; `auto` runs CiA 401 I/O on a device whose
+    /// 1000h says profile 401 and that has 6000h or 6200h. The start line of each device says which runs.
+    #[arg(long, value_enum, default_value_t = SimApp::Auto)]
     pub(crate) app: SimApp,
+    /// Refuse SDO downloads while Operational (abort 0800 0022h, "because of the present device state"), as
+    /// devices do that take parameters only in Pre-operational.
+    #[arg(long)]
+    pub(crate) writes_only_pre_operational: bool,
     #[arg(long, value_enum, default_value_t = SimFormat::Human)]
     pub(crate) format: SimFormat,
 }
@@ -41,6 +46,8 @@ pub(crate) struct SimArgs {
 /// What runs behind a simulated device's object dictionary.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub(crate) enum SimApp {
+    /// CiA 401 I/O when the file describes a CiA 401 I/O device (1000h profile 401, 6000h or 6200h), else none.
+    Auto,
     /// Nothing: the device only holds its object dictionary.
     None,
     /// CiA 401 generic I/O (6000h/6200h/6401h, factory test registers 2000h-2002h); objects the file lacks

@@ -30,9 +30,11 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         .first_node_id(args.node_id)
         .serial(args.serial)
         .application(match args.app {
+            SimApp::Auto => ApplicationKind::Auto,
             SimApp::None => ApplicationKind::None,
             SimApp::Cia401 => ApplicationKind::Cia401,
         })
+        .downloads_refused_in_operational(args.writes_only_pre_operational)
         .faults(args.faults.iter().copied())
         .state_dir(args.state_dir.clone())
         .build()?;

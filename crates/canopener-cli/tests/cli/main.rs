@@ -13,6 +13,7 @@ mod support;
 
 mod eds;
 mod eds_check;
+mod grammar;
 mod harness;
 mod master_pdo;
 mod master_sdo;

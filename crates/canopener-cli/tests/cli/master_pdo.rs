@@ -121,10 +121,10 @@ fn map_a_tpdo_start_the_node_and_watch_the_values_the_device_holds() {
         "1",
         "6000:01:8",
         "6401:01:16",
-        "--type",
+        "--transmission-type",
         "255",
         "--event-timer",
-        "100",
+        "100ms",
     ]);
     assert_eq!(map.status.code(), Some(0), "{}", stderr(&map));
     let text = stdout(&map);
@@ -185,6 +185,27 @@ fn map_a_tpdo_start_the_node_and_watch_the_values_the_device_holds() {
             "TPDO1  COB-ID 00000185h  type 255 (event-driven)  16 bits: 6000:01:8 Read input 8 bit, 6000:02:8"
         ),
         "{text}"
+    );
+
+    // Issue 13 item 12: without --eds, TPDO 1..4 are read from the device and shown raw, not refused.
+    let raw = bench.pdo(&["watch", "--node", "5", "--count", "2", "--format", "json"]);
+    assert_eq!(raw.status.code(), Some(0), "{}", stderr(&raw));
+    let events = json_lines(&stdout(&raw));
+    let layout = events
+        .iter()
+        .find(|e| e["event"] == "layout" && e["pdo"] == "TPDO1")
+        .expect("a layout for TPDO1");
+    assert_eq!(layout["mapping"][1]["index"], "6401");
+    assert_eq!(layout["mapping"][1]["name"], Value::Null, "no EDS, no names");
+    assert_eq!(layout["mapping"][1]["type"], Value::Null, "no EDS, no types");
+    let pdos: Vec<&Value> = events.iter().filter(|e| e["event"] == "pdo").collect();
+    assert_eq!(pdos.len(), 2, "{events:?}");
+    assert!(pdos.iter().all(|pdo| pdo["data"] == "3C 2E FB"), "{pdos:?}");
+    let offline_without_eds = bench.pdo(&["watch", "--node", "5", "--offline"]);
+    assert_eq!(
+        offline_without_eds.status.code(),
+        Some(2),
+        "--offline needs the EDS's mapping"
     );
 }
 

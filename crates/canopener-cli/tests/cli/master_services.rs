@@ -32,12 +32,23 @@ fn heartbeat_eds(dir: &Path) -> PathBuf {
 /// A hub with `count` unconfigured devices from base.eds, serial numbers `serial` and up, each
 /// answering LSS: the hub, a test client on it and the simulator.
 fn unconfigured_sims(name: &str, count: usize, serial: &str) -> (HubProc, Box<dyn CanBus>, Background) {
+    unconfigured_sims_with(name, count, serial, &[])
+}
+
+/// [`unconfigured_sims`] with more `canopener sim` arguments (faults).
+fn unconfigured_sims_with(
+    name: &str,
+    count: usize,
+    serial: &str,
+    extra: &[&str],
+) -> (HubProc, Box<dyn CanBus>, Background) {
     let hub = HubProc::start();
     let dir = temp_dir(name);
     let mut bus = client(&hub);
     let eds = base_eds();
     let mut args = vec![eds.to_str().unwrap(); count];
     args.extend(["--serial", serial]);
+    args.extend_from_slice(extra);
     let sim = Background::sim(&hub, &dir, "sim", &args);
     // Asked until all answer, so that the test starts once the simulator is on the hub.
     let deadline = Instant::now() + WAIT;
@@ -348,6 +359,48 @@ fn lss_scan_gives_three_unconfigured_devices_node_ids_they_then_answer_sdo_on() 
         stdout(&output).starts_with("0 device(s) found"),
         "{}",
         stdout(&output)
+    );
+}
+
+/// Issue 13 item 8: a device with `lss-state-not-changed` never enters LSS configuration state, not
+/// even by fastscan, so `lss scan --assign` gives it no node-ID (it configured one before).
+#[test]
+fn lss_scan_configures_no_device_that_never_leaves_waiting_state() {
+    let (hub, mut bus, sim) = unconfigured_sims_with(
+        "master-lss-stuck",
+        1,
+        "100",
+        &["--fault", "lss-state-not-changed"],
+    );
+    let spec = hub.spec("can0");
+    let output = run_on(&spec, &["lss", "scan", "--assign", "10", "--format", "json"]);
+    let assigned: Vec<Value> = json_lines(&stdout(&output))
+        .iter()
+        .flat_map(|json| json["devices"].as_array().cloned().unwrap_or_default())
+        .filter(|device| device["node_id"] == 10)
+        .collect();
+    assert!(
+        assigned.is_empty(),
+        "the stuck device was given node 10: {assigned:?}\n{}",
+        stderr(&output)
+    );
+    // Node 10 does not answer SDO, and the device still answers as unconfigured.
+    send(&mut *bus, "60A#4018100400000000");
+    let deadline = Instant::now() + Duration::from_millis(500);
+    while let Some(wait) = deadline.checked_duration_since(Instant::now()) {
+        if let Some(received) = bus.recv(wait).expect("recv") {
+            assert_ne!(
+                received.frame.id().as_raw(),
+                0x58A,
+                "node 10 answered SDO; {}",
+                sim.report()
+            );
+        }
+    }
+    assert!(
+        identify_unconfigured(&mut *bus).contains(&"7E4#5000000000000000".to_owned()),
+        "{}",
+        sim.report()
     );
 }
 

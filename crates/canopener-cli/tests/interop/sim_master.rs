@@ -230,3 +230,69 @@ fn python_canopen_master_drives_simulated_devices_through_nmt_sdo_pdo_emcy_and_l
         lss_device.events
     );
 }
+
+/// CANopenNode's basicDevice: 1000h = 000F0191h, 6000h, 6200h, TPDO1 = 6000h:01..02 on event. Vendored, so
+/// this test runs in a fresh clone.
+const CIA401_EDS: &str = "CANopenNode__CANopenSocket__examples__basicDevice__basicDevice.eds";
+const CIA401_NODE_ID: u8 = 5;
+
+/// Issue 13 item 1: `canopener sim` on a CiA 401 EDS, with no `--app`, acts as a CiA 401 device for a python
+/// canopen master: the factory test registers 2000h/2001h drive 6000h:01, and TPDO1 carries the change.
+#[test]
+fn python_canopen_factory_test_round_trip_on_a_cia401_eds_without_app() {
+    let Some(python) = python() else { return };
+    let eds = crate::support::corpus_eds(CIA401_EDS);
+    let hub = HubProc::start();
+    let args: Vec<String> = vec![
+        hub.addr.ip().to_string(),
+        hub.addr.port().to_string(),
+        "can0".into(),
+        CIA401_NODE_ID.to_string(),
+    ];
+    let mut master = python_peer(&python, "co_sim_factory.py", &args);
+    assert_eq!(
+        master.json(Duration::from_secs(30))["ready"],
+        true,
+        "the python master did not connect"
+    );
+    let mut command = canopener();
+    command
+        .arg("sim")
+        .arg(&eds)
+        .args(["--bus", &hub.spec("can0"), "--format", "json"])
+        .args(["--node-id", &CIA401_NODE_ID.to_string()])
+        .env_remove("CANOPENER_BUS");
+    let mut proc = Proc::spawn("canopener sim (basicDevice, no --app)", command);
+    let started = proc.json(Duration::from_secs(30));
+    assert_eq!(started["event"], "started", "unexpected first event {started}");
+    assert_eq!(
+        started["application"], "cia401",
+        "sim must say it runs the CiA 401 application: {started}"
+    );
+    master.send_line("go");
+    let result = master.json(Duration::from_secs(60));
+    let device = stop(proc);
+    let checks = result["checks"]
+        .as_object()
+        .unwrap_or_else(|| panic!("no checks object in the peer's result: {result}"));
+    for name in [
+        "1000h says CiA 401",
+        "factory test 2000h = 1, 2001h = F0h -> 6000h:01 = F0h and TPDO1",
+        "a second pattern 2001h = 0Fh follows",
+    ] {
+        let check = &checks
+            .get(name)
+            .unwrap_or_else(|| panic!("{name}: not reported by the peer: {result}"));
+        assert_eq!(
+            check["ok"], true,
+            "{name}: {}\nsimulator ({}) stderr:\n{}",
+            check["detail"], device.status, device.stderr
+        );
+    }
+    assert!(
+        device.status.success(),
+        "the simulator ended with {}: {}",
+        device.status,
+        device.stderr
+    );
+}

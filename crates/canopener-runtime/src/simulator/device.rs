@@ -7,9 +7,11 @@ use std::time::Duration;
 
 use canopener_can::{CanFrame, Core, Instant};
 use canopener_device::application::{Application, NoApplication};
-use canopener_device::cia401::{Cia401Io, install_objects};
+use canopener_device::cia401::{Cia401Io, install_objects, is_cia401_io};
 use canopener_device::device::{Device, DeviceEvent, UNCONFIGURED};
 use canopener_device::faults::{Fault, FaultSet};
+use canopener_device::od_build::build_od;
+use canopener_eds::Eds;
 use canopener_od::ObjectKey;
 use canopener_wire::TimeOfDay;
 
@@ -24,12 +26,41 @@ pub const TIME_PERIOD: Duration = Duration::from_secs(1);
 /// What runs behind a simulated device's object dictionary.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ApplicationKind {
-    /// Nothing: the device only holds its object dictionary.
+    /// What the description says the device is: [`ApplicationKind::Cia401`] for a CiA 401 generic
+    /// I/O device (1000h bits 15..0 = 0191h and digital I/O 6000h or 6200h,
+    /// [`is_cia401_io`]), else [`ApplicationKind::None`]. A device described as a CiA 401 module
+    /// behaves as one unless told otherwise.
     #[default]
+    Auto,
+    /// Nothing: the device only holds its object dictionary.
     None,
     /// CiA 401 generic I/O (6000h/6200h/6401h, factory test registers 2000h-2002h); the objects the
     /// description lacks are added (only those).
     Cia401,
+}
+
+impl ApplicationKind {
+    /// The application a device described by `eds` runs: `Auto` decided by the description's
+    /// dictionary (as built for node 1), anything else as asked. Never `Auto`.
+    pub fn resolve(self, eds: &Eds) -> ApplicationKind {
+        match self {
+            ApplicationKind::Auto => match build_od(eds, 1) {
+                Ok(built) if is_cia401_io(&built.od) => ApplicationKind::Cia401,
+                // A description that does not build fails with its own message when the device is.
+                _ => ApplicationKind::None,
+            },
+            chosen => chosen,
+        }
+    }
+
+    /// How `--app` and the JSON log name it: `auto`, `none`, `cia401`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ApplicationKind::Auto => "auto",
+            ApplicationKind::None => "none",
+            ApplicationKind::Cia401 => "cia401",
+        }
+    }
 }
 
 /// How every device of a simulation is built besides its description and node-ID.
@@ -42,6 +73,9 @@ pub struct DeviceOptions {
     pub application: ApplicationKind,
     /// The defects every device has.
     pub faults: Vec<Fault>,
+    /// Every device refuses SDO downloads while Operational with 0800 0022h
+    /// ([`Device::with_downloads_refused_in_operational`]).
+    pub downloads_refused_in_operational: bool,
     /// Where devices keep what they store (1010h parameters, LSS configuration) across runs; nothing
     /// survives the process without it.
     pub state_dir: Option<PathBuf>,
@@ -53,7 +87,10 @@ pub struct DeviceOptions {
 pub struct SimulatedDevice {
     device: Device,
     name: String,
+    /// The application it runs (never `Auto`).
     application: ApplicationKind,
+    /// Whether that was decided from the description (`--app auto`).
+    application_auto: bool,
     store: Option<PathBuf>,
     /// When a TIME producer (1012h bit 30) next sends the time; `None` while it is no producer.
     next_time: Option<Instant>,
@@ -67,12 +104,15 @@ impl SimulatedDevice {
     /// starts with the node-ID it stored last time instead, as a real device does after power-on.
     pub fn build(plan: Plan, position: usize, options: &DeviceOptions) -> Result<SimulatedDevice, SimError> {
         let Plan { name, eds, node_id } = plan;
+        let application = options.application.resolve(&eds);
         let serial = options
             .first_serial
             .map(|first| first.wrapping_add(position as u32));
         let make = |node_id: u8| -> Result<Device, SimError> {
-            let mut device = match options.application {
-                ApplicationKind::None => Device::from_eds(&eds, node_id, Box::new(NoApplication)),
+            let mut device = match application {
+                ApplicationKind::Auto | ApplicationKind::None => {
+                    Device::from_eds(&eds, node_id, Box::new(NoApplication))
+                }
                 ApplicationKind::Cia401 => {
                     let app: Box<dyn Application> = Box::new(Cia401Io::new());
                     Device::from_eds_extended(&eds, node_id, app, |od, node| {
@@ -95,6 +135,9 @@ impl SimulatedDevice {
             }
             if !options.faults.is_empty() {
                 device = device.with_faults(options.faults.iter().copied().collect::<FaultSet>());
+            }
+            if options.downloads_refused_in_operational {
+                device = device.with_downloads_refused_in_operational();
             }
             Ok(device)
         };
@@ -125,7 +168,8 @@ impl SimulatedDevice {
         Ok(SimulatedDevice {
             device,
             name,
-            application: options.application,
+            application,
+            application_auto: options.application == ApplicationKind::Auto,
             store,
             next_time: None,
             unix_millis_at_zero: 0,
@@ -161,9 +205,15 @@ impl SimulatedDevice {
         &self.name
     }
 
-    /// The application behind its object dictionary.
+    /// The application behind its object dictionary (never `Auto`).
     pub fn application(&self) -> ApplicationKind {
         self.application
+    }
+
+    /// Whether [`SimulatedDevice::application`] was decided from the description
+    /// ([`ApplicationKind::Auto`]) rather than asked for.
+    pub fn application_is_auto(&self) -> bool {
+        self.application_auto
     }
 
     /// The file its saved parameters go to, with a state directory.

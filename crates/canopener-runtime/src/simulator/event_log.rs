@@ -112,9 +112,14 @@ impl LogEntry {
             sim.name(),
             device.od().len()
         );
-        if sim.application() == ApplicationKind::Cia401 {
-            text.push_str(", CiA 401 I/O");
-        }
+        text.push_str(match (sim.application(), sim.application_is_auto()) {
+            (ApplicationKind::Cia401, true) => {
+                ", CiA 401 I/O application: 1000h says profile 401 (--app none turns it off)"
+            }
+            (ApplicationKind::Cia401, false) => ", CiA 401 I/O application",
+            (_, true) => ", no application: not a CiA 401 I/O description (--app cia401 adds one)",
+            (_, false) => ", no application",
+        });
         if let Some(store) = sim.store_path() {
             let _ = write!(text, ", saved parameters in {}", store.display());
         }
@@ -132,6 +137,7 @@ impl LogEntry {
             .with("file", sim.name())
             .with("bus", bus)
             .with("entries", device.od().len())
+            .with("application", sim.application().name())
             .with("build_notes", notes.len())
     }
 
@@ -263,6 +269,10 @@ fn describe(device: &Device, event: &DeviceEvent) -> Option<LogEntry> {
         DeviceEvent::Pdo(PdoEvent::Disabled { pdo, error }) => {
             LogEntry::new("pdo", format!("{pdo} disabled: {error}"))
         }
+        DeviceEvent::Pdo(PdoEvent::RpdoLate { number }) => LogEntry::new(
+            "pdo",
+            format!("RPDO{number} arrived after the synchronous window (1007h) and was discarded"),
+        ),
         DeviceEvent::Pdo(event) => LogEntry::new("pdo", format!("{event:?}")),
         DeviceEvent::Sync(SyncEvent::Sync { .. } | SyncEvent::WindowClosed) => return None,
         DeviceEvent::Sync(event) => LogEntry::new("sync", format!("{event:?}")),

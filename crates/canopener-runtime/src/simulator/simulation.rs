@@ -124,6 +124,13 @@ impl Simulation {
         self
     }
 
+    /// Makes every device refuse SDO downloads while Operational with 0800 0022h, as devices do that
+    /// take parameters only in Pre-operational.
+    pub fn downloads_refused_in_operational(mut self, refused: bool) -> Simulation {
+        self.options.downloads_refused_in_operational = refused;
+        self
+    }
+
     /// Gives every device the defect `fault` too.
     pub fn fault(mut self, fault: Fault) -> Simulation {
         self.options.faults.push(fault);
@@ -194,7 +201,7 @@ mod tests {
     use crate::link::Link;
     use crate::sdo_session::SdoSession;
     use crate::simulator::event_log::LogEntry;
-    use crate::simulator::test_support::{CONSUMER_1016, base_eds, base_eds_with, temp_dir};
+    use crate::simulator::test_support::{CONSUMER_1016, base_eds, base_eds_with, frame, temp_dir};
 
     fn described(bus: &mut SimulatedBus) -> Vec<(Instant, LogEntry)> {
         let events: Vec<NodeEvent<DeviceEvent>> =
@@ -266,6 +273,70 @@ mod tests {
             .expect("node 5 hears node 6's heartbeat");
         assert_eq!(heard.0, Instant::ZERO + Duration::from_millis(100));
         assert_eq!(heard.1.text, "heartbeat of node 6 started");
+    }
+
+    /// A CiA 401 description acts like a CiA 401 device without being told (`--app auto`, the
+    /// default): CANopenNode's basicDevice (1000h = 000F0191h, 6000h, 6200h, TPDO1 = 6000h:01..02 on
+    /// event) gets the factory test registers, and 2000h = 1 with 2001h = F0h drives 6000h:01 and sends
+    /// TPDO1. `ApplicationKind::None` turns it off.
+    #[test]
+    fn a_cia401_description_runs_the_cia401_application_by_default() {
+        let eds = canopener_testkit::corpus::eds(
+            "CANopenNode__CANopenSocket__examples__basicDevice__basicDevice.eds",
+        );
+        let mut bus = Simulation::ideal().device(&eds, 5).start().unwrap();
+        let (_, sim) = bus.network().nodes().next().expect("one device");
+        assert_eq!(sim.application(), ApplicationKind::Cia401);
+        assert!(sim.application_is_auto());
+        let started = LogEntry::started(sim, "virtual:test");
+        assert!(
+            started
+                .text
+                .contains("CiA 401 I/O application: 1000h says profile 401"),
+            "{}",
+            started.text
+        );
+        bus.network_mut().record();
+        bus.send(&frame("000#0105")).unwrap();
+        let timeout = Duration::from_millis(100);
+        let mut session = SdoSession::new(&mut bus, 5, timeout).unwrap();
+        session.write(0x2000, 0, vec![1]).unwrap();
+        session.write(0x2001, 0, vec![0xF0]).unwrap();
+        assert_eq!(session.read(0x6000, 1).unwrap(), [0xF0]);
+        let tpdos: Vec<String> = bus
+            .network_mut()
+            .take_recording()
+            .iter()
+            .filter(|f| f.frame.id().as_raw() == 0x185)
+            .map(|f| f.frame.to_string())
+            .collect();
+        assert_eq!(
+            tpdos,
+            ["185#0000", "185#F000"],
+            "TPDO1 at the start, then on the change"
+        );
+
+        let bus = Simulation::ideal()
+            .device(&eds, 5)
+            .application(ApplicationKind::None)
+            .start()
+            .unwrap();
+        let (_, sim) = bus.network().nodes().next().expect("one device");
+        assert_eq!(sim.application(), ApplicationKind::None);
+        assert!(
+            sim.device().od().object(0x2000).is_empty(),
+            "no factory registers without the application"
+        );
+        // A description of another profile runs nothing, and says why.
+        let other = canopener_testkit::corpus::eds("CANopenNode__CANopenNode__example__DS301_profile.eds");
+        let bus = Simulation::ideal().device(&other, 5).start().unwrap();
+        let (_, sim) = bus.network().nodes().next().expect("one device");
+        assert_eq!(sim.application(), ApplicationKind::None);
+        assert!(
+            LogEntry::started(sim, "virtual:test")
+                .text
+                .contains("no application: not a CiA 401 I/O description")
+        );
     }
 
     #[test]

@@ -3,6 +3,7 @@
 use canopener_can::Instant;
 use canopener_device::application::NoApplication;
 use canopener_device::device::{Device, UNCONFIGURED};
+use canopener_device::faults::{Fault, FaultSet};
 use canopener_master::lss_master::{KnownParts, LssConfig, ScanPlan};
 use canopener_od::ObjectKey;
 use canopener_runtime::lss_session::{LssError, LssSession, ScanOutcome};
@@ -13,12 +14,30 @@ use crate::common::{IO_EDS, Node, bus, eds};
 
 /// An LSS-unconfigured I/O device with serial number `serial`.
 fn unconfigured(serial: u32) -> Node {
+    unconfigured_with(serial, FaultSet::none())
+}
+
+/// [`unconfigured`] with the defects `faults`.
+fn unconfigured_with(serial: u32, faults: FaultSet) -> Node {
     let mut device = Device::from_eds(&eds(IO_EDS), UNCONFIGURED, Box::new(NoApplication))
         .expect("device")
         .with_value(ObjectKey::new(0x1018, 4), &serial.to_le_bytes())
-        .expect("serial number");
+        .expect("serial number")
+        .with_faults(faults);
     device.boot(Instant::ZERO);
     Node::Device(Box::new(device))
+}
+
+/// Fastscan assigning `node_ids` in order, without storing.
+fn assigning(node_ids: &[u8]) -> ScanPlan {
+    ScanPlan {
+        node_ids: node_ids
+            .iter()
+            .map(|&id| NodeId::new(id).expect("node"))
+            .collect(),
+        store: false,
+        known: KnownParts::NONE,
+    }
 }
 
 fn session(serials: &[u32]) -> LssSession<VirtualLink<Node>> {
@@ -51,13 +70,8 @@ fn listing_finds_every_unconfigured_device_once() {
 #[test]
 fn scanning_assigns_the_node_ids_in_order() {
     let mut session = session(&[0x1234, 0x5678]);
-    let plan = ScanPlan {
-        node_ids: vec![NodeId::new(10).expect("node"), NodeId::new(11).expect("node")],
-        store: false,
-        known: KnownParts::NONE,
-    };
     let (found, outcome) = session
-        .scan_all::<LssError>(plan, |_| Ok(()))
+        .scan_all::<LssError>(assigning(&[10, 11]), |_| Ok(()))
         .expect("no bus error")
         .expect("started");
     assert_eq!(outcome, ScanOutcome::Complete);
@@ -104,4 +118,27 @@ fn an_unknown_address_is_not_selected() {
             .ends_with("answered switch state selective within 100 ms"),
         "{err}"
     );
+}
+
+/// `lss-state-not-changed` holds for fastscan too: the device answers the scan but never enters
+/// LSS configuration state, so `lss scan --assign` gives it no node-ID and says so.
+#[test]
+fn scanning_a_device_that_never_leaves_waiting_configures_nothing() {
+    let faulty = unconfigured_with(0x1234, Fault::LssStateNotChanged.into());
+    let (link, stations) = bus(vec![faulty]);
+    let mut session = LssSession::new(link, LssConfig::DEFAULT);
+    let (found, outcome) = session
+        .scan_all::<LssError>(assigning(&[10]), |_| Ok(()))
+        .expect("no bus error")
+        .expect("started");
+    assert!(
+        found.iter().all(|device| device.node_id.is_none()),
+        "{found:?} {outcome:?}"
+    );
+    assert!(matches!(outcome, ScanOutcome::Failed(_)), "{outcome:?}");
+    let configured = match session.link_mut().network().node(stations[0]) {
+        Some(Node::Device(device)) => device.is_configured(),
+        _ => panic!("no device"),
+    };
+    assert!(!configured, "the faulty device took a node-ID");
 }

@@ -160,3 +160,24 @@ fn guarding_with_a_zero_guard_time_is_refused_before_watching() {
         Err(Error::Guarding)
     ));
 }
+
+/// `heartbeat-state-wrong` is heard as a node in the wrong state, not as a lost heartbeat: the
+/// state byte it sends is a valid one (a consumer drops an invalid one and then reports the node
+/// lost, which hides the defect a tester is looking for).
+#[test]
+fn a_wrong_heartbeat_state_is_heard_as_a_state_not_as_a_loss() {
+    use canopener_device::faults::Fault;
+    let faulty = device(IO_EDS, 5).with_faults(Fault::HeartbeatStateWrong.into());
+    let (mut link, _) = bus(vec![Node::Device(Box::new(faulty))]);
+    SdoSession::new(&mut link, 5, Duration::from_millis(500))
+        .expect("session")
+        .write(0x1017, 0, 100u16.to_le_bytes().to_vec())
+        .expect("heartbeat on");
+    let summary = watch::<_, Error>(&mut link, config(None), |_, _| Ok(())).expect("watched");
+    let five = &summary.nodes[&node(5)];
+    assert_eq!(five.heartbeats, 10);
+    assert_eq!(five.losses, 0);
+    assert!(!five.lost_now);
+    // The I/O device starts on its own (1F80h), so it is operational; the fault reports stopped.
+    assert_eq!(five.state, Some(NmtState::Stopped));
+}
