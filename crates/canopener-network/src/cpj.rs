@@ -89,7 +89,11 @@ pub fn read(bytes: &[u8]) -> (Document, Topology, Vec<NetDiagnostic>) {
         );
     }
     // A base path the sections share is the system's; a section's own differing one stays with it.
-    let bases: Vec<Option<String>> = topology.networks.iter().map(|n| n.eds_base_name.clone()).collect();
+    let bases: Vec<Option<String>> = topology
+        .networks
+        .iter()
+        .map(|n| n.eds_base_name.clone())
+        .collect();
     if let Some(Some(first)) = bases.first() {
         topology.eds_base_name = Some(first.clone());
         for network in &mut topology.networks {
@@ -137,7 +141,10 @@ fn read_section(
                 NetDiagnostic::new(
                     NetCode::DuplicateData,
                     document.key_span(line),
-                    format!("`{key}` is given again (first at line {}); the first value is used", first + 1),
+                    format!(
+                        "`{key}` is given again (first at line {}); the first value is used",
+                        first + 1
+                    ),
                 )
                 .at(Some(section_name), Some(key)),
             );
@@ -238,7 +245,10 @@ fn read_section(
                 format!("[{section_name}] has no Nodes= entry, which CiA 306-3 makes mandatory"),
             )
             .at(Some(section_name), None)
-            .with_help(format!("add Nodes=0x{:02X}", nodes.values().filter(|e| e.present.is_some()).count())),
+            .with_help(format!(
+                "add Nodes=0x{:02X}",
+                nodes.values().filter(|e| e.present.is_some()).count()
+            )),
         ),
         Some((line, Some(count))) => {
             let listed = nodes.values().filter(|e| e.present.is_some()).count();
@@ -335,7 +345,10 @@ fn node_key(folded: &str) -> NodeKey {
 }
 
 fn parse_nodes(value: &str) -> Option<u32> {
-    let hex = value.trim().strip_prefix("0x").or_else(|| value.trim().strip_prefix("0X"))?;
+    let hex = value
+        .trim()
+        .strip_prefix("0x")
+        .or_else(|| value.trim().strip_prefix("0X"))?;
     u32::from_str_radix(hex, 16).ok().filter(|n| *n <= 0x7F)
 }
 
@@ -364,7 +377,10 @@ pub fn write(topology: &Topology) -> String {
             out.push('\n');
         }
         let _ = writeln!(out, "[{header}]");
-        if let Some(name) = network.and_then(|n| n.name.as_deref()).or_else(|| topology.network_name(number)) {
+        if let Some(name) = network
+            .and_then(|n| n.name.as_deref())
+            .or_else(|| topology.network_name(number))
+        {
             let _ = writeln!(out, "NetName={name}");
         }
         if let Some(refd) = network.and_then(|n| n.refd.as_deref()) {
@@ -422,7 +438,13 @@ mod tests {
         let ids: Vec<(&str, Option<i64>, Option<&str>)> = topology
             .vertices
             .iter()
-            .map(|v| (v.id.as_str(), v.attachments[0].node_id, v.attachments[0].dcf.as_deref()))
+            .map(|v| {
+                (
+                    v.id.as_str(),
+                    v.attachments[0].node_id,
+                    v.attachments[0].dcf.as_deref(),
+                )
+            })
             .collect();
         assert_eq!(
             ids,
@@ -448,10 +470,19 @@ mod tests {
         let (_, again, diagnostics) = read(written.as_bytes());
         assert!(diagnostics.is_empty(), "{diagnostics:?}");
         assert_eq!(
-            again.vertices.iter().map(|v| (&v.id, &v.name, &v.attachments[0].dcf)).collect::<Vec<_>>(),
-            topology.vertices.iter().map(|v| (&v.id, &v.name, &v.attachments[0].dcf)).collect::<Vec<_>>()
+            again
+                .vertices
+                .iter()
+                .map(|v| (&v.id, &v.name, &v.attachments[0].dcf))
+                .collect::<Vec<_>>(),
+            topology
+                .vertices
+                .iter()
+                .map(|v| (&v.id, &v.name, &v.attachments[0].dcf))
+                .collect::<Vec<_>>()
         );
-        let numbered = "[Topology]\nNodes=0x00\n[Topology7]\nNodes=0x01\nNode3Present=0x01\nNode3DCFName=x.dcf\n";
+        let numbered =
+            "[Topology]\nNodes=0x00\n[Topology7]\nNodes=0x01\nNode3Present=0x01\nNode3DCFName=x.dcf\n";
         let (_, topology, _) = read(numbered.as_bytes());
         assert_eq!(topology.vertices[0].attachments[0].net, Some(7));
     }
@@ -474,7 +505,11 @@ mod tests {
             ]
         );
         assert_eq!(topology.networks[0].extra.len(), 2);
-        let present: Vec<bool> = topology.vertices.iter().map(|v| v.attachments[0].present).collect();
+        let present: Vec<bool> = topology
+            .vertices
+            .iter()
+            .map(|v| v.attachments[0].present)
+            .collect();
         assert_eq!(present, [false, false, true]);
         let (_, _, diagnostics) = read(b"garbage\n");
         assert_eq!(

@@ -140,7 +140,15 @@ impl Localiser {
         let fitting: Vec<(&Hypothesis, BTreeSet<usize>)> = self
             .hypotheses
             .iter()
-            .map(|h| (h, h.predicts.intersection(watched).copied().collect::<BTreeSet<usize>>()))
+            .map(|h| {
+                (
+                    h,
+                    h.predicts
+                        .intersection(watched)
+                        .copied()
+                        .collect::<BTreeSet<usize>>(),
+                )
+            })
             .filter(|(_, p)| !p.is_empty() && p.is_subset(&silent))
             .collect();
         let laminar: BTreeSet<&BTreeSet<usize>> = fitting
@@ -206,7 +214,10 @@ fn choose_supplies<'a>(
     let cost = |chosen: &[&BTreeSet<usize>]| -> (usize, usize) {
         let covered: BTreeSet<usize> = chosen.iter().flat_map(|s| s.iter().copied()).collect();
         let rest: BTreeSet<usize> = silent.difference(&covered).copied().collect();
-        let trees = maximal.iter().filter(|m| m.iter().any(|d| rest.contains(d))).count();
+        let trees = maximal
+            .iter()
+            .filter(|m| m.iter().any(|d| rest.contains(d)))
+            .count();
         let loose = rest
             .iter()
             .filter(|d| !maximal.iter().any(|m| m.contains(d)))
@@ -264,7 +275,11 @@ mod tests {
             .explain(&watched, &silent)
             .into_iter()
             .map(|e| {
-                let explains = e.explains.iter().map(|&d| wiring.devices()[d].name.clone()).collect();
+                let explains = e
+                    .explains
+                    .iter()
+                    .map(|&d| wiring.devices()[d].name.clone())
+                    .collect();
                 (e.kind, e.candidates, explains)
             })
             .collect()
@@ -277,9 +292,19 @@ mod tests {
     /// m (monitor, node 1) — W1 — a — W2 — j — W3 — b, j — W4 — c: a trunk with a junction.
     fn trunk() -> Topology {
         system(
-            &[("m", 1, Some("A")), ("a", 2, Some("A")), ("b", 3, Some("B")), ("c", 4, Some("B"))],
+            &[
+                ("m", 1, Some("A")),
+                ("a", 2, Some("A")),
+                ("b", 3, Some("B")),
+                ("c", 4, Some("B")),
+            ],
             &[("j", "junction")],
-            &[("W1", "m", "a"), ("W2", "a", "j"), ("W3", "j", "b"), ("W4", "j", "c")],
+            &[
+                ("W1", "m", "a"),
+                ("W2", "a", "j"),
+                ("W3", "j", "b"),
+                ("W4", "j", "c"),
+            ],
         )
     }
 
@@ -316,7 +341,13 @@ mod tests {
     #[test]
     fn two_faults_in_different_branches_give_two_explanations() {
         let topology = system(
-            &[("m", 1, None), ("a", 2, None), ("b", 3, None), ("c", 4, None), ("d", 5, None)],
+            &[
+                ("m", 1, None),
+                ("a", 2, None),
+                ("b", 3, None),
+                ("c", 4, None),
+                ("d", 5, None),
+            ],
             &[("j", "junction")],
             &[
                 ("W1", "m", "j"),
@@ -336,7 +367,12 @@ mod tests {
     #[test]
     fn a_scattered_supply_domain_is_one_fault_not_many() {
         let topology = system(
-            &[("m", 1, None), ("a", 2, Some("F1")), ("b", 3, None), ("c", 4, Some("F1"))],
+            &[
+                ("m", 1, None),
+                ("a", 2, Some("F1")),
+                ("b", 3, None),
+                ("c", 4, Some("F1")),
+            ],
             &[],
             &[("W1", "m", "a"), ("W2", "a", "b"), ("W3", "b", "c")],
         );

@@ -268,14 +268,12 @@ impl Topology {
 
     /// The name of network `number`: its declared name, else the first `NetworkNameNx` of a device on it.
     pub fn network_name(&self, number: u32) -> Option<&str> {
-        self.network(number)
-            .and_then(|n| n.name.as_deref())
-            .or_else(|| {
-                self.vertices
-                    .iter()
-                    .filter_map(|v| v.attachment(number))
-                    .find_map(|a| a.network_name.as_deref())
-            })
+        self.network(number).and_then(|n| n.name.as_deref()).or_else(|| {
+            self.vertices
+                .iter()
+                .filter_map(|v| v.attachment(number))
+                .find_map(|a| a.network_name.as_deref())
+        })
     }
 
     /// The present devices of network `net` that have a node-ID, in vertex order.
@@ -301,6 +299,20 @@ impl Topology {
             .iter()
             .position(|v| v.id == name)
             .or_else(|| self.vertices.iter().position(|v| v.name.as_deref() == Some(name)))
+    }
+
+    /// The vertex indices each cable joins, by cable index (`None` when an end is no vertex).
+    pub fn cable_ends(&self) -> Vec<Option<(usize, usize)>> {
+        let index: std::collections::BTreeMap<&str, usize> = self
+            .vertices
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (v.id.as_str(), i))
+            .collect();
+        self.cables
+            .iter()
+            .map(|c| Some((*index.get(c.source.as_str())?, *index.get(c.target.as_str())?)))
+            .collect()
     }
 
     /// The cables of network `net`. In a system with one network, cables without `NetNumber` are
@@ -359,8 +371,14 @@ mod tests {
     fn kinds_follow_the_vocabulary_and_the_attachments() {
         assert_eq!(vertex("a", None, &[(1, 5)]).kind(), VertexKind::Device);
         assert_eq!(vertex("a", None, &[(1, 5), (2, 5)]).kind(), VertexKind::Gateway);
-        assert_eq!(vertex("a", Some("device"), &[(1, 5), (2, 5)]).kind(), VertexKind::Gateway);
-        assert_eq!(vertex("a", Some("Master"), &[(1, 5), (2, 5)]).kind(), VertexKind::Manager);
+        assert_eq!(
+            vertex("a", Some("device"), &[(1, 5), (2, 5)]).kind(),
+            VertexKind::Gateway
+        );
+        assert_eq!(
+            vertex("a", Some("Master"), &[(1, 5), (2, 5)]).kind(),
+            VertexKind::Manager
+        );
         assert_eq!(vertex("j", None, &[]).kind(), VertexKind::Passive);
         assert_eq!(vertex("h", Some("HUB"), &[]).kind(), VertexKind::Active);
         assert!(!vertex("h", Some("repeater"), &[]).is_device());

@@ -354,7 +354,11 @@ impl SystemMonitor {
 
     /// When [`SystemMonitor::handle_timeout`] has something to do next.
     pub fn poll_timeout(&self) -> Option<Instant> {
-        let deadlines = self.devices.iter().filter(|d| !d.silent).filter_map(|d| d.deadline);
+        let deadlines = self
+            .devices
+            .iter()
+            .filter(|d| !d.silent)
+            .filter_map(|d| d.deadline);
         let dues = self.networks.values().filter_map(|w| w.due);
         deadlines.chain(dues).min()
     }
@@ -495,7 +499,9 @@ impl SystemMonitor {
     }
 
     fn seconds(&self, now: Instant) -> f64 {
-        let elapsed = self.started.map_or(Duration::ZERO, |s| now.saturating_duration_since(s));
+        let elapsed = self
+            .started
+            .map_or(Duration::ZERO, |s| now.saturating_duration_since(s));
         // Microseconds are what the clock resolves; the JSON keeps them exactly.
         elapsed.as_micros() as f64 / 1e6
     }
@@ -562,7 +568,13 @@ mod tests {
         );
     }
 
-    fn run_from(monitor: &mut SystemMonitor, from: u64, until: u64, beating: &[u16], events: &mut Vec<String>) {
+    fn run_from(
+        monitor: &mut SystemMonitor,
+        from: u64,
+        until: u64,
+        beating: &[u16],
+        events: &mut Vec<String>,
+    ) {
         for t in (from..=until).step_by(100) {
             while let Some(due) = monitor.poll_timeout().filter(|d| *d <= at(t)) {
                 monitor.handle_timeout(due);
@@ -587,7 +599,9 @@ mod tests {
         let mut monitor = SystemMonitor::new(&topology, &config);
         monitor.start(at(0));
         assert_eq!(monitor.poll_timeout(), None);
-        let events: Vec<String> = std::iter::from_fn(|| monitor.poll_event()).map(|e| e.to_json()).collect();
+        let events: Vec<String> = std::iter::from_fn(|| monitor.poll_event())
+            .map(|e| e.to_json())
+            .collect();
         assert_eq!(
             events,
             [r#"{"event":"state","time":0.0,"network":1,"node":"a","node_id":2,"state":"unmonitored"}"#]

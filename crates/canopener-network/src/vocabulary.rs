@@ -100,7 +100,10 @@ pub const CPJ_KEY_PREFIX: &str = "Cpj.";
 pub fn split_attachment_key(name: &str) -> Option<(&'static str, u32)> {
     ATTACHMENT_KEYS.iter().find_map(|(base, _)| {
         let rest = name.strip_prefix(base)?.strip_prefix('N')?;
-        let slot: u32 = rest.parse().ok().filter(|_| rest.bytes().all(|b| b.is_ascii_digit()))?;
+        let slot: u32 = rest
+            .parse()
+            .ok()
+            .filter(|_| rest.bytes().all(|b| b.is_ascii_digit()))?;
         (slot >= 1).then_some((*base, slot))
     })
 }

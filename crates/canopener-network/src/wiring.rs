@@ -144,7 +144,14 @@ impl Wiring {
                 .supply_domain
                 .clone()
                 .filter(|d| !d.is_empty())
-                .or_else(|| member.vertex.supply_domains().into_iter().next().map(str::to_owned));
+                .or_else(|| {
+                    member
+                        .vertex
+                        .supply_domains()
+                        .into_iter()
+                        .next()
+                        .map(str::to_owned)
+                });
             wiring.devices.push(Device {
                 vertex: member.index,
                 node_id,
@@ -207,7 +214,10 @@ impl Wiring {
     /// Whether a device is off under `faults` (dead, or its supply off).
     pub fn is_off(&self, device: &Device, faults: &Faults) -> bool {
         faults.dead.contains(&device.vertex)
-            || device.supply.as_ref().is_some_and(|d| faults.unpowered.contains(d))
+            || device
+                .supply
+                .as_ref()
+                .is_some_and(|d| faults.unpowered.contains(d))
     }
 
     /// The devices (indices into [`Wiring::devices`]) the monitor cannot hear under `faults`: those that
@@ -218,7 +228,9 @@ impl Wiring {
             .iter()
             .enumerate()
             .filter(|(_, d)| !d.is_monitor)
-            .filter(|(_, d)| self.is_off(d, faults) || (self.reachable_without_faults[d.core] && !reach[d.core]))
+            .filter(|(_, d)| {
+                self.is_off(d, faults) || (self.reachable_without_faults[d.core] && !reach[d.core])
+            })
             .map(|(index, _)| index)
             .collect()
     }
@@ -432,7 +444,10 @@ pub(crate) mod tests {
         let partition = wiring.partition(&cut);
         assert_eq!(partition.devices[0], partition.root);
         assert_eq!(partition.devices[1], partition.root);
-        assert_eq!(partition.devices[2], partition.devices[3], "b and c still hear each other");
+        assert_eq!(
+            partition.devices[2], partition.devices[3],
+            "b and c still hear each other"
+        );
         assert_ne!(partition.devices[2], partition.root);
         assert_eq!(wiring.partition(&dead).devices[2], None);
     }

@@ -650,9 +650,15 @@ mod tests {
             node.data[1].attributes,
             [("xml:space".to_owned(), "preserve".to_owned())]
         );
-        assert_eq!(first.keys[0].attributes, [("yfiles.type".to_owned(), "nodegraphics".to_owned())]);
+        assert_eq!(
+            first.keys[0].attributes,
+            [("yfiles.type".to_owned(), "nodegraphics".to_owned())]
+        );
         assert_eq!(first.keys[1].default.as_deref(), Some("x & y"));
-        assert_eq!(first.graph.edges[0].attributes, [("sourceport".to_owned(), "a".to_owned())]);
+        assert_eq!(
+            first.graph.edges[0].attributes,
+            [("sourceport".to_owned(), "a".to_owned())]
+        );
         let written = first.write();
         let (second, diagnostics) = GraphMl::parse(&written);
         assert!(diagnostics.is_empty(), "{diagnostics:?}\n{written}");

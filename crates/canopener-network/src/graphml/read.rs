@@ -8,9 +8,7 @@ use canopener_eds::Span;
 use crate::codes::{NetCode, NetDiagnostic};
 use crate::graphml::document::{Data, GraphMl, Key};
 use crate::model::{Attachment, Cable, Extra, Format, Network, Topology, Vertex};
-use crate::vocabulary::{
-    self, ATTACHMENT_KEYS, CPJ_KEY_PREFIX, ValueClass, class_of, split_attachment_key,
-};
+use crate::vocabulary::{self, ATTACHMENT_KEYS, CPJ_KEY_PREFIX, ValueClass, class_of, split_attachment_key};
 
 /// The model of a GraphML document, with what reading it found.
 pub fn topology(doc: &GraphMl, diagnostics: &mut Vec<NetDiagnostic>) -> Topology {
@@ -76,7 +74,10 @@ pub fn topology(doc: &GraphMl, diagnostics: &mut Vec<NetDiagnostic>) -> Topology
                 let span = data.map_or(port.span, |d| d.span);
                 if ATTACHMENT_KEYS.iter().any(|(k, _)| *k == name) {
                     known = true;
-                    let base = ATTACHMENT_KEYS.iter().find(|(k, _)| *k == name).map_or("", |(k, _)| k);
+                    let base = ATTACHMENT_KEYS
+                        .iter()
+                        .find(|(k, _)| *k == name)
+                        .map_or("", |(k, _)| k);
                     attachment_datum(&mut attachment, base, &name, value, span, diagnostics);
                 }
             }
@@ -218,7 +219,10 @@ impl<'a> Keys<'a> {
                     NetDiagnostic::new(
                         NetCode::KeyDeclaration,
                         key.span,
-                        format!("the key id `{}` is declared twice; the first declaration is used", key.id),
+                        format!(
+                            "the key id `{}` is declared twice; the first declaration is used",
+                            key.id
+                        ),
                     )
                     .at(None, Some(&key.id)),
                 );
@@ -231,7 +235,10 @@ impl<'a> Keys<'a> {
                     NetDiagnostic::new(
                         NetCode::KeyDeclaration,
                         key.span,
-                        format!("attr.type `{text}` of key `{}` is not a GraphML type; read as string", key.id),
+                        format!(
+                            "attr.type `{text}` of key `{}` is not a GraphML type; read as string",
+                            key.id
+                        ),
                     )
                     .with_help("GraphML types are boolean, int, long, float, double and string"),
                 );
@@ -322,7 +329,13 @@ impl<'a> Keys<'a> {
         self.doc
             .keys
             .iter()
-            .filter(|key| key.allows(element) && self.by_id.get(key.id.as_str()).is_some_and(|k| std::ptr::eq(*k, *key)))
+            .filter(|key| {
+                key.allows(element)
+                    && self
+                        .by_id
+                        .get(key.id.as_str())
+                        .is_some_and(|k| std::ptr::eq(*k, *key))
+            })
             .filter_map(|key| key.default.clone().map(|d| (key, d)))
             .collect()
     }
@@ -399,9 +412,10 @@ impl<'a> Keys<'a> {
 
 fn is_canopener_key(name: &str) -> bool {
     name.starts_with(CPJ_KEY_PREFIX)
-        || vocabulary::NETWORK_KEY_PREFIXES
-            .iter()
-            .any(|prefix| name.strip_prefix(prefix).is_some_and(|n| n.parse::<u32>().is_ok()))
+        || vocabulary::NETWORK_KEY_PREFIXES.iter().any(|prefix| {
+            name.strip_prefix(prefix)
+                .is_some_and(|n| n.parse::<u32>().is_ok())
+        })
 }
 
 fn parse_bool(text: &str) -> Option<bool> {
@@ -490,11 +504,20 @@ mod tests {
 <graph edgedefault="undirected"><node id="a"><data key="d0">5</data><data key="d1">2</data></node>
 <node id="b"/><edge source="a" target="b"><data key="d3">W1</data></edge></graph></graphml>"#,
         );
-        assert!(diagnostics.iter().all(|d| d.code == NetCode::UnknownKey), "{diagnostics:?}");
+        assert!(
+            diagnostics.iter().all(|d| d.code == NetCode::UnknownKey),
+            "{diagnostics:?}"
+        );
         let a = &topology.vertices[0];
-        assert_eq!((a.num_of_nets, a.attachments[0].node_id, a.attachments[0].net), (Some(1), Some(5), Some(2)));
+        assert_eq!(
+            (a.num_of_nets, a.attachments[0].node_id, a.attachments[0].net),
+            (Some(1), Some(5), Some(2))
+        );
         assert_eq!(topology.cables[0].id.as_deref(), Some("W1"));
-        assert_eq!(topology.networks.iter().map(|n| n.number).collect::<Vec<_>>(), [2]);
+        assert_eq!(
+            topology.networks.iter().map(|n| n.number).collect::<Vec<_>>(),
+            [2]
+        );
     }
 
     #[test]
