@@ -8,6 +8,7 @@ use crate::eds::args::EdsCommand;
 use crate::master::args::{
     HeartbeatCommand, LssCommand, NmtArgs, NodeCommand, PdoCommand, SdoCommand, SyncArgs,
 };
+use crate::net::args::NetCommand;
 use crate::sim::args::SimArgs;
 
 /// canopener: verify CANopen devices, their EDS files and whole networks.
@@ -41,10 +42,11 @@ Exit codes:
   7  device error: the device refused a request (SDO abort, LSS error) or did not answer in time
 130  interrupted: Ctrl-C or SIGTERM while talking to a device (a running transfer is aborted on the bus)
 
-`eds` commands follow diff(1) instead:
+`eds` and `net` commands (except `net monitor`) follow diff(1) instead:
   0  success (`eds diff`: both files describe the same device and object dictionary;
      `eds check`/`eds fix`: no errors, or no warnings either with --deny warnings)
-  1  `eds diff`: the files differ; `eds check`/`eds fix`: errors found (or warnings with --deny warnings)
+  1  `eds diff`: the files differ; `eds check`/`eds fix`/`net check`: errors found (or warnings with
+     --deny warnings)
   2  any trouble: bad arguments, a file that cannot be read, refused or written";
 
 #[derive(Debug, Subcommand)]
@@ -62,6 +64,10 @@ pub(crate) enum Command {
     /// Read, show, convert, format and compare EDS/DCF files (CiA 306) and XDD/XDC files (CiA 311).
     #[command(subcommand)]
     Eds(EdsCommand),
+    /// CANopen systems (nodelist.cpj, Nodelist.graphml): check, show, convert, draw, and monitor which cable
+    /// broke.
+    #[command(subcommand)]
+    Net(NetCommand),
     /// Run simulated CANopen devices built from EDS/DCF files on a bus, in real time, until Ctrl-C.
     #[command(after_help = "Examples:
   canopener bus serve &                                   # a hub on 127.0.0.1:29536

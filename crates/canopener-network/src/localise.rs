@@ -36,6 +36,18 @@ pub enum Kind {
     Monitor,
 }
 
+impl Kind {
+    /// The word the JSON events use.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Kind::Cable => "cable",
+            Kind::Device => "device",
+            Kind::Supply => "supply",
+            Kind::Monitor => "monitor",
+        }
+    }
+}
+
 /// One single fault and what it would silence.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Hypothesis {

@@ -80,7 +80,7 @@ impl Run {
         let mut links = self.sim.links();
         self.now = self
             .watch
-            .run(&mut links, Some(self.now + by), |_, mut slice| {
+            .run(&mut links, Some(self.now + by), |_, _, mut slice| {
                 events.append(&mut slice);
                 Ok::<_, LinkError>(Flow::Continue)
             })

@@ -10,3 +10,9 @@ for id in $(seq 1 24); do
     "$canopener" eds convert "$src" --to dcf --node-id "$id" --bitrate 250 -o "$out/node$id.dcf.tmp"
     mv "$out/node$id.dcf.tmp" "$out/node$id.dcf"
 done
+# The paper's example (paper/Nodelist.graphml) names its DCFs as the iCC 2012 paper does.
+cp "$out/node2.dcf" "$out/../paper/EDS/demo_plc.dcf"
+cp "$out/node3.dcf" "$out/../paper/EDS/demodeva.dcf"
+cp "$out/node4.dcf" "$out/../paper/EDS/demodevb.dcf"
+cp "$out/node6.dcf" "$out/../paper/EDS/demodevb2.dcf"
+cp "$out/node5.dcf" "$out/../paper/EDS/demodevd.dcf"

@@ -60,6 +60,7 @@ pub struct SystemFiles {
     /// What reading it gave.
     pub loaded: Loaded,
     dir: PathBuf,
+    text: String,
 }
 
 impl SystemFiles {
@@ -79,7 +80,13 @@ impl SystemFiles {
             path: path.to_owned(),
             loaded: canopener_network::load(bytes),
             dir: path.parent().map(Path::to_owned).unwrap_or_default(),
+            text: String::from_utf8_lossy(bytes).into_owned(),
         }
+    }
+
+    /// The file's text as read (invalid UTF-8 replaced), for showing the lines findings point at.
+    pub fn source_text(&self) -> &str {
+        &self.text
     }
 
     /// The system.

@@ -38,14 +38,14 @@ impl SystemWatch {
     }
 
     /// Serves `links` (network number, link) until `until` (on the first link's clock), until a link
-    /// is cancelled or `on_slice` returns [`Flow::Done`]. After every slice `on_slice` gets the monitor
-    /// and the events of the slice (often none: a display redraws then). Returns the first link's time
+    /// is cancelled or `on_slice` returns [`Flow::Done`]. After every slice `on_slice` gets the time, the
+    /// monitor and the events of the slice (often none: a display redraws then). Returns the first link's time
     /// at the end.
     pub fn run<E>(
         &mut self,
         links: &mut [(u32, &mut dyn Link)],
         until: Option<Instant>,
-        mut on_slice: impl FnMut(&SystemMonitor, Vec<Event>) -> Result<Flow<()>, E>,
+        mut on_slice: impl FnMut(Instant, &SystemMonitor, Vec<Event>) -> Result<Flow<()>, E>,
     ) -> Result<Instant, E>
     where
         E: From<LinkError>,
@@ -76,7 +76,7 @@ impl SystemWatch {
             now = links[0].1.now().max(deadline);
             self.monitor.handle_timeout(now);
             let events: Vec<Event> = std::iter::from_fn(|| self.monitor.poll_event()).collect();
-            if let Flow::Done(()) = on_slice(&self.monitor, events)? {
+            if let Flow::Done(()) = on_slice(now, &self.monitor, events)? {
                 return Ok(now);
             }
         }
