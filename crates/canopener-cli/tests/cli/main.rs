@@ -18,6 +18,7 @@ mod harness;
 mod master_pdo;
 mod master_sdo;
 mod master_services;
+mod net;
 mod sim;
 
 use std::process::Output;
