@@ -4,6 +4,7 @@
 
 use std::fmt::Write as _;
 
+use crate::graphml::document::{Data, GraphMl};
 use crate::model::{Format, Topology};
 use crate::read::{Loaded, Source};
 
@@ -28,11 +29,12 @@ pub struct Converted {
 }
 
 /// Converts a file read by [`crate::load`]. A file converted to its own format is written back as it
-/// was read (every byte of a cpj, every element of a GraphML).
+/// was read (every byte of a cpj; every element of a GraphML, with the two quirks N011 and N012
+/// resolved as they were read).
 pub fn convert(loaded: &Loaded, target: Target) -> Converted {
     let text = match (target, &loaded.source) {
         (Target::Cpj, Source::Cpj(document)) => document.text().to_owned(),
-        (Target::Graphml, Source::Graphml(document)) => document.write(),
+        (Target::Graphml, Source::Graphml(document)) => as_read(document).write(),
         (Target::Graphml, Source::Cpj(_)) => crate::graphml::build::document(&loaded.topology).write(),
         (Target::Cpj, Source::Graphml(_)) => crate::cpj::write(&loaded.topology),
         (Target::Dot, _) => dot(&loaded.topology),
@@ -42,6 +44,38 @@ pub fn convert(loaded: &Loaded, target: Target) -> Converted {
         _ => Vec::new(),
     };
     Converted { text, dropped }
+}
+
+/// The document as canopener read it: every `<data key>` that matches a declared key only when case
+/// is ignored (warning N011, as in the paper's own `EdsBaseName`) points at the declared key, and of
+/// repeated data elements (N012) only the first, which is the one read, is kept. Other GraphML
+/// readers refuse an undeclared key (networkx) or take the last of repeated values.
+fn as_read(document: &GraphMl) -> GraphMl {
+    let mut document = document.clone();
+    let ids: Vec<String> = document.keys.iter().map(|k| k.id.clone()).collect();
+    let resolve = |data: &mut Vec<Data>| {
+        for datum in data.iter_mut() {
+            if !ids.contains(&datum.key)
+                && let Some(id) = ids.iter().find(|id| id.eq_ignore_ascii_case(&datum.key))
+            {
+                datum.key = id.clone();
+            }
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        data.retain(|datum| seen.insert(datum.key.clone()));
+    };
+    let graph = &mut document.graph;
+    resolve(&mut graph.data);
+    for node in &mut graph.nodes {
+        resolve(&mut node.data);
+        for port in &mut node.ports {
+            resolve(&mut port.data);
+        }
+    }
+    for edge in &mut graph.edges {
+        resolve(&mut edge.data);
+    }
+    document
 }
 
 /// What nodelist.cpj cannot hold of a topology.

@@ -11,7 +11,9 @@ use canopener_testkit::fixture;
 use proptest::prelude::*;
 
 fn test_data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("test_data").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("test_data")
+        .join(name)
 }
 
 const GRAPHML: [&str; 8] = [
@@ -78,7 +80,11 @@ fn every_graphml_fixture_reads_without_errors_and_writes_back_to_the_same_model(
             unspanned(loaded.topology.clone()),
             "{name}"
         );
-        assert_eq!(convert(&again, Target::Graphml).text, written, "{name}: not a fixed point");
+        assert_eq!(
+            convert(&again, Target::Graphml).text,
+            written,
+            "{name}: not a fixed point"
+        );
     }
 }
 
@@ -96,15 +102,29 @@ fn the_papers_example_has_the_warnings_it_deserves_and_its_two_networks() {
     assert_eq!(gateway.kind(), canopener_network::VertexKind::Gateway);
     assert_eq!(gateway.attachment(7).and_then(|a| a.node_id), Some(6));
     // The first of repeated values wins.
-    assert_eq!(gateway.attachment(7).and_then(|a| a.supply_domain.as_deref()), Some("Primary"));
+    assert_eq!(
+        gateway.attachment(7).and_then(|a| a.supply_domain.as_deref()),
+        Some("Primary")
+    );
     let cpj = convert(&loaded, Target::Cpj);
-    assert!(cpj.dropped.iter().any(|d| d.contains("cable")), "{:?}", cpj.dropped);
+    assert!(
+        cpj.dropped.iter().any(|d| d.contains("cable")),
+        "{:?}",
+        cpj.dropped
+    );
     let back = canopener_network::load(cpj.text.as_bytes());
     assert_eq!(devices(&back.topology), devices(topology));
     let dot = convert(&loaded, Target::Dot).text;
     assert!(dot.contains("\"N003\" -- \"N004\""), "{dot}");
     let svg = canopener_network::draw::svg(topology);
-    for name in ["DemoPLC", "DemoNode_A", "DemoNode_C", "DemoNode_D", "W5002 500 m", "lin_back.bmp"] {
+    for name in [
+        "DemoPLC",
+        "DemoNode_A",
+        "DemoNode_C",
+        "DemoNode_D",
+        "W5002 500 m",
+        "lin_back.bmp",
+    ] {
         assert!(svg.contains(name), "{name} not in the drawing");
     }
 }
@@ -118,18 +138,37 @@ fn cpj_to_graphml_to_cpj_keeps_every_device_of_every_graphml_fixture() {
         let from_cpj = canopener_network::load(cpj.as_bytes());
         let graphml = convert(&from_cpj, Target::Graphml);
         assert!(graphml.dropped.is_empty(), "{name}");
-        let back = canopener_network::load(convert(&canopener_network::load(graphml.text.as_bytes()), Target::Cpj).text.as_bytes());
+        let back = canopener_network::load(
+            convert(&canopener_network::load(graphml.text.as_bytes()), Target::Cpj)
+                .text
+                .as_bytes(),
+        );
         assert_eq!(devices(&back.topology), devices(&from_cpj.topology), "{name}");
         // Gateways become one node per network in cpj; every (network, node-ID) survives.
-        let ids = |t: &Topology| devices(t).into_iter().map(|(n, id, ..)| (n, id)).collect::<Vec<_>>();
+        let ids = |t: &Topology| {
+            devices(t)
+                .into_iter()
+                .map(|(n, id, ..)| (n, id))
+                .collect::<Vec<_>>()
+        };
         assert_eq!(ids(&back.topology), ids(&original.topology), "{name}");
     }
 }
 
 /// A system with `nets` networks: devices with names, node-IDs and DCFs, some absent.
 fn system() -> impl Strategy<Value = Topology> {
-    let device = (1u32..=3, 1u8..=127, "[A-Za-z][A-Za-z0-9_ ]{0,12}", proptest::option::of("[a-z0-9_]{1,8}\\.dcf"), any::<bool>());
-    (proptest::collection::vec(device, 1..12), proptest::option::of("[a-z]{1,6}"), proptest::option::of("[A-Za-z ]{1,10}"))
+    let device = (
+        1u32..=3,
+        1u8..=127,
+        "[A-Za-z][A-Za-z0-9_ ]{0,12}",
+        proptest::option::of("[a-z0-9_]{1,8}\\.dcf"),
+        any::<bool>(),
+    );
+    (
+        proptest::collection::vec(device, 1..12),
+        proptest::option::of("[a-z]{1,6}"),
+        proptest::option::of("[A-Za-z ]{1,10}"),
+    )
         .prop_map(|(devices, base, net_name)| {
             let mut seen = std::collections::BTreeSet::new();
             let vertices: Vec<Vertex> = devices
@@ -156,7 +195,10 @@ fn system() -> impl Strategy<Value = Topology> {
                     .into_iter()
                     .map(|number| Network {
                         number,
-                        name: net_name.clone().map(|n| n.trim().to_owned()).filter(|n| !n.is_empty()),
+                        name: net_name
+                            .clone()
+                            .map(|n| n.trim().to_owned())
+                            .filter(|n| !n.is_empty()),
                         ..Network::default()
                     })
                     .collect(),

@@ -8,7 +8,9 @@ use serde_json::Value;
 use super::{run, stderr, stdout, temp_dir};
 
 fn test_data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../canopener-network/test_data").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../canopener-network/test_data")
+        .join(name)
 }
 
 fn arg(path: &Path) -> &str {
@@ -34,7 +36,10 @@ fn codes(file: &Value) -> Vec<String> {
 
 #[test]
 fn clean_systems_exit_0_and_the_papers_example_only_warns() {
-    let (code, json) = check_json(&[&test_data("gateway.graphml"), &test_data("paper/Nodelist.graphml")]);
+    let (code, json) = check_json(&[
+        &test_data("gateway.graphml"),
+        &test_data("paper/Nodelist.graphml"),
+    ]);
     assert_eq!(code, Some(0), "{json:#}");
     assert_eq!(json["version"], 1);
     assert!(codes(&json["files"][0]).is_empty(), "{json:#}");
@@ -42,7 +47,11 @@ fn clean_systems_exit_0_and_the_papers_example_only_warns() {
     assert_eq!(paper.iter().filter(|c| *c == "N011").count(), 1, "{paper:?}");
     assert_eq!(paper.iter().filter(|c| *c == "N012").count(), 8, "{paper:?}");
     let first = &json["files"][1]["findings"][0];
-    assert_eq!((first["line"].as_u64(), first["column"].as_u64()), (Some(36), Some(5)), "{first}");
+    assert_eq!(
+        (first["line"].as_u64(), first["column"].as_u64()),
+        (Some(36), Some(5)),
+        "{first}"
+    );
     assert_eq!(json["summary"]["errors"], 0);
 }
 
@@ -59,7 +68,11 @@ fn malformed_xml_missing_dcfs_rings_and_cpj_nodes_without_dcf_are_errors_exit_1(
     );
     std::fs::write(&ring, ring_text).expect("write");
     let cpj = dir.join("nodelist.cpj");
-    std::fs::write(&cpj, "[Topology]\nNodes=0x01\nNode5Present=0x01\nNode5Name=Drive\n").expect("write");
+    std::fs::write(
+        &cpj,
+        "[Topology]\nNodes=0x01\nNode5Present=0x01\nNode5Name=Drive\n",
+    )
+    .expect("write");
     let (code, json) = check_json(&[&broken, &ring, &cpj]);
     assert_eq!(code, Some(1), "{json:#}");
     let malformed = &json["files"][0]["findings"][0];
@@ -76,15 +89,30 @@ fn malformed_xml_missing_dcfs_rings_and_cpj_nodes_without_dcf_are_errors_exit_1(
 fn a_file_that_cannot_be_read_exits_2_and_is_named() {
     let (code, json) = check_json(&[Path::new("/nonexistent/Nodelist.graphml")]);
     assert_eq!(code, Some(2));
-    assert!(json["files"][0]["problem"].as_str().expect("problem").contains("/nonexistent/Nodelist.graphml"));
+    assert!(
+        json["files"][0]["problem"]
+            .as_str()
+            .expect("problem")
+            .contains("/nonexistent/Nodelist.graphml")
+    );
     let show = run(&["net", "show", "/nonexistent/nodelist.cpj"]);
     assert_eq!(show.status.code(), Some(2));
-    assert!(stderr(&show).contains("/nonexistent/nodelist.cpj"), "{}", stderr(&show));
+    assert!(
+        stderr(&show).contains("/nonexistent/nodelist.cpj"),
+        "{}",
+        stderr(&show)
+    );
 }
 
 #[test]
 fn show_lists_networks_devices_and_cables_as_json() {
-    let output = run(&["net", "show", arg(&test_data("gateway.graphml")), "--format", "json"]);
+    let output = run(&[
+        "net",
+        "show",
+        arg(&test_data("gateway.graphml")),
+        "--format",
+        "json",
+    ]);
     assert!(output.status.success(), "{}", stderr(&output));
     let json: Value = serde_json::from_str(&stdout(&output)).expect("json");
     let networks = json["networks"].as_array().expect("networks");
@@ -105,11 +133,31 @@ fn show_lists_networks_devices_and_cables_as_json() {
 fn convert_round_trips_through_cpj_and_names_what_it_drops() {
     let dir = temp_dir("net-convert");
     let cpj = dir.join("nodelist.cpj");
-    let output = run(&["net", "convert", arg(&test_data("trunk.graphml")), "--to", "cpj", "-o", arg(&cpj)]);
+    let output = run(&[
+        "net",
+        "convert",
+        arg(&test_data("trunk.graphml")),
+        "--to",
+        "cpj",
+        "-o",
+        arg(&cpj),
+    ]);
     assert!(output.status.success(), "{}", stderr(&output));
-    assert!(stderr(&output).contains("cannot hold 11 cable(s)"), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("cannot hold 11 cable(s)"),
+        "{}",
+        stderr(&output)
+    );
     let graphml = dir.join("Nodelist.graphml");
-    let output = run(&["net", "convert", arg(&cpj), "--to", "graphml", "-o", arg(&graphml)]);
+    let output = run(&[
+        "net",
+        "convert",
+        arg(&cpj),
+        "--to",
+        "graphml",
+        "-o",
+        arg(&graphml),
+    ]);
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(stderr(&output).is_empty(), "{}", stderr(&output));
     let again = run(&["net", "convert", arg(&graphml), "--to", "cpj"]);
@@ -134,12 +182,34 @@ fn draw_writes_an_svg_naming_every_device() {
 #[test]
 fn monitor_arguments_are_checked_before_any_bus_is_opened() {
     let file = test_data("gateway.graphml");
-    let unknown_net = run(&["net", "monitor", arg(&file), "--bus", "9=socketcand://127.0.0.1:9/can0"]);
+    let unknown_net = run(&[
+        "net",
+        "monitor",
+        arg(&file),
+        "--bus",
+        "9=socketcand://127.0.0.1:9/can0",
+    ]);
     assert_eq!(unknown_net.status.code(), Some(2));
-    assert!(stderr(&unknown_net).contains("no network 9"), "{}", stderr(&unknown_net));
-    let unknown_at = run(&["net", "monitor", arg(&file), "--bus", "socketcand://127.0.0.1:9/can0", "--at", "Nobody"]);
+    assert!(
+        stderr(&unknown_net).contains("no network 9"),
+        "{}",
+        stderr(&unknown_net)
+    );
+    let unknown_at = run(&[
+        "net",
+        "monitor",
+        arg(&file),
+        "--bus",
+        "socketcand://127.0.0.1:9/can0",
+        "--at",
+        "Nobody",
+    ]);
     assert_eq!(unknown_at.status.code(), Some(2));
-    assert!(stderr(&unknown_at).contains("--at Nobody"), "{}", stderr(&unknown_at));
+    assert!(
+        stderr(&unknown_at).contains("--at Nobody"),
+        "{}",
+        stderr(&unknown_at)
+    );
     let twice = run(&[
         "net",
         "monitor",
@@ -150,6 +220,14 @@ fn monitor_arguments_are_checked_before_any_bus_is_opened() {
         "1=socketcand://127.0.0.1:9/can1",
     ]);
     assert_eq!(twice.status.code(), Some(2), "{}", stderr(&twice));
-    let refused = run(&["net", "monitor", arg(&file), "--bus", "socketcand://127.0.0.1:9/can0", "--duration", "1s"]);
+    let refused = run(&[
+        "net",
+        "monitor",
+        arg(&file),
+        "--bus",
+        "socketcand://127.0.0.1:9/can0",
+        "--duration",
+        "1s",
+    ]);
     assert_eq!(refused.status.code(), Some(4), "{}", stderr(&refused));
 }

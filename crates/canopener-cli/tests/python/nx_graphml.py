@@ -2,7 +2,8 @@
 
     nx_graphml.py dump FILE          print {"graph": {...}, "nodes": {id: {...}}, "edges": [[u, v, {...}], ...]}
                                      as networkx reads FILE (read_graphml)
-    nx_graphml.py rewrite IN OUT     read IN with networkx and write it again with write_graphml
+    nx_graphml.py rewrite IN OUT     read IN with networkx and write it again with write_graphml (key
+                                     defaults written out on each element: networkx drops them)
     nx_graphml.py make OUT           write a two-network system built with networkx's own API
 """
 
@@ -14,10 +15,15 @@ import networkx as nx
 
 def dump(path):
     graph = nx.read_graphml(path)
+    # networkx keeps a key's <default> aside (graph["node_default"]); GraphML says it is the value of
+    # every element without a <data> for the key, as canopener reads it.
+    node_default = graph.graph.pop("node_default", {})
+    edge_default = graph.graph.pop("edge_default", {})
     out = {
         "graph": dict(graph.graph),
-        "nodes": {node: dict(data) for node, data in graph.nodes(data=True)},
-        "edges": sorted([[u, v, dict(data)] for u, v, data in graph.edges(data=True)], key=lambda e: (e[0], e[1])),
+        "nodes": {node: {**node_default, **data} for node, data in graph.nodes(data=True)},
+        "edges": sorted([[u, v, {**edge_default, **data}] for u, v, data in graph.edges(data=True)],
+                        key=lambda e: (e[0], e[1])),
     }
     print(json.dumps(out, sort_keys=True))
 
@@ -43,7 +49,14 @@ if __name__ == "__main__":
     if command == "dump":
         dump(sys.argv[2])
     elif command == "rewrite":
-        nx.write_graphml(nx.read_graphml(sys.argv[2]), sys.argv[3])
+        graph = nx.read_graphml(sys.argv[2])
+        # write_graphml does not write key defaults back: give every element its defaulted values.
+        for node_or_edge, key in ((graph.nodes, "node_default"), (graph.edges, "edge_default")):
+            defaults = graph.graph.pop(key, {})
+            for item in node_or_edge:
+                for name, value in defaults.items():
+                    node_or_edge[item].setdefault(name, value)
+        nx.write_graphml(graph, sys.argv[3])
     elif command == "make":
         make(sys.argv[2])
     else:
