@@ -23,11 +23,14 @@ pub fn network_colour(net: u32) -> &'static str {
     PALETTE[(net.saturating_sub(1) as usize) % PALETTE.len()]
 }
 
-const CELL_W: f64 = 170.0;
+const CELL_W: f64 = 210.0;
 const CELL_H: f64 = 110.0;
 const BOX_W: f64 = 140.0;
 const BOX_H: f64 = 44.0;
 const MARGIN: f64 = 40.0;
+/// The least distance between the centres of two positioned vertices after scaling: a box and a
+/// cable label between neighbours.
+const MIN_CENTRE_DISTANCE: f64 = 230.0;
 /// Characters of a name that fit in a box at the font size used (about 6.5 px per character).
 const NAME_CHARS: usize = 20;
 
@@ -53,12 +56,24 @@ pub fn layout(topology: &Topology) -> Vec<Placed> {
         let (min_x, max_x) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
         let (min_y, max_y) = ys.fold((f64::MAX, f64::MIN), |(a, b), y| (a.min(y), b.max(y)));
         let span = (max_x - min_x).max(max_y - min_y);
-        // Coordinates in metres or on a small grid: spread them so boxes do not cover each other.
-        let scale = if span > 0.0 && span < 600.0 {
-            600.0 / span
-        } else {
-            1.0
-        };
+        // Coordinates in metres or on a small grid: spread them so boxes do not cover each other, and
+        // so that neighbours leave room for a cable label between them.
+        let nearest = nearest_pair(topology);
+        let scale = [
+            if span > 0.0 && span < 600.0 {
+                600.0 / span
+            } else {
+                1.0
+            },
+            if nearest > 0.0 {
+                MIN_CENTRE_DISTANCE / nearest
+            } else {
+                1.0
+            },
+            1.0,
+        ]
+        .into_iter()
+        .fold(0.0, f64::max);
         // On a background the picture's own coordinates are kept (the picture starts at 0,0).
         let (origin_x, origin_y) = if topology.background.is_some() && scale == 1.0 {
             (0.0, 0.0)
@@ -95,6 +110,26 @@ pub fn layout(topology: &Topology) -> Vec<Placed> {
             }
         })
         .collect()
+}
+
+/// The distance between the two closest positioned vertices (0 when fewer than two).
+fn nearest_pair(topology: &Topology) -> f64 {
+    let points: Vec<(f64, f64)> = topology
+        .vertices
+        .iter()
+        .filter_map(|v| Some((v.x?, v.y?)))
+        .collect();
+    let mut nearest = f64::MAX;
+    for (i, a) in points.iter().enumerate() {
+        for b in &points[i + 1..] {
+            // Positions on one row or column are apart by their larger offset, as boxes are laid out.
+            let d = (a.0 - b.0).abs().max((a.1 - b.1).abs());
+            if d > 0.0 {
+                nearest = nearest.min(d);
+            }
+        }
+    }
+    if nearest == f64::MAX { 0.0 } else { nearest }
 }
 
 /// Vertices breadth-first along the cables, starting at the first vertex of each unvisited part.
@@ -145,6 +180,11 @@ pub fn svg(topology: &Topology) -> String {
             escape(background)
         );
     }
+    let mut occupied: Vec<Rect> = placed
+        .iter()
+        .map(|p| footprint(&topology.vertices[p.vertex], p))
+        .collect();
+    let mut cable_labels = String::new();
     out.push_str("<g class=\"cables\">\n");
     for (cable, ends) in topology.cables.iter().zip(topology.cable_ends()) {
         let Some((a, b)) = ends else { continue };
@@ -171,12 +211,23 @@ pub fn svg(topology: &Topology) -> String {
         if let Some(length) = cable.length {
             label = format!("{label} {length} m").trim().to_owned();
         }
-        if !label.is_empty() {
-            let (mx, my) = ((x1 + x2) / 2.0, (y1 + y2) / 2.0);
+        if label.is_empty() {
+            continue;
+        }
+        // The first free spot along the cable; a label with no free spot stays in the tooltip.
+        if let Some(spot) = free_spot(
+            &occupied,
+            (x1, y1),
+            (x2, y2),
+            &label,
+            (width, height - legend_height(topology)),
+        ) {
+            occupied.push(spot);
             let _ = writeln!(
-                out,
-                r#"<text class="cable-label" x="{mx:.1}" y="{:.1}" text-anchor="middle" font-size="9" fill="{}" stroke="white" stroke-width="3" paint-order="stroke">{}</text>"#,
-                my - 4.0,
+                cable_labels,
+                r#"<text class="cable-label" x="{:.1}" y="{:.1}" text-anchor="middle" font-size="9" fill="{}" stroke="white" stroke-width="3" paint-order="stroke">{}</text>"#,
+                (spot.0 + spot.2) / 2.0,
+                spot.3 - 3.0,
                 network_colour(net),
                 escape(&label)
             );
@@ -250,11 +301,58 @@ pub fn svg(topology: &Topology) -> String {
         }
         out.push_str("</g>\n");
     }
+    out.push_str("</g>\n<g class=\"cable-labels\">\n");
+    out.push_str(&cable_labels);
     out.push_str("</g>\n");
     legend(topology, height - legend_height(topology), &mut out);
     out.push_str("</svg>\n");
     out
 }
+
+/// A box on the page: left, top, right, bottom.
+type Rect = (f64, f64, f64, f64);
+
+/// What a vertex covers: its box (devices, couplers) or its dot and name below (junctions).
+fn footprint(vertex: &crate::model::Vertex, p: &Placed) -> Rect {
+    match vertex.kind() {
+        VertexKind::Passive | VertexKind::Active => {
+            let half = (vertex.label().chars().count().min(NAME_CHARS) as f64 * CHAR_W_NAME / 2.0).max(15.0);
+            (p.x - half, p.y - 15.0, p.x + half, p.y + 26.0)
+        }
+        _ => (
+            p.x - BOX_W / 2.0 - 5.0,
+            p.y - BOX_H / 2.0 - 5.0,
+            p.x + BOX_W / 2.0 + 5.0,
+            p.y + BOX_H / 2.0 + 5.0,
+        ),
+    }
+}
+
+/// Where a cable label of `text` fits along the cable from `a` to `b` without covering a vertex or
+/// another label and inside the page: tried from the middle outwards, on and beside the line.
+fn free_spot(occupied: &[Rect], a: (f64, f64), b: (f64, f64), text: &str, page: (f64, f64)) -> Option<Rect> {
+    let w = text.chars().count() as f64 * CHAR_W_CABLE + 6.0;
+    let h = 12.0;
+    const ALONG: [f64; 9] = [0.5, 0.4, 0.6, 0.3, 0.7, 0.2, 0.8, 0.1, 0.9];
+    // On the line, just beside it, and clear of the boxes of a row (a cable between neighbours).
+    const BESIDE: [f64; 5] = [0.0, -9.0, 9.0, -(BOX_H / 2.0 + 13.0), BOX_H / 2.0 + 13.0];
+    ALONG
+        .iter()
+        .flat_map(|t| BESIDE.iter().map(move |d| (*t, *d)))
+        .find_map(|(t, d)| {
+            let (cx, cy) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t + d);
+            let rect = (cx - w / 2.0, cy - h / 2.0, cx + w / 2.0, cy + h / 2.0);
+            let inside = rect.0 >= 0.0 && rect.1 >= 0.0 && rect.2 <= page.0 && rect.3 <= page.1;
+            let free = occupied
+                .iter()
+                .all(|o| rect.2 <= o.0 || o.2 <= rect.0 || rect.3 <= o.1 || o.3 <= rect.1);
+            (inside && free).then_some(rect)
+        })
+}
+
+/// Generous widths of a character of a name (11 px bold) and a cable label (9 px), for placing.
+const CHAR_W_NAME: f64 = 7.5;
+const CHAR_W_CABLE: f64 = 5.8;
 
 fn legend_height(topology: &Topology) -> f64 {
     20.0 * topology.network_numbers().len() as f64 + 10.0

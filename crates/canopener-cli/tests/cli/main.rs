@@ -19,6 +19,7 @@ mod master_pdo;
 mod master_sdo;
 mod master_services;
 mod net;
+mod net_browser;
 mod sim;
 
 use std::process::Output;
