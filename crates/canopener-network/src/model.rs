@@ -332,6 +332,15 @@ impl Topology {
         self.vertices.iter().flat_map(Vertex::supply_domains).collect()
     }
 
+    /// Where a monitor sits when not told: the vertex typed master/manager/monitor, else the device
+    /// with the lowest node-ID of the lowest network.
+    pub fn default_position(&self) -> Option<usize> {
+        self.vertices
+            .iter()
+            .position(|v| v.node_type.as_deref().and_then(VertexKind::parse) == Some(VertexKind::Manager))
+            .or_else(|| self.default_monitor(self.network_numbers().into_iter().next()?))
+    }
+
     /// Where a monitor on network `net` sits by default: the vertex on `net` typed
     /// master/manager/monitor, else the device with the lowest node-ID on `net`.
     pub fn default_monitor(&self, net: u32) -> Option<usize> {

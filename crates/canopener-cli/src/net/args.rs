@@ -141,32 +141,3 @@ pub(crate) enum MonitorFormat {
     /// One JSON object per event on stdout.
     Json,
 }
-
-/// `--bus` values: `N=SPEC` for network N, a plain `SPEC` for the monitor's network (`None`).
-pub(crate) fn split_bus(value: &str) -> Result<(Option<u32>, &str), String> {
-    match value.split_once('=') {
-        Some((net, spec)) if !net.is_empty() && net.bytes().all(|b| b.is_ascii_digit()) => {
-            let net = net
-                .parse()
-                .map_err(|_| format!("--bus {value}: network number {net} is too large"))?;
-            Ok((Some(net), spec))
-        }
-        _ => Ok((None, value)),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bus_values_name_their_network_or_none() {
-        assert_eq!(split_bus("2=socketcan:can1"), Ok((Some(2), "socketcan:can1")));
-        assert_eq!(split_bus("socketcan:can0"), Ok((None, "socketcan:can0")));
-        assert_eq!(
-            split_bus("virtual:x?bitrate=500k"),
-            Ok((None, "virtual:x?bitrate=500k"))
-        );
-        assert!(split_bus("99999999999=virtual:x").is_err());
-    }
-}

@@ -1,17 +1,17 @@
 //! `canopener net monitor`: the system monitor on one bus per network, its events as JSON lines, as
 //! text lines, or in a live terminal view ([`crate::net::tui`]).
 
-use std::collections::BTreeMap;
 use std::io::{IsTerminal, Write};
 
+use canopener_network::Topology;
 use canopener_network::monitor::{Event, MonitorConfig, SystemMonitor};
-use canopener_network::{Topology, VertexKind};
 use canopener_runtime::link::{BusLink, Flow, Link};
 use canopener_runtime::system::watch::SystemWatch;
 
+use crate::args::buses_by_network;
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult, stdout_error};
-use crate::net::args::{MonitorFormat, NetMonitorArgs, split_bus};
+use crate::net::args::{MonitorFormat, NetMonitorArgs};
 use crate::net::input::read_system;
 use crate::net::tui::Tui;
 use crate::output::buffered_stdout;
@@ -32,20 +32,7 @@ pub(crate) fn run(args: NetMonitorArgs) -> CliResult {
         .and_then(|at| topology.vertices[at].networks().into_iter().next())
         .or_else(|| topology.network_numbers().into_iter().next())
         .unwrap_or(1);
-    let mut specs: BTreeMap<u32, String> = BTreeMap::new();
-    for value in &args.buses {
-        let (net, spec) = split_bus(value).map_err(CliError::Usage)?;
-        let net = net.unwrap_or(home);
-        if !topology.network_numbers().contains(&net) {
-            return Err(CliError::Usage(format!(
-                "--bus {value}: the topology has no network {net}; its networks are {:?}",
-                topology.network_numbers()
-            )));
-        }
-        if specs.insert(net, spec.to_owned()).is_some() {
-            return Err(CliError::Usage(format!("network {net} is given two buses")));
-        }
-    }
+    let specs = buses_by_network(&args.buses, home, &topology.network_numbers()).map_err(CliError::Usage)?;
     let config = MonitorConfig {
         at,
         networks: specs.keys().copied().collect(),
@@ -95,24 +82,16 @@ pub(crate) fn run(args: NetMonitorArgs) -> CliResult {
     Ok(())
 }
 
-/// `--at`, or the master/manager/monitor vertex, else the device with the lowest node-ID of the first
-/// network.
+/// `--at`, or the default position ([`Topology::default_position`]).
 fn monitor_position(topology: &Topology, at: Option<&str>) -> CliResult<Option<usize>> {
-    if let Some(name) = at {
-        return topology.find_vertex(name).map(Some).ok_or_else(|| {
+    match at {
+        Some(name) => topology.find_vertex(name).map(Some).ok_or_else(|| {
             CliError::Usage(format!(
                 "--at {name}: no vertex of the topology has this id or NodeName"
             ))
-        });
+        }),
+        None => Ok(topology.default_position()),
     }
-    let manager = topology
-        .vertices
-        .iter()
-        .position(|v| v.node_type.as_deref().and_then(VertexKind::parse) == Some(VertexKind::Manager));
-    Ok(manager.or_else(|| {
-        let first = topology.network_numbers().into_iter().next()?;
-        topology.default_monitor(first)
-    }))
 }
 
 /// An event as one line for people.

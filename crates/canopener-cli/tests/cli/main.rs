@@ -20,6 +20,7 @@ mod master_sdo;
 mod master_services;
 mod net;
 mod net_browser;
+mod net_system;
 mod sim;
 
 use std::process::Output;

@@ -74,6 +74,12 @@ impl SystemSim {
         })
     }
 
+    /// [`SystemSim::new`] with frames delivered at the instant they are sent, as on a real bus that a
+    /// tool watches from outside (the real bus brings its own timing).
+    pub fn ideal(files: &SystemFiles, at: Option<usize>) -> Result<SystemSim, SystemError> {
+        SystemSim::new(files, at, Timing::Ideal)
+    }
+
     /// The system simulated.
     pub fn topology(&self) -> &Topology {
         &self.topology

@@ -2,8 +2,8 @@
 //! [`SystemMonitor`], its events out.
 //!
 //! The links are served in turn up to a common deadline (the monitor's next timeout, at most
-//! [`SLICE`] ahead), so simulated buses on virtual time stay in step and real buses are read at least
-//! every [`SLICE`]. Frames carry their receive times, so the order of service does not change what the
+//! [`SLICE`] ahead): each real bus waits its share of the slice, every simulated bus on virtual time
+//! runs to the deadline, so they stay in step, and real buses are read at least every [`SLICE`]. Frames carry their receive times, so the order of service does not change what the
 //! monitor concludes.
 
 use std::time::Duration;
@@ -68,9 +68,17 @@ impl SystemWatch {
             if let Some(until) = until {
                 deadline = deadline.min(until);
             }
-            for (net, link) in links.iter_mut() {
-                while let Some((at, frame)) = link.recv_until(deadline)? {
-                    self.monitor.handle_frame(at, *net, &frame);
+            // Each link waits its share of the slice in turn (a real bus only delivers while waited
+            // on), then every link is brought up to the deadline (a simulated bus runs to it).
+            let count = u32::try_from(links.len()).unwrap_or(u32::MAX);
+            let span = deadline.saturating_duration_since(now);
+            for pass in [true, false] {
+                for (i, (net, link)) in links.iter_mut().enumerate() {
+                    let share = now + span * (u32::try_from(i).unwrap_or(u32::MAX).saturating_add(1)) / count;
+                    let until = if pass { share } else { deadline };
+                    while let Some((at, frame)) = link.recv_until(until)? {
+                        self.monitor.handle_frame(at, *net, &frame);
+                    }
                 }
             }
             now = links[0].1.now().max(deadline);
