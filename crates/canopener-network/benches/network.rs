@@ -19,8 +19,12 @@ fn hundred() -> Vec<u8> {
 fn bench(c: &mut Criterion) {
     let bytes = hundred();
     let loaded = canopener_network::load(&bytes);
-    c.bench_function("read 100 devices", |b| b.iter(|| canopener_network::load(black_box(&bytes))));
-    c.bench_function("check 100 devices", |b| b.iter(|| check(black_box(&loaded), &mut |_| DcfFound::Missing)));
+    c.bench_function("read 100 devices", |b| {
+        b.iter(|| canopener_network::load(black_box(&bytes)))
+    });
+    c.bench_function("check 100 devices", |b| {
+        b.iter(|| check(black_box(&loaded), &mut |_| DcfFound::Missing))
+    });
     c.bench_function("draw 100 devices", |b| {
         b.iter(|| canopener_network::draw::svg(black_box(&loaded.topology)))
     });

@@ -364,7 +364,7 @@ fn tree(topology: &Topology, net: u32, out: &mut Vec<NetDiagnostic>) {
 
 fn positions(topology: &Topology, out: &mut Vec<NetDiagnostic>) {
     for vertex in topology.vertices.iter().filter(|v| v.is_device()) {
-        if vertex.x.is_none() || vertex.y.is_none() {
+        if vertex.position().is_none() {
             out.push(NetDiagnostic::new(
                 NetCode::NoPosition,
                 vertex.span,

@@ -10,7 +10,7 @@
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::fmt::Write as _;
 
-use crate::model::{Topology, VertexKind};
+use crate::model::{Topology, Vertex, VertexKind};
 
 /// The colours of networks 1, 2, … (repeating), distinguishable for the common colour blindnesses
 /// (Okabe–Ito).
@@ -45,14 +45,13 @@ pub struct Placed {
     pub y: f64,
 }
 
-/// Where each vertex goes: at its X/Y when every device has both (scaled up when the coordinates are
-/// small), else on the automatic grid.
+/// Where each vertex goes: at its X/Y (or where yEd drew it) when every vertex has a position (scaled
+/// up when the coordinates are small), else on the automatic grid.
 pub fn layout(topology: &Topology) -> Vec<Placed> {
-    let given =
-        !topology.vertices.is_empty() && topology.vertices.iter().all(|v| v.x.is_some() && v.y.is_some());
+    let given = !topology.vertices.is_empty() && topology.vertices.iter().all(|v| v.position().is_some());
     if given {
-        let xs = topology.vertices.iter().filter_map(|v| v.x);
-        let ys = topology.vertices.iter().filter_map(|v| v.y);
+        let xs = topology.vertices.iter().filter_map(|v| Some(v.position()?.0));
+        let ys = topology.vertices.iter().filter_map(|v| Some(v.position()?.1));
         let (min_x, max_x) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
         let (min_y, max_y) = ys.fold((f64::MAX, f64::MIN), |(a, b), y| (a.min(y), b.max(y)));
         let span = (max_x - min_x).max(max_y - min_y);
@@ -86,8 +85,8 @@ pub fn layout(topology: &Topology) -> Vec<Placed> {
             .enumerate()
             .map(|(vertex, v)| Placed {
                 vertex,
-                x: MARGIN + BOX_W / 2.0 + (v.x.unwrap_or(0.0) - origin_x) * scale,
-                y: MARGIN + BOX_H / 2.0 + (v.y.unwrap_or(0.0) - origin_y) * scale,
+                x: MARGIN + BOX_W / 2.0 + (v.position().map_or(0.0, |p| p.0) - origin_x) * scale,
+                y: MARGIN + BOX_H / 2.0 + (v.position().map_or(0.0, |p| p.1) - origin_y) * scale,
             })
             .collect();
     }
@@ -114,11 +113,7 @@ pub fn layout(topology: &Topology) -> Vec<Placed> {
 
 /// The distance between the two closest positioned vertices (0 when fewer than two).
 fn nearest_pair(topology: &Topology) -> f64 {
-    let points: Vec<(f64, f64)> = topology
-        .vertices
-        .iter()
-        .filter_map(|v| Some((v.x?, v.y?)))
-        .collect();
+    let points: Vec<(f64, f64)> = topology.vertices.iter().filter_map(Vertex::position).collect();
     let mut nearest = f64::MAX;
     for (i, a) in points.iter().enumerate() {
         for b in &points[i + 1..] {
@@ -313,7 +308,7 @@ pub fn svg(topology: &Topology) -> String {
 type Rect = (f64, f64, f64, f64);
 
 /// What a vertex covers: its box (devices, couplers) or its dot and name below (junctions).
-fn footprint(vertex: &crate::model::Vertex, p: &Placed) -> Rect {
+fn footprint(vertex: &Vertex, p: &Placed) -> Rect {
     match vertex.kind() {
         VertexKind::Passive | VertexKind::Active => {
             let half = (vertex.label().chars().count().min(NAME_CHARS) as f64 * CHAR_W_NAME / 2.0).max(15.0);

@@ -112,6 +112,10 @@ pub struct Vertex {
     pub y: Option<f64>,
     /// `NumOfNets` as written.
     pub num_of_nets: Option<i64>,
+    /// The centre another tool drew it at (yEd's `y:Geometry`), for drawings when `X`/`Y` are absent;
+    /// never written as `X`/`Y`.
+    #[serde(skip)]
+    pub drawn_at: Option<(f64, f64)>,
     /// Its attachments to networks, by slot (the x of `NetNumberNx`).
     pub attachments: Vec<Attachment>,
     /// Data the vocabulary does not know, kept.
@@ -125,6 +129,11 @@ impl Vertex {
     /// What messages and events call it: `NodeName`, else the id.
     pub fn label(&self) -> &str {
         self.name.as_deref().filter(|n| !n.is_empty()).unwrap_or(&self.id)
+    }
+
+    /// Where drawings put it: `X`/`Y`, else where another tool drew it.
+    pub fn position(&self) -> Option<(f64, f64)> {
+        self.x.zip(self.y).or(self.drawn_at)
     }
 
     /// What it is: its `NodeType` when in the vocabulary; else a gateway when attached to two or more

@@ -57,7 +57,10 @@ pub fn topology(doc: &GraphMl, diagnostics: &mut Vec<NetDiagnostic>) -> Topology
                         });
                         attachment_datum(attachment, base, &name, value, span, diagnostics);
                     }
-                    None => vertex.extra.push(Extra { name, value }),
+                    None => {
+                        vertex.drawn_at = vertex.drawn_at.or_else(|| drawn_at(&value));
+                        vertex.extra.push(Extra { name, value });
+                    }
                 },
             }
         }
@@ -129,6 +132,29 @@ pub fn topology(doc: &GraphMl, diagnostics: &mut Vec<NetDiagnostic>) -> Topology
     }
     topology.networks = per_network.into_values().collect();
     topology
+}
+
+/// The centre of the first yEd `<y:Geometry x y width height>` in a datum's markup.
+fn drawn_at(markup: &str) -> Option<(f64, f64)> {
+    if !markup.contains("Geometry") {
+        return None;
+    }
+    let wrapped = format!("<r xmlns:y=\"http://www.yworks.com/xml/graphml\">{markup}</r>");
+    let document = roxmltree::Document::parse(&wrapped).ok()?;
+    let geometry = document
+        .descendants()
+        .find(|n| n.tag_name().name() == "Geometry")?;
+    let number = |name: &str| {
+        geometry
+            .attribute(name)
+            .and_then(|v| v.trim().parse::<f64>().ok())
+            .filter(|v| v.is_finite())
+    };
+    let (x, y) = (number("x")?, number("y")?);
+    Some((
+        x + number("width").unwrap_or(0.0) / 2.0,
+        y + number("height").unwrap_or(0.0) / 2.0,
+    ))
 }
 
 /// Which format [`topology`] produces.
@@ -518,6 +544,18 @@ mod tests {
             topology.networks.iter().map(|n| n.number).collect::<Vec<_>>(),
             [2]
         );
+    }
+
+    #[test]
+    fn a_yed_geometry_gives_the_drawing_position_but_not_x_and_y() {
+        let text = r#"<graphml xmlns:y="http://www.yworks.com/xml/graphml">
+<key for="node" id="d6" yfiles.type="nodegraphics"/><graph>
+<node id="n0"><data key="d6"><y:ShapeNode><y:Geometry height="30.0" width="60.0" x="100.0" y="50.0"/></y:ShapeNode></data></node>
+</graph></graphml>"#;
+        let topology = crate::load(text.as_bytes()).topology;
+        assert_eq!(topology.vertices[0].drawn_at, Some((130.0, 65.0)));
+        assert_eq!((topology.vertices[0].x, topology.vertices[0].y), (None, None));
+        assert_eq!(topology.vertices[0].position(), Some((130.0, 65.0)));
     }
 
     #[test]
