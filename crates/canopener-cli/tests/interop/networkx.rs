@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use canopener_network::Topology;
+use canopener_testkit::fixture::ScratchDir;
 use serde_json::{Value, json};
 
 use crate::support::{canopener, python, workspace_root};
@@ -198,8 +199,7 @@ fn read(path: &Path) -> Topology {
 #[test]
 fn networkx_reads_every_graphml_canopener_writes_with_the_same_nodes_edges_and_data() {
     let Some(python) = python() else { return };
-    let dir = std::env::temp_dir().join(format!("canopener-networkx-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
+    let dir = ScratchDir::new("networkx-written");
     let mut checked = BTreeMap::new();
     let sources = [
         "line.graphml",
@@ -267,14 +267,12 @@ fn networkx_reads_every_graphml_canopener_writes_with_the_same_nodes_edges_and_d
         }
     }
     assert_eq!(checked.len(), sources.len() * 2);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn canopener_reads_what_networkx_builds_and_writes() {
     let Some(python) = python() else { return };
-    let dir = std::env::temp_dir().join(format!("canopener-networkx-make-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
+    let dir = ScratchDir::new("networkx-made");
     let file = dir.join("made.graphml");
     nx(&python, &["make", to_arg(&file)]);
     let loaded = canopener_network::load(&std::fs::read(&file).expect("read"));
