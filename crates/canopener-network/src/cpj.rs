@@ -4,7 +4,7 @@
 //! its line and column and the file itself can be written back unchanged. Several networks are read in
 //! both layouts implementations use: `[Topology]`, `[Topology2]`, … (EdsDcfNet; the number is the
 //! network number) and repeated `[TOPOLOGY]` sections (CANFestival; numbered 1, 2, … in file order).
-//! [`write`] writes `[Topology]` for network 1 and `[Topology<n>]` for the others.
+//! [`write()`] writes `[Topology]` for network 1 and `[Topology<n>]` for the others.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
