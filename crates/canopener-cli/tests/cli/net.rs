@@ -86,6 +86,41 @@ fn malformed_xml_missing_dcfs_rings_and_cpj_nodes_without_dcf_are_errors_exit_1(
 }
 
 #[test]
+fn dcf_problems_are_findings_on_the_topology_line_that_names_the_dcf() {
+    let dir = temp_dir("net-check-dcf");
+    let good = std::fs::read(test_data("dcf/node2.dcf")).expect("fixture");
+    std::fs::write(dir.join("node2.dcf"), &good).expect("write");
+    // Node 3's DCF says node 2; node 4's says node 2 too and has a line the EDS reader cannot read.
+    std::fs::write(dir.join("node3.dcf"), &good).expect("write");
+    let mut broken = good.clone();
+    broken.extend_from_slice(b"\n[1018]\nthis line is no key=value pair\n");
+    std::fs::write(dir.join("node4.dcf"), broken).expect("write");
+    let cpj = dir.join("nodelist.cpj");
+    std::fs::write(
+        &cpj,
+        "[Topology]\nNodes=0x03\nNode2Present=0x01\nNode2DCFName=node2.dcf\nNode3Present=0x01\n\
+         Node3DCFName=node3.dcf\nNode4Present=0x01\nNode4DCFName=node4.dcf\n",
+    )
+    .expect("write");
+    let (code, json) = check_json(&[&cpj]);
+    assert_eq!(code, Some(1), "{json:#}");
+    let findings: Vec<(String, u64)> = json["files"][0]["findings"]
+        .as_array()
+        .expect("findings")
+        .iter()
+        .map(|f| {
+            (
+                f["code"].as_str().unwrap_or("").to_owned(),
+                f["line"].as_u64().unwrap_or(0),
+            )
+        })
+        .collect();
+    // Each on the line where the node's entries start (its Node<X>Present).
+    let expected = [("N041", 5), ("N041", 7), ("N043", 7)].map(|(c, l)| (c.to_owned(), l));
+    assert_eq!(findings, expected);
+}
+
+#[test]
 fn a_file_that_cannot_be_read_exits_2_and_is_named() {
     let (code, json) = check_json(&[Path::new("/nonexistent/Nodelist.graphml")]);
     assert_eq!(code, Some(2));
