@@ -113,8 +113,7 @@ pub(crate) struct NetMonitorArgs {
     /// A topology file.
     #[arg(value_name = "FILE")]
     pub(crate) file: PathBuf,
-    /// The bus of the monitor's network (SPEC), or of network N (N=SPEC); repeatable.
-    #[arg(long = "bus", value_name = "SPEC", help = BUS_HELP_NET, required = true)]
+    #[arg(long = "bus", value_name = "SPEC", help = BUS_HELP_NET)]
     pub(crate) buses: Vec<String>,
     /// Where the monitor is connected: a GraphML node id or NodeName (default: the master, else the
     /// device with the lowest node-ID).
@@ -130,8 +129,9 @@ pub(crate) struct NetMonitorArgs {
     pub(crate) format: MonitorFormat,
 }
 
-const BUS_HELP_NET: &str = "The monitor network's bus (SPEC) or network N's bus (N=SPEC); repeatable. SPEC forms: \
-socketcand://HOST:PORT/BUS, socketcan:IFACE, udp-multicast://GROUP:PORT";
+const BUS_HELP_NET: &str = "The monitor network's bus (SPEC) or network N's bus (N=SPEC); repeatable \
+[env: CANOPENER_BUS, for the monitor's network]. SPEC forms: socketcand://HOST:PORT/BUS, socketcan:IFACE, \
+udp-multicast://GROUP:PORT";
 
 /// How `net monitor` reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -8,7 +8,7 @@ use canopener_network::monitor::{Event, MonitorConfig, SystemMonitor};
 use canopener_runtime::link::{BusLink, Flow, Link};
 use canopener_runtime::system::watch::SystemWatch;
 
-use crate::args::buses_by_network;
+use crate::args::{bus_values, buses_by_network};
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult, stdout_error};
 use crate::net::args::{MonitorFormat, NetMonitorArgs};
@@ -32,7 +32,8 @@ pub(crate) fn run(args: NetMonitorArgs) -> CliResult {
         .and_then(|at| topology.vertices[at].networks().into_iter().next())
         .or_else(|| topology.network_numbers().into_iter().next())
         .unwrap_or(1);
-    let specs = buses_by_network(&args.buses, home, &topology.network_numbers()).map_err(CliError::Usage)?;
+    let values = bus_values(&args.buses)?;
+    let specs = buses_by_network(&values, home, &topology.network_numbers()).map_err(CliError::Usage)?;
     let config = MonitorConfig {
         at,
         networks: specs.keys().copied().collect(),

@@ -10,7 +10,7 @@ use canopener_runtime::system::files::{SystemError, SystemFiles};
 use canopener_runtime::system::serve::{ServeReport, serve, stdin_commands};
 use canopener_runtime::system::sim::SystemSim;
 
-use crate::args::buses_by_network;
+use crate::args::{bus_values, buses_by_network};
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult};
 use crate::output::print_stdout;
@@ -32,16 +32,7 @@ pub(crate) fn run(path: &Path, args: &SimArgs) -> CliResult {
         .and_then(|at| topology.vertices[at].networks().into_iter().next())
         .or_else(|| topology.network_numbers().into_iter().next())
         .unwrap_or(1);
-    let env_bus = std::env::var("CANOPENER_BUS")
-        .ok()
-        .filter(|_| args.buses.is_empty());
-    let values: Vec<String> = args.buses.iter().cloned().chain(env_bus).collect();
-    if values.is_empty() {
-        return Err(CliError::Usage(
-            "pass --bus SPEC (the network of the master) or --bus N=SPEC per network, or set CANOPENER_BUS"
-                .to_owned(),
-        ));
-    }
+    let values = bus_values(&args.buses)?;
     let specs = buses_by_network(&values, home, &topology.network_numbers()).map_err(CliError::Usage)?;
     let mut sim = SystemSim::ideal(&files, at).map_err(sim_error)?;
     let initial = args
