@@ -79,6 +79,9 @@ pub(crate) enum Command {
   canopener sim io.eds io.eds io.eds --serial 100         # three LSS-unconfigured devices, serials 100-102
   canopener sim io.eds --serial 7 --state-dir state/      # LSS-stored node-ID used on the next start
   canopener sim device.eds --node-id 5 --format json | jq 'select(.event == \"nmt_state\")'
+  canopener sim --nodelist Nodelist.graphml --bus 1=socketcand://127.0.0.1:29536/can0 --cut W3
+      # a whole system, wiring-aware; type cut CABLE, repair CABLE, kill DEVICE, revive DEVICE,
+      # power-off DOMAIN, power-on DOMAIN or repair-all on stdin (docs/networks.md)
 Logs boot-up, NMT state changes, SDO writes and aborts, EMCY and LSS (stderr, or JSON lines on stdout).
 Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error.")]
     Sim(SimArgs),
