@@ -189,13 +189,13 @@ pub(crate) fn split_bus(value: &str) -> Result<(Option<u32>, &str), String> {
 
 /// The `--bus` values of a system command, or `CANOPENER_BUS` as the monitor network's bus when none is
 /// given.
-pub(crate) fn bus_values(given: &[String]) -> Result<Vec<String>, crate::error::CliError> {
+pub(crate) fn bus_values(given: &[String]) -> Result<Vec<String>, CliError> {
     if !given.is_empty() {
         return Ok(given.to_vec());
     }
     match std::env::var("CANOPENER_BUS") {
         Ok(spec) if !spec.trim().is_empty() => Ok(vec![spec]),
-        _ => Err(crate::error::CliError::Usage(
+        _ => Err(CliError::Usage(
             "pass --bus SPEC (the monitor's network) or --bus N=SPEC per network, or set CANOPENER_BUS"
                 .to_owned(),
         )),
