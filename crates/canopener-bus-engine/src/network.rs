@@ -14,7 +14,9 @@
 //!
 //! Faults of the wiring are part of the model: a station can be [disconnected](Network::disconnect)
 //! (an unplugged connector or a broken drop cable: it neither sends nor receives), and frames can be
-//! [lost](Network::lose_when) by a predicate (recorded as lost, delivered to nobody).
+//! [lost](Network::lose_when) by a predicate (recorded as lost, delivered to nobody). A cut cable
+//! splits the bus into [segments](Network::set_segment): stations hear only the stations of their own
+//! segment, so devices beyond a cut keep talking among themselves.
 
 use std::collections::VecDeque;
 use std::time::Duration;
@@ -115,6 +117,7 @@ struct Station<N> {
     kind: StationKind<N>,
     port: Option<Port>,
     connected: bool,
+    segment: u32,
 }
 
 #[derive(Debug)]
@@ -170,6 +173,20 @@ impl<N: Core> Network<N> {
         if let Some(station) = self.stations.get_mut(station.0) {
             station.connected = true;
         }
+    }
+
+    /// Puts a station on segment `segment` of the wire (all start on segment 0): a frame reaches only the
+    /// stations of its sender's segment, as on a bus cut into pieces. With [`Timing::BitAccurate`] the
+    /// pieces still share one arbitration, an approximation: a frame on one piece delays the others.
+    pub fn set_segment(&mut self, station: StationId, segment: u32) {
+        if let Some(station) = self.stations.get_mut(station.0) {
+            station.segment = segment;
+        }
+    }
+
+    /// The segment a station is on ([`Network::set_segment`]).
+    pub fn segment(&self, station: StationId) -> Option<u32> {
+        self.stations.get(station.0).map(|station| station.segment)
     }
 
     /// Whether a station is plugged in.
@@ -358,6 +375,7 @@ impl<N: Core> Network<N> {
             kind,
             port,
             connected: true,
+            segment: 0,
         });
         StationId(self.stations.len() - 1)
     }
@@ -456,8 +474,9 @@ impl<N: Core> Network<N> {
         if seen.lost {
             return;
         }
+        let segment = self.stations.get(from.0).map_or(0, |station| station.segment);
         for (index, station) in self.stations.iter_mut().enumerate() {
-            if index == from.0 || !station.connected {
+            if index == from.0 || !station.connected || station.segment != segment {
                 continue;
             }
             match &mut station.kind {
@@ -632,6 +651,31 @@ mod tests {
         net.send(tap, frame(0x601, &[])).unwrap();
         assert!(net.run_until(Instant::from_millis(2), Some(tap)).unwrap());
         assert_eq!(net.node(echo).unwrap().heard, 1);
+    }
+
+    #[test]
+    fn stations_on_other_segments_do_not_hear_each_other_but_their_own_segment_does() {
+        let mut net = Network::new(Timing::Ideal);
+        let near = net.attach(Echo::new(0x601, 0x581, Duration::ZERO));
+        let far = net.attach(Echo::new(0x601, 0x582, Duration::ZERO));
+        let tap = net.tap();
+        let far_tap = net.tap();
+        net.set_segment(far, 1);
+        net.set_segment(far_tap, 1);
+        assert_eq!(net.segment(far), Some(1));
+        net.send(tap, frame(0x601, &[])).unwrap();
+        net.send(far_tap, frame(0x601, &[])).unwrap();
+        net.run_until(Instant::from_millis(1), None).unwrap();
+        assert_eq!(net.node(near).unwrap().heard, 1);
+        assert_eq!(net.node(far).unwrap().heard, 1);
+        let heard: Vec<u32> = std::iter::from_fn(|| net.take_received(tap))
+            .map(|(_, f)| f.id().as_raw())
+            .collect();
+        assert_eq!(heard, [0x581]);
+        assert_eq!(
+            net.take_received(far_tap).map(|(_, f)| f.id().as_raw()),
+            Some(0x582)
+        );
     }
 
     #[test]

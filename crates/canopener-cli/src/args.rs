@@ -174,10 +174,72 @@ pub(crate) fn parse_duration(text: &str) -> Result<std::time::Duration, String> 
     Ok(std::time::Duration::from_secs_f64(seconds))
 }
 
+/// `--bus` values: `N=SPEC` for network N, a plain `SPEC` for the monitor's network (`None`).
+pub(crate) fn split_bus(value: &str) -> Result<(Option<u32>, &str), String> {
+    match value.split_once('=') {
+        Some((net, spec)) if !net.is_empty() && net.bytes().all(|b| b.is_ascii_digit()) => {
+            let net = net
+                .parse()
+                .map_err(|_| format!("--bus {value}: network number {net} is too large"))?;
+            Ok((Some(net), spec))
+        }
+        _ => Ok((None, value)),
+    }
+}
+
+/// The `--bus` values of a system command, or `CANOPENER_BUS` as the monitor network's bus when none is
+/// given.
+pub(crate) fn bus_values(given: &[String]) -> Result<Vec<String>, CliError> {
+    if !given.is_empty() {
+        return Ok(given.to_vec());
+    }
+    match std::env::var("CANOPENER_BUS") {
+        Ok(spec) if !spec.trim().is_empty() => Ok(vec![spec]),
+        _ => Err(CliError::Usage(
+            "pass --bus SPEC (the monitor's network) or --bus N=SPEC per network, or set CANOPENER_BUS"
+                .to_owned(),
+        )),
+    }
+}
+
+/// `--bus` values by network: `N=SPEC` for network N, a plain `SPEC` for network `home`. Every
+/// network must be one of `networks`, and have one bus.
+pub(crate) fn buses_by_network(
+    values: &[String],
+    home: u32,
+    networks: &std::collections::BTreeSet<u32>,
+) -> Result<std::collections::BTreeMap<u32, String>, String> {
+    let mut specs = std::collections::BTreeMap::new();
+    for value in values {
+        let (net, spec) = split_bus(value)?;
+        let net = net.unwrap_or(home);
+        if !networks.contains(&net) {
+            return Err(format!(
+                "--bus {value}: the topology has no network {net}; its networks are {networks:?}"
+            ));
+        }
+        if specs.insert(net, spec.to_owned()).is_some() {
+            return Err(format!("network {net} is given two buses"));
+        }
+    }
+    Ok(specs)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::time::Duration;
+
+    #[test]
+    fn bus_values_name_their_network_or_none() {
+        assert_eq!(split_bus("2=socketcan:can1"), Ok((Some(2), "socketcan:can1")));
+        assert_eq!(split_bus("socketcan:can0"), Ok((None, "socketcan:can0")));
+        assert_eq!(
+            split_bus("virtual:x?bitrate=500k"),
+            Ok((None, "virtual:x?bitrate=500k"))
+        );
+        assert!(split_bus("99999999999=virtual:x").is_err());
+    }
 
     #[test]
     fn durations_parse_with_units() {

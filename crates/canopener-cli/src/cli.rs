@@ -8,6 +8,7 @@ use crate::eds::args::EdsCommand;
 use crate::master::args::{
     HeartbeatCommand, LssCommand, NmtArgs, NodeCommand, PdoCommand, SdoCommand, SyncArgs,
 };
+use crate::net::args::NetCommand;
 use crate::sim::args::SimArgs;
 
 /// canopener: verify CANopen devices, their EDS files and whole networks.
@@ -41,10 +42,11 @@ Exit codes:
   7  device error: the device refused a request (SDO abort, LSS error) or did not answer in time
 130  interrupted: Ctrl-C or SIGTERM while talking to a device (a running transfer is aborted on the bus)
 
-`eds` commands follow diff(1) instead:
+`eds` and `net` commands (except `net monitor`) follow diff(1) instead:
   0  success (`eds diff`: both files describe the same device and object dictionary;
      `eds check`/`eds fix`: no errors, or no warnings either with --deny warnings)
-  1  `eds diff`: the files differ; `eds check`/`eds fix`: errors found (or warnings with --deny warnings)
+  1  `eds diff`: the files differ; `eds check`/`eds fix`/`net check`: errors found (or warnings with
+     --deny warnings)
   2  any trouble: bad arguments, a file that cannot be read, refused or written";
 
 #[derive(Debug, Subcommand)]
@@ -62,6 +64,10 @@ pub(crate) enum Command {
     /// Read, show, convert, format and compare EDS/DCF files (CiA 306) and XDD/XDC files (CiA 311).
     #[command(subcommand)]
     Eds(EdsCommand),
+    /// CANopen systems (nodelist.cpj, Nodelist.graphml): check, show, convert, draw, and monitor which cable
+    /// broke.
+    #[command(subcommand)]
+    Net(NetCommand),
     /// Run simulated CANopen devices built from EDS/DCF files on a bus, in real time, until Ctrl-C.
     #[command(after_help = "Examples:
   canopener bus serve &                                   # a hub on 127.0.0.1:29536
@@ -73,6 +79,9 @@ pub(crate) enum Command {
   canopener sim io.eds io.eds io.eds --serial 100         # three LSS-unconfigured devices, serials 100-102
   canopener sim io.eds --serial 7 --state-dir state/      # LSS-stored node-ID used on the next start
   canopener sim device.eds --node-id 5 --format json | jq 'select(.event == \"nmt_state\")'
+  canopener sim --nodelist Nodelist.graphml --bus 1=socketcand://127.0.0.1:29536/can0 --cut W3
+      # a whole system, wiring-aware; type cut CABLE, repair CABLE, kill DEVICE, revive DEVICE,
+      # power-off DOMAIN, power-on DOMAIN or repair-all on stdin (docs/networks.md)
 Logs boot-up, NMT state changes, SDO writes and aborts, EMCY and LSS (stderr, or JSON lines on stdout).
 Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error.")]
     Sim(SimArgs),

@@ -13,6 +13,7 @@ mod cli;
 mod eds;
 mod error;
 mod master;
+mod net;
 mod output;
 mod sim;
 mod stop;
@@ -25,6 +26,7 @@ use crate::bus::args::BusCommand;
 use crate::cli::{Cli, Command};
 use crate::eds::args::{EdsCommand, EdsRulesCommand};
 use crate::master::args::{HeartbeatCommand, LssCommand, NodeCommand, PdoCommand, SdoCommand};
+use crate::net::args::NetCommand;
 
 use crate::error::{CliError, exit_code};
 
@@ -70,6 +72,11 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Eds(EdsCommand::Explain(args)) => eds::explain::run(args),
         Command::Eds(EdsCommand::Rules(EdsRulesCommand::List(args))) => eds::rules::list(args),
         Command::Eds(EdsCommand::Fix(args)) => eds::fix::run(args),
+        Command::Net(NetCommand::Check(args)) => net::check::run(args),
+        Command::Net(NetCommand::Show(args)) => net::show::run(args),
+        Command::Net(NetCommand::Convert(args)) => net::convert::run(args),
+        Command::Net(NetCommand::Draw(args)) => net::draw::run(args),
+        Command::Net(NetCommand::Monitor(args)) => net::monitor::run(args),
         Command::Sim(args) => sim::command::run(args),
         Command::Sdo(SdoCommand::Read(args)) => master::sdo::read(args),
         Command::Sdo(SdoCommand::Write(args)) => master::sdo::write(args),

@@ -1,4 +1,6 @@
-//! `canopener sim`: simulated devices on a bus.
+//! The `sim` command: simulated devices on a real bus, from EDS/DCF files or a whole system from its
+//! topology (`--nodelist`).
 
 pub(crate) mod args;
 pub(crate) mod command;
+pub(crate) mod nodelist;

@@ -50,6 +50,7 @@ pub mod sdo_session;
 pub mod simulator;
 pub mod state_store;
 pub mod sync_producer;
+pub mod system;
 pub mod virtual_link;
 
 pub mod candump_file;

@@ -4,21 +4,38 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::{BusArg, parse_node_id, parse_u32_number};
+use crate::args::{parse_node_id, parse_u32_number};
 
 #[derive(Debug, Args)]
 pub(crate) struct SimArgs {
     /// EDS or DCF files: one simulated device each.
-    #[arg(required_unless_present = "list_faults", value_name = "FILE")]
+    #[arg(required_unless_present_any = ["list_faults", "nodelist"], conflicts_with = "nodelist", value_name = "FILE")]
     pub(crate) files: Vec<PathBuf>,
+    /// Simulate a whole system: every device of a nodelist.cpj or Nodelist.graphml from its DCF, one bus
+    /// per network (`--bus N=SPEC`), wired as the file says.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) nodelist: Option<PathBuf>,
+    /// With --nodelist: start with this cable cut (CableName or edge id); repeatable.
+    #[arg(long = "cut", value_name = "CABLE", requires = "nodelist")]
+    pub(crate) cuts: Vec<String>,
+    /// With --nodelist: start with this supply domain off; repeatable.
+    #[arg(long = "power-off", value_name = "DOMAIN", requires = "nodelist")]
+    pub(crate) power_off: Vec<String>,
+    /// With --nodelist: where the real bus meets the simulated wiring (GraphML node id or NodeName;
+    /// default: the master, else the device with the lowest node-ID).
+    #[arg(long, value_name = "VERTEX", requires = "nodelist")]
+    pub(crate) at: Option<String>,
     /// Give every simulated device this defect (repeatable); `--list-faults` names them.
     #[arg(long = "fault", value_name = "NAME", value_parser = parse_fault)]
     pub(crate) faults: Vec<canopener_device::faults::Fault>,
     /// Describe every fault `--fault` accepts and exit.
     #[arg(long)]
     pub(crate) list_faults: bool,
-    #[command(flatten)]
-    pub(crate) bus: BusArg,
+    /// CAN bus to use [env: CANOPENER_BUS]; with --nodelist, N=SPEC for network N (a plain SPEC is the
+    /// network of --at) and repeatable. Forms: socketcand://HOST:PORT/BUS, socketcan:IFACE,
+    /// udp-multicast://GROUP:PORT
+    #[arg(long = "bus", value_name = "SPEC")]
+    pub(crate) buses: Vec<String>,
     /// Node-ID of devices whose file is not a DCF with a node-ID (several files: N, N+1, ... in order).
     /// Without it such devices start LSS-unconfigured (node-ID FFh) and wait for an LSS master.
     #[arg(long, value_parser = parse_node_id, value_name = "N")]

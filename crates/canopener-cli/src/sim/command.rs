@@ -15,7 +15,7 @@ use canopener_runtime::simulator::simulation::Simulation;
 use serde_json::{Map, Value, json};
 
 use crate::bus_open::open_bus;
-use crate::error::CliResult;
+use crate::error::{CliError, CliResult};
 use crate::output::print_stdout;
 use crate::sim::args::{SimApp, SimArgs, SimFormat};
 use crate::stop::StopFlag;
@@ -23,6 +23,14 @@ use crate::stop::StopFlag;
 pub(crate) fn run(args: SimArgs) -> CliResult {
     if args.list_faults {
         return print_stdout(&fault_list());
+    }
+    if let Some(nodelist) = &args.nodelist {
+        return crate::sim::nodelist::run(nodelist, &args);
+    }
+    if args.buses.len() > 1 {
+        return Err(CliError::Usage(
+            "several --bus are for --nodelist systems; simulated devices from files share one bus".to_owned(),
+        ));
     }
     let stop = StopFlag::install()?;
     let devices = Simulation::default()
@@ -38,7 +46,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         .faults(args.faults.iter().copied())
         .state_dir(args.state_dir.clone())
         .build()?;
-    let bus = open_bus(args.bus.spec.as_deref(), "sim")?;
+    let bus = open_bus(args.buses.first().map(String::as_str), "sim")?;
     let mut host = SimHost::new(devices, bus, stop.token());
     host.run(|report| match report {
         HostReport::Entry { elapsed, entry } => match args.format {

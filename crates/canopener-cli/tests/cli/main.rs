@@ -18,6 +18,9 @@ mod harness;
 mod master_pdo;
 mod master_sdo;
 mod master_services;
+mod net;
+mod net_browser;
+mod net_system;
 mod sim;
 
 use std::process::Output;

@@ -1,0 +1,205 @@
+//! `canopener net draw` rendered by headless Chromium (Debian's `chromium` package): every device's
+//! name is on the page inside the drawing, and no two labels overlap in the automatic layout of 100
+//! devices. Screenshots of the two-network drawings are left in the target directory for people.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+use super::{run, stderr, stdout, temp_dir};
+
+const CHROMIUM: &str = "/usr/bin/chromium";
+const SKIP_VAR: &str = "CANOPENER_SKIP_BROWSER_TESTS";
+
+fn chromium() -> Option<&'static Path> {
+    if std::env::var(SKIP_VAR).is_ok_and(|v| v == "1") {
+        eprintln!("skipped: {SKIP_VAR}=1");
+        return None;
+    }
+    let path = Path::new(CHROMIUM);
+    assert!(
+        path.exists(),
+        "{CHROMIUM} not found: `cargo xtask setup` installs it, or set {SKIP_VAR}=1"
+    );
+    Some(path)
+}
+
+fn test_data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../canopener-network/test_data")
+        .join(name)
+}
+
+fn chromium_run(browser: &Path, profile: &Path, url: &str, extra: &[&str]) -> String {
+    let mut child = Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--no-first-run",
+            "--hide-scrollbars",
+        ])
+        .args([
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg("--virtual-time-budget=2000")
+        .args(extra)
+        .arg(url)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start chromium");
+    // The DOM of a large drawing is more than a pipe holds: read it while Chromium runs.
+    let mut stdout = child.stdout.take().expect("stdout");
+    let reader = std::thread::spawn(move || {
+        let mut text = String::new();
+        let _ = std::io::Read::read_to_string(&mut stdout, &mut text);
+        text
+    });
+    let started = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        if started.elapsed() > Duration::from_secs(120) {
+            let _ = child.kill();
+            panic!("chromium did not finish within 120 s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(status.success(), "chromium failed: {status}");
+    reader.join().expect("reader")
+}
+
+/// Measures the drawing in the browser: every label's box, and the device titles.
+const MEASURE: &str = r#"<script>
+const svg = document.querySelector('svg');
+const view = svg.viewBox.baseVal;
+const labels = [...svg.querySelectorAll('text.name, text.node-id, text.cable-label')].map(t => {
+  const b = t.getBBox();
+  return {cls: t.getAttribute('class'), text: t.textContent, x: b.x, y: b.y, w: b.width, h: b.height,
+          vertex: t.closest('g.vertex') ? t.closest('g.vertex').dataset.id : null};
+});
+const overlaps = [];
+for (let i = 0; i < labels.length; i++) for (let j = i + 1; j < labels.length; j++) {
+  const a = labels[i], b = labels[j];
+  if (a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h) overlaps.push([a.text, b.text]);
+}
+const outside = labels.filter(l => l.x < 0 || l.y < 0 || l.x + l.w > view.width || l.y + l.h > view.height)
+  .map(l => l.text);
+const devices = [...svg.querySelectorAll('g.vertex.device')].map(g => ({
+  title: g.querySelector('title').textContent,
+  name: g.querySelector('text.name').textContent}));
+const pre = document.createElement('pre');
+pre.id = 'result';
+pre.textContent = JSON.stringify({labels: labels.length, cables: labels.filter(l => l.cls === 'cable-label').length,
+  overlaps, outside, devices});
+document.body.appendChild(pre);
+</script>"#;
+
+fn measure(browser: &Path, dir: &Path, svg: &str) -> Value {
+    let page = dir.join("page.html");
+    std::fs::write(
+        &page,
+        format!("<!doctype html><html><body>{svg}{MEASURE}</body></html>"),
+    )
+    .expect("page");
+    let dom = chromium_run(
+        browser,
+        &dir.join("profile"),
+        &format!("file://{}", page.display()),
+        &["--dump-dom"],
+    );
+    let start = dom.find("<pre id=\"result\">").expect("the script ran") + "<pre id=\"result\">".len();
+    let text = &dom[start..start + dom[start..].find("</pre>").expect("end")];
+    serde_json::from_str(
+        &text
+            .replace("&amp;", "&")
+            .replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&quot;", "\""),
+    )
+    .expect("json")
+}
+
+fn draw(name: &str) -> String {
+    let output = run(&["net", "draw", test_data(name).to_str().expect("utf-8")]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    stdout(&output)
+}
+
+#[test]
+fn a_hundred_devices_are_all_named_inside_the_drawing_without_overlapping_labels() {
+    let Some(browser) = chromium() else { return };
+    let dir = temp_dir("net-browser-100");
+    let result = measure(browser, &dir, &draw("hundred.graphml"));
+    let devices = result["devices"].as_array().expect("devices");
+    assert_eq!(devices.len(), 100, "{result}");
+    for device in devices {
+        let (title, name) = (
+            device["title"].as_str().unwrap_or(""),
+            device["name"].as_str().unwrap_or(""),
+        );
+        // A long name is shortened with an ellipsis on the page; the full name is the tooltip.
+        assert!(
+            name == title || (name.ends_with('…') && title.starts_with(name.trim_end_matches('…'))),
+            "{device}"
+        );
+    }
+    assert_eq!(
+        result["overlaps"],
+        serde_json::json!([]),
+        "labels overlap: {}",
+        result["overlaps"]
+    );
+    assert_eq!(
+        result["outside"],
+        serde_json::json!([]),
+        "labels outside the drawing: {}",
+        result["outside"]
+    );
+    // A cable label without a free spot would only be the cable's tooltip: all 111 are on the page.
+    assert_eq!(result["cables"], 111, "{}", result["cables"]);
+}
+
+#[test]
+fn two_network_systems_render_with_every_device_and_leave_screenshots() {
+    let Some(browser) = chromium() else { return };
+    let dir = temp_dir("net-browser-two");
+    for (name, devices) in [("gateway.graphml", 6), ("paper/Nodelist.graphml", 4)] {
+        let svg = draw(name);
+        let result = measure(browser, &dir, &svg);
+        assert_eq!(
+            result["devices"].as_array().map(Vec::len),
+            Some(devices),
+            "{name}: {result}"
+        );
+        assert_eq!(result["outside"], serde_json::json!([]), "{name}: {result}");
+        // For people: target/net-<name>.png. The paper's background is looked up beside the SVG.
+        let svg_path = test_data(name).with_extension("svg.tmp.svg");
+        let out = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../target")
+            .join(format!(
+                "net-{}.png",
+                name.replace('/', "-").replace(".graphml", "")
+            ));
+        std::fs::write(&svg_path, &svg).expect("svg");
+        chromium_run(
+            browser,
+            &dir.join("profile"),
+            &format!("file://{}", svg_path.display()),
+            &[
+                &format!("--screenshot={}", out.display()),
+                "--window-size=1500,400",
+            ],
+        );
+        let _ = std::fs::remove_file(&svg_path);
+        assert!(out.exists(), "{}", out.display());
+    }
+}
