@@ -876,7 +876,7 @@ impl<'a> Compiler<'a> {
                 CExpr::Unary(op, Box::new(self.expr(inner, scope)?))
             }
             ExprKind::Binary(op, a, b) => {
-                let op = BinOp::from_str(op)?;
+                let op = BinOp::from_symbol(op)?;
                 CExpr::Binary(op, Box::new(self.expr(a, scope)?), Box::new(self.expr(b, scope)?))
             }
             ExprKind::In(x, items) => {

@@ -27,6 +27,10 @@ pub struct Lts {
     pub transitions: Vec<(usize, String, usize)>,
 }
 
+/// One step of the untimed semantics: the transition, its label (none for internal steps) and
+/// the state it leads to.
+pub type Step = (usize, Option<Label>, Vec<i64>);
+
 /// The explored state space of a model.
 #[derive(Debug, Clone)]
 pub struct StateSpace {
@@ -152,7 +156,7 @@ impl Model {
     }
 
     /// Every step from `state`: transition, label (none for internal), target.
-    pub fn steps(&self, state: &[i64]) -> Result<Vec<(usize, Option<Label>, Vec<i64>)>, (usize, String)> {
+    pub fn steps(&self, state: &[i64]) -> Result<Vec<Step>, (usize, String)> {
         let mut out = Vec::new();
         for t in &self.transitions {
             if !self.located(t, state) {

@@ -82,7 +82,7 @@ pub enum BinOp {
 
 impl BinOp {
     /// The operator for its spelling.
-    pub fn from_str(op: &str) -> Option<BinOp> {
+    pub fn from_symbol(op: &str) -> Option<BinOp> {
         Some(match op {
             "||" => BinOp::Or,
             "&&" => BinOp::And,

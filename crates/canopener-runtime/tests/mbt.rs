@@ -1,0 +1,126 @@
+//! Model-based tests end to end: the shipped models against simulated devices on virtual time,
+//! clean (never a failure) and with the faults each model is meant to catch (always a failure).
+
+use std::time::Duration;
+
+use canopener_can::Instant;
+use canopener_device::faults::Fault;
+use canopener_eds::model::Eds;
+use canopener_mbt::compile::{Options, Source, compile};
+use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::model::Model;
+use canopener_mbt::shipped;
+use canopener_runtime::mbt_run::run;
+use canopener_runtime::simulator::simulation::Simulation;
+use canopener_testkit::corpus;
+
+/// CANopenNode's example I/O device: heartbeat every 1000 ms (1017h), the CiA 301 objects.
+const IO: &str = "CANopenNode__CANopenNode__example__IO.eds";
+const NODE: u8 = 5;
+
+fn eds() -> Eds {
+    canopener_eds::load(&std::fs::read(corpus::eds(IO)).expect("EDS file")).eds
+}
+
+fn model(names: &[&str], eds: &Eds) -> Model {
+    let sources: Vec<Source> = names
+        .iter()
+        .map(|n| Source {
+            origin: (*n).into(),
+            text: shipped::text(n).expect("shipped model").into(),
+        })
+        .collect();
+    let options = Options {
+        node_id: NODE,
+        eds: Some(eds),
+        set: Vec::new(),
+    };
+    let (model, report) = compile(&sources, &options, &|n| shipped::text(n).map(str::to_owned));
+    model.unwrap_or_else(|| panic!("{report:#?}"))
+}
+
+fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+    let mut bus = Simulation::ideal()
+        .device(eds, NODE)
+        .faults(faults.iter().copied())
+        .start()
+        .expect("simulation");
+    // The device's power-on boot-up is history when the tester starts with its own reset.
+    bus.run_until(Instant::from_millis(100)).expect("virtual time");
+    let config = RunConfig {
+        seed,
+        steps,
+        ..RunConfig::default()
+    };
+    run(&mut bus, model, config, Some(Duration::from_secs(3600))).expect("link")
+}
+
+fn show(o: &Outcome) -> String {
+    let tail: Vec<String> = o
+        .trace
+        .iter()
+        .rev()
+        .take(8)
+        .rev()
+        .map(|s| format!("{:.3} {:?} {}", s.t, s.dir, s.label))
+        .collect();
+    format!(
+        "{:?}: {}\n  {}\n  allowed: {:?}",
+        o.verdict,
+        o.reason,
+        tail.join("\n  "),
+        o.allowed
+    )
+}
+
+#[test]
+fn clean_devices_pass_every_shipped_model() {
+    let eds = eds();
+    for names in [&["nmt"][..], &["sdo"][..]] {
+        let model = model(names, &eds);
+        for seed in 1..=3 {
+            let outcome = test(&model, &eds, &[], seed, 150);
+            assert_eq!(
+                outcome.verdict,
+                Verdict::Pass,
+                "{names:?} seed {seed}: {}",
+                show(&outcome)
+            );
+            assert_eq!(outcome.steps, 150);
+            assert!(outcome.coverage.transitions[0] > 5, "{:?}", outcome.coverage);
+        }
+    }
+}
+
+#[test]
+fn protocol_faults_are_caught() {
+    let eds = eds();
+    let cases: &[(&[&str], Fault)] = &[
+        (&["nmt"], Fault::NoBootUp),
+        (&["nmt"], Fault::BootUpWrongId),
+        (&["nmt"], Fault::HeartbeatStateWrong),
+        (&["nmt"], Fault::HeartbeatTooFast),
+        (&["nmt"], Fault::HeartbeatJitter),
+        (&["nmt"], Fault::IgnoresNmtStop),
+        (&["nmt"], Fault::NmtBroadcastIgnored),
+        (&["sdo"], Fault::SdoSlow),
+        (&["sdo"], Fault::SdoExpeditedSizeWrong),
+        (&["sdo"], Fault::WrongAbortCode),
+        (&["sdo"], Fault::SdoBadCommandSilent),
+    ];
+    for (names, fault) in cases {
+        let model = model(names, &eds);
+        let outcome = test(&model, &eds, &[*fault], 1, 400);
+        assert_eq!(
+            outcome.verdict,
+            Verdict::Fail,
+            "{fault} on {names:?}: {}",
+            show(&outcome)
+        );
+        assert!(
+            !outcome.allowed.is_empty() || outcome.reason.contains("unexpected"),
+            "{}",
+            show(&outcome)
+        );
+    }
+}
