@@ -23,6 +23,16 @@ pub const MODELS: &[Shipped] = &[
         covers: "SDO server, expedited: upload sizes of 1000h/1001h/1018h, aborts for an absent object and sub-index, a read-only write and an unknown command, silence in Stopped (CiA 301 §7.2.4.3); uses nmt",
         text: include_str!("../models/sdo.mbt"),
     },
+    Shipped {
+        name: "sync",
+        covers: "SYNC producer configured over SDO: period 1006h and counter 1019h on every SYNC, including a missing counter byte (CiA 301 §7.2.5)",
+        text: include_str!("../models/sync.mbt"),
+    },
+    Shipped {
+        name: "lss",
+        covers: "LSS slave: waiting/configuration, switch state global and selective, inquire identity and node-ID (CiA 305)",
+        text: include_str!("../models/lss.mbt"),
+    },
 ];
 
 /// The text of the shipped model `name`.

@@ -76,7 +76,7 @@ fn show(o: &Outcome) -> String {
 #[test]
 fn clean_devices_pass_every_shipped_model() {
     let eds = eds();
-    for names in [&["nmt"][..], &["sdo"][..]] {
+    for names in [&["nmt"][..], &["sdo"][..], &["sync"][..], &["lss"][..]] {
         let model = model(names, &eds);
         for seed in 1..=3 {
             let outcome = test(&model, &eds, &[], seed, 150);
@@ -88,6 +88,22 @@ fn clean_devices_pass_every_shipped_model() {
             );
             assert_eq!(outcome.steps, 150);
             assert!(outcome.coverage.transitions[0] > 5, "{:?}", outcome.coverage);
+            eprintln!(
+                "{names:?} seed {seed}: {:?} {:?}",
+                outcome.coverage.transitions, outcome.coverage.locations
+            );
+            if names == ["sync"] {
+                assert!(
+                    outcome
+                        .trace
+                        .iter()
+                        .filter(|s| s.label.starts_with("!SYNC !0x05"))
+                        .count()
+                        > 5,
+                    "{}",
+                    show(&outcome)
+                );
+            }
         }
     }
 }
@@ -107,6 +123,9 @@ fn protocol_faults_are_caught() {
         (&["sdo"], Fault::SdoExpeditedSizeWrong),
         (&["sdo"], Fault::WrongAbortCode),
         (&["sdo"], Fault::SdoBadCommandSilent),
+        (&["sync"], Fault::SyncCounterMissing),
+        (&["lss"], Fault::LssStateNotChanged),
+        (&["lss"], Fault::NoLss),
     ];
     for (names, fault) in cases {
         let model = model(names, &eds);
