@@ -138,6 +138,7 @@ struct Compiler<'a> {
     globals: BTreeMap<String, Binding>,
     clock_index: BTreeMap<String, usize>,
     gate_files: Vec<usize>,
+    quiescence_declared: bool,
 }
 
 /// Where an expression is compiled: which process it belongs to and which gate's fields it sees.
@@ -172,6 +173,7 @@ impl<'a> Compiler<'a> {
             globals,
             clock_index: BTreeMap::new(),
             gate_files: Vec::new(),
+            quiescence_declared: false,
         }
     }
 
@@ -253,7 +255,13 @@ impl<'a> Compiler<'a> {
         if let Some(q) = &file.quiescence
             && let Some(v) = self.constant(q, global, None)
         {
-            self.model.quiescence_us = self.model.quiescence_us.max(v);
+            // Composed models wait as long as the most patient of them.
+            self.model.quiescence_us = if self.quiescence_declared {
+                self.model.quiescence_us.max(v)
+            } else {
+                v
+            };
+            self.quiescence_declared = true;
         }
         for clock in &file.clocks {
             if !self.clock_index.contains_key(&clock.text) {
