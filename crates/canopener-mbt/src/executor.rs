@@ -26,7 +26,8 @@ use crate::syntax::ast::Direction;
 /// How many configurations the set may hold before the run stops as inconclusive.
 pub const MAX_CONFIGURATIONS: usize = 4096;
 
-/// How many observation rounds a scripted input may wait to become allowed.
+/// How many observation rounds a scripted input may wait to become allowed, and how many follow
+/// the last one.
 const SCRIPT_PATIENCE: usize = 8;
 
 /// How the IO-chooser picks inputs.
@@ -133,6 +134,8 @@ pub struct Outcome {
     pub trace: Vec<TraceStep>,
     /// For `fail`: the outputs (with their windows) the model allowed at that point.
     pub allowed: Vec<String>,
+    /// The inputs the tester chose, in order (not the reset stimuli): the script to replay.
+    pub inputs: Vec<String>,
     /// Steps taken.
     pub steps: usize,
     /// How many frames the device sent that the model judged.
@@ -190,6 +193,7 @@ pub struct Executor<'m> {
     taken: BTreeSet<usize>,
     locations: BTreeSet<(usize, i64)>,
     states: BTreeSet<Vec<i64>>,
+    inputs_sent: Vec<String>,
     script_pos: usize,
     script_waits: usize,
     outcome: Option<Outcome>,
@@ -220,6 +224,7 @@ impl<'m> Executor<'m> {
             taken: BTreeSet::new(),
             locations: BTreeSet::new(),
             states: BTreeSet::new(),
+            inputs_sent: Vec::new(),
             script_pos: 0,
             script_waits: 0,
             outcome: None,
@@ -371,6 +376,7 @@ impl<'m> Executor<'m> {
             reason,
             trace: self.trace.clone(),
             allowed,
+            inputs: self.inputs_sent.clone(),
             steps: self.steps,
             outputs_seen: self.outputs_seen,
             coverage: Coverage {
@@ -617,6 +623,8 @@ impl<'m> Executor<'m> {
             frame: Some(frame_json(&frame)),
         });
         self.outbox.push_back(frame);
+        self.inputs_sent
+            .push(format!("?{}", self.model.label_text(label)));
         self.confs = self.closure(next);
         self.visit();
         self.steps += 1;
@@ -645,11 +653,14 @@ impl<'m> Executor<'m> {
         if let Some(script) = self.config.script.clone() {
             // Replay: the next scripted input as soon as the model allows it, observing meanwhile.
             let Some(next_label) = script.get(self.script_pos) else {
-                let _ = self.conclude(
-                    Verdict::Pass,
-                    "the scripted inputs all ran without a failure".into(),
-                    Vec::new(),
-                );
+                // The failure a script provokes may show only in what follows its last input.
+                if self.script_waits >= SCRIPT_PATIENCE {
+                    let reason = "the scripted inputs all ran without a failure".to_owned();
+                    let _ = self.conclude(Verdict::Pass, reason, Vec::new());
+                } else {
+                    self.script_waits += 1;
+                    self.observe_from(now);
+                }
                 return;
             };
             let inputs = self.inputs();

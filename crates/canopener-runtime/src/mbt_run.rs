@@ -33,3 +33,80 @@ pub fn run<L: Link + ?Sized>(
         }
     })
 }
+
+/// A failing run's inputs shrunk by delta debugging against the device.
+#[derive(Debug, Clone)]
+pub struct Shrunk {
+    /// The inputs of the failing run.
+    pub before: Vec<String>,
+    /// The shortest failing script found; 1-minimal.
+    pub after: Vec<String>,
+    /// How many runs shrinking took.
+    pub runs: usize,
+    /// The outcome of the shortened script (a `fail`).
+    pub outcome: Outcome,
+}
+
+/// Shrinks `inputs` (a failing run's, see [`Outcome::inputs`]) to the shortest script that still
+/// fails on the device. `link_for_run` gives the link for each run: a fresh simulation on virtual
+/// time, or the same bus again (each run starts with the model's reset stimuli).
+pub fn shrink<L: Link>(
+    link_for_run: &mut dyn FnMut() -> Result<L, LinkError>,
+    model: &Model,
+    config: &RunConfig,
+    inputs: &[String],
+    limit: Option<Duration>,
+) -> Result<Option<Shrunk>, LinkError> {
+    let mut error = None;
+    let mut last_fail: Option<(Vec<String>, Outcome)> = None;
+    let mut fails = |script: &[String]| -> bool {
+        if error.is_some() {
+            return false;
+        }
+        let scripted = RunConfig {
+            script: Some(script.to_vec()),
+            ..config.clone()
+        };
+        let outcome = link_for_run().and_then(|mut link| run(&mut link, model, scripted, limit));
+        match outcome {
+            Ok(outcome) if outcome.verdict == canopener_mbt::executor::Verdict::Fail => {
+                if last_fail.as_ref().is_none_or(|(s, _)| s.len() >= script.len()) {
+                    last_fail = Some((script.to_vec(), outcome));
+                }
+                true
+            }
+            Ok(_) => false,
+            Err(e) => {
+                error = Some(e);
+                false
+            }
+        }
+    };
+    if !fails(inputs) {
+        return match error {
+            Some(e) => Err(e),
+            None => Ok(None),
+        };
+    }
+    let (after, runs) = canopener_mbt::shrink::ddmin(inputs, &mut fails);
+    if let Some(e) = error {
+        return Err(e);
+    }
+    // The outcome of exactly the kept script (ddmin's last failing test may be a longer one).
+    let outcome = match last_fail {
+        Some((script, outcome)) if script == after => outcome,
+        _ => {
+            let scripted = RunConfig {
+                script: Some(after.clone()),
+                ..config.clone()
+            };
+            run(&mut link_for_run()?, model, scripted, limit)?
+        }
+    };
+    Ok(Some(Shrunk {
+        before: inputs.to_vec(),
+        after,
+        runs: runs + 1,
+        outcome,
+    }))
+}

@@ -10,7 +10,7 @@ use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
-use canopener_runtime::mbt_run::run;
+use canopener_runtime::mbt_run::{run, shrink};
 use canopener_runtime::simulator::simulation::Simulation;
 use canopener_testkit::corpus;
 
@@ -140,6 +140,71 @@ fn protocol_faults_are_caught() {
             !outcome.allowed.is_empty() || outcome.reason.contains("unexpected"),
             "{}",
             show(&outcome)
+        );
+    }
+}
+
+#[test]
+fn failing_runs_shrink_to_one_minimal_scripts() {
+    let eds = eds();
+    for (names, fault) in [
+        (&["nmt"][..], Fault::IgnoresNmtStop),
+        (&["sdo"][..], Fault::WrongAbortCode),
+        (&["lss"][..], Fault::LssStateNotChanged),
+    ] {
+        let model = model(names, &eds);
+        let failing = test(&model, &eds, &[fault], 3, 400);
+        assert_eq!(failing.verdict, Verdict::Fail, "{}", show(&failing));
+        let config = RunConfig {
+            seed: 3,
+            steps: 400,
+            ..RunConfig::default()
+        };
+        let mut new_bus = || {
+            let mut bus = Simulation::ideal()
+                .device(&eds, NODE)
+                .fault(fault)
+                .start()
+                .expect("simulation");
+            bus.run_until(Instant::from_millis(100))?;
+            Ok(bus)
+        };
+        let shrunk = shrink(&mut new_bus, &model, &config, &failing.inputs, None)
+            .unwrap()
+            .expect("still fails");
+        assert_eq!(shrunk.outcome.verdict, Verdict::Fail);
+        assert!(shrunk.after.len() <= failing.inputs.len());
+        assert!(
+            !shrunk.after.is_empty(),
+            "{fault}: a fault this needs a stimulus for"
+        );
+        // 1-minimal: leaving out any one input makes the run pass.
+        for i in 0..shrunk.after.len() {
+            let mut fewer = shrunk.after.clone();
+            fewer.remove(i);
+            let outcome = run(
+                &mut new_bus().unwrap(),
+                &model,
+                RunConfig {
+                    script: Some(fewer),
+                    ..config.clone()
+                },
+                None,
+            )
+            .unwrap();
+            assert_ne!(
+                outcome.verdict,
+                Verdict::Fail,
+                "{fault}: input {i} of {:?} is not needed",
+                shrunk.after
+            );
+        }
+        eprintln!(
+            "{fault}: {} inputs -> {} ({:?}) in {} runs",
+            failing.inputs.len(),
+            shrunk.after.len(),
+            shrunk.after,
+            shrunk.runs
         );
     }
 }
