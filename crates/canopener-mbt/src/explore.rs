@@ -257,10 +257,15 @@ pub fn explore(model: &Model, max_states: usize) -> (StateSpace, Vec<MbtDiagnost
     )
 }
 
+/// A string as a DOT quoted string's content.
+fn dot_escape(s: &str) -> String {
+    s.replace('\\', "\\\\").replace('"', "\\\"")
+}
+
 /// The state space as Graphviz DOT: states named by their vectors, inputs blue, outputs green,
 /// internal steps dashed.
 pub fn to_dot(model: &Model, space: &StateSpace) -> String {
-    let esc = |s: &str| s.replace('\\', "\\\\").replace('"', "\\\"");
+    let esc = dot_escape;
     let mut out = format!(
         "digraph \"{}\" {{\n  rankdir=LR;\n  node [shape=box, fontsize=10];\n",
         esc(&model.name())
@@ -286,6 +291,56 @@ pub fn to_dot(model: &Model, space: &StateSpace) -> String {
             "  s{from} -> s{to} [label=\"{}\", {attrs}];\n",
             esc(label)
         ));
+    }
+    out.push_str("}\n");
+    out
+}
+
+/// The model's processes as DOT, one cluster each: locations as nodes, transitions as edges, those
+/// in `taken` green and bold, the rest grey: what a run covered.
+pub fn coverage_dot(model: &Model, taken: &[usize]) -> String {
+    let esc = dot_escape;
+    let mut out = format!(
+        "digraph \"{} coverage\" {{\n  rankdir=LR;\n  node [shape=ellipse, fontsize=10];\n",
+        esc(&model.name())
+    );
+    for (p, process) in model.processes.iter().enumerate() {
+        out.push_str(&format!(
+            "  subgraph cluster_{p} {{\n    label=\"{}\";\n",
+            esc(&process.name)
+        ));
+        for (l, location) in process.locations.iter().enumerate() {
+            out.push_str(&format!("    p{p}l{l} [label=\"{}\"];\n", esc(&location.name)));
+        }
+        out.push_str("  }\n");
+        for &t in &process.transitions {
+            let transition = &model.transitions[t];
+            let label = match transition.gate {
+                Some(g) => format!(
+                    "{}{}",
+                    if transition.kind == Kind::Input { "?" } else { "!" },
+                    model.gates[g].name
+                ),
+                None => "i".to_owned(),
+            };
+            let style = if taken.contains(&t) {
+                "color=darkgreen, penwidth=2"
+            } else {
+                "color=grey, fontcolor=grey"
+            };
+            let froms: Vec<usize> = if transition.from.is_empty() {
+                (0..process.locations.len()).collect()
+            } else {
+                transition.from.iter().map(|l| *l as usize).collect()
+            };
+            for f in froms {
+                let to = transition.to.map_or(f, |l| l as usize);
+                out.push_str(&format!(
+                    "  p{p}l{f} -> p{p}l{to} [label=\"{}\", {style}];\n",
+                    esc(&label)
+                ));
+            }
+        }
     }
     out.push_str("}\n");
     out

@@ -50,13 +50,13 @@ pub struct Shrunk {
 /// Shrinks `inputs` (a failing run's, see [`Outcome::inputs`]) to the shortest script that still
 /// fails on the device. `link_for_run` gives the link for each run: a fresh simulation on virtual
 /// time, or the same bus again (each run starts with the model's reset stimuli).
-pub fn shrink<L: Link>(
-    link_for_run: &mut dyn FnMut() -> Result<L, LinkError>,
+pub fn shrink<L: Link, E: From<LinkError>>(
+    link_for_run: &mut dyn FnMut() -> Result<L, E>,
     model: &Model,
     config: &RunConfig,
     inputs: &[String],
     limit: Option<Duration>,
-) -> Result<Option<Shrunk>, LinkError> {
+) -> Result<Option<Shrunk>, E> {
     let mut error = None;
     let mut last_fail: Option<(Vec<String>, Outcome)> = None;
     let mut fails = |script: &[String]| -> bool {
@@ -67,7 +67,7 @@ pub fn shrink<L: Link>(
             script: Some(script.to_vec()),
             ..config.clone()
         };
-        let outcome = link_for_run().and_then(|mut link| run(&mut link, model, scripted, limit));
+        let outcome = link_for_run().and_then(|mut link| Ok(run(&mut link, model, scripted, limit)?));
         match outcome {
             Ok(outcome) if outcome.verdict == canopener_mbt::executor::Verdict::Fail => {
                 if last_fail.as_ref().is_none_or(|(s, _)| s.len() >= script.len()) {

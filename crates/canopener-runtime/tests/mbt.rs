@@ -167,7 +167,7 @@ fn failing_runs_shrink_to_one_minimal_scripts() {
                 .start()
                 .expect("simulation");
             bus.run_until(Instant::from_millis(100))?;
-            Ok(bus)
+            Ok::<_, canopener_runtime::link::LinkError>(bus)
         };
         let shrunk = shrink(&mut new_bus, &model, &config, &failing.inputs, None)
             .unwrap()
