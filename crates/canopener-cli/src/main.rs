@@ -98,6 +98,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Mbt(MbtCommand::Models(args)) => mbt::inspect::models(args),
         Command::Mbt(MbtCommand::Check(args)) => mbt::inspect::check(args),
         Command::Mbt(MbtCommand::Explore(args)) => mbt::inspect::explore(args),
+        Command::Mbt(MbtCommand::Synth(args)) => mbt::inspect::synth(args),
         Command::Mbt(MbtCommand::Run(args)) => mbt::run::run(args),
         Command::Mbt(MbtCommand::Replay(args)) => mbt::run::replay(args),
         Command::Mbt(MbtCommand::Shrink(args)) => mbt::run::shrink(args),

@@ -23,3 +23,4 @@ pub mod purpose;
 pub mod shipped;
 pub mod shrink;
 pub mod syntax;
+pub mod synth;

@@ -26,6 +26,15 @@ Exit status: 0 the models check, 3 a model has errors, 2 bad arguments.")]
   dot -Tsvg nmt.dot > nmt.svg
 Exit status: 0 explored, 3 the model has errors, 5 an output file could not be written.")]
     Explore(ExploreArgs),
+    /// Synthesise the complete test graph of a test purpose (TGV: suspension, determinisation,
+    /// product, co-reachability) as .aut.
+    #[command(after_help = "Examples:
+  canopener mbt synth nmt --purpose stop_and_start --aut ctg.aut
+  canopener mbt synth nmt --purpose stop_and_start --spec-aut nmt-from-cadp.aut
+The graph keeps the specification's labels (?GATE tester sends, !GATE device sends, QUIESCENCE);
+states with a PASS or INCONCLUSIVE loop are verdicts; outputs missing from the graph are fail.
+Exit status: 0 synthesised, 6 the purpose cannot be reached, 3 a model or .aut that does not read.")]
+    Synth(SynthArgs),
     /// Test a device against models on the fly: ioco with timed quiescence.
     #[command(after_help = "Examples:
   canopener mbt run nmt sdo --sim device.eds --node 5                  # a simulated device, virtual time
@@ -91,6 +100,22 @@ pub(crate) struct ExploreArgs {
     /// Stop exploring after this many states.
     #[arg(long, default_value_t = 100_000, value_name = "N")]
     pub(crate) max_states: usize,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct SynthArgs {
+    #[command(flatten)]
+    pub(crate) model: ModelArgs,
+    /// The test purpose: the name of a `purpose` block of the models.
+    #[arg(long, value_name = "P")]
+    pub(crate) purpose: String,
+    /// Take the specification from this .aut file (e.g. made by CADP or mCRL2) instead of exploring
+    /// the models; its labels are ?GATE .. (inputs), !GATE .. (outputs) and i or tau.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) spec_aut: Option<PathBuf>,
+    /// Write the test graph here (stdout without it).
+    #[arg(long, value_name = "OUT")]
+    pub(crate) aut: Option<PathBuf>,
 }
 
 /// Where the device under test is.

@@ -3,8 +3,8 @@
 use canopener_mbt::shipped;
 
 use crate::error::{CliError, CliResult};
-use crate::mbt::args::{ExploreArgs, Format, ModelArgs, ModelsArgs};
-use crate::mbt::load::{description, load};
+use crate::mbt::args::{ExploreArgs, Format, ModelArgs, ModelsArgs, SynthArgs};
+use crate::mbt::load::{description, load, write};
 use crate::output::print_stdout;
 
 pub(crate) fn models(args: ModelsArgs) -> CliResult {
@@ -84,4 +84,57 @@ pub(crate) fn explore(args: ExploreArgs) -> CliResult {
             ""
         }
     ))
+}
+
+pub(crate) fn synth(args: SynthArgs) -> CliResult {
+    let eds = description(args.model.eds.as_ref())?;
+    let loaded = load(&args.model.models, args.model.node, eds.as_ref(), &args.model.set)?;
+    eprint!("{}", loaded.warnings);
+    let Some(purpose) = loaded.model.purposes.iter().find(|p| p.name == args.purpose) else {
+        let names: Vec<&str> = loaded.model.purposes.iter().map(|p| p.name.as_str()).collect();
+        return Err(CliError::Usage(format!(
+            "the models have no purpose `{}`; they have: {}",
+            args.purpose,
+            if names.is_empty() {
+                "none".to_owned()
+            } else {
+                names.join(", ")
+            }
+        )));
+    };
+    let spec = match &args.spec_aut {
+        Some(path) => {
+            let bytes = canopener_runtime::files::read(path).map_err(|e| CliError::read_file(path, e))?;
+            let (lts, diagnostics) = canopener_mbt::aut::read(&String::from_utf8_lossy(&bytes));
+            let text = canopener_mbt::diagnostics::render(&path.display().to_string(), &diagnostics);
+            if canopener_mbt::diagnostics::has_errors(&diagnostics) {
+                return Err(CliError::InvalidInput(format!(
+                    "{text}the .aut file does not read"
+                )));
+            }
+            eprint!("{text}");
+            lts
+        }
+        None => canopener_mbt::explore::explore(&loaded.model, 100_000).0.lts,
+    };
+    let Some(ctg) = canopener_mbt::synth::synthesize(&spec, purpose) else {
+        eprintln!(
+            "the purpose `{}` cannot be reached in the specification",
+            purpose.name
+        );
+        return Err(CliError::Exit(crate::error::exit_code::CHECK_FAILED));
+    };
+    let text = canopener_mbt::aut::write(&ctg);
+    match &args.aut {
+        Some(path) => {
+            write(path, &text)?;
+            print_stdout(&format!(
+                "{}: {} states, {} transitions\n",
+                purpose.name,
+                ctg.states,
+                ctg.transitions.len()
+            ))
+        }
+        None => print_stdout(&text),
+    }
 }

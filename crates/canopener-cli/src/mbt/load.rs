@@ -73,3 +73,13 @@ pub(crate) fn load(
         ))),
     }
 }
+
+/// Writes a result file atomically (a reader never sees half of it).
+pub(crate) fn write(path: &Path, text: &str) -> CliResult {
+    canopener_runtime::files::write_atomic(path, text.as_bytes(), false).map_err(|e| {
+        CliError::output(
+            format!("writing {}", path.display()),
+            std::io::Error::other(e.to_string()),
+        )
+    })
+}

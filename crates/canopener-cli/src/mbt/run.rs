@@ -13,7 +13,7 @@ use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::mbt::args::{DeviceArgs, Format, ReplayArgs, RunArgs, ShrinkArgs, Strategy};
-use crate::mbt::load::{description, load};
+use crate::mbt::load::{description, load, write};
 use crate::output::print_stdout;
 use crate::stop::StopFlag;
 
@@ -118,15 +118,6 @@ fn warn_hash(header: &RunHeader, model: &Model) {
             "warning: the models changed since the log was written (model hash differs); the replay may diverge"
         );
     }
-}
-
-fn write(path: &std::path::Path, text: &str) -> CliResult {
-    canopener_runtime::files::write_atomic(path, text.as_bytes(), false).map_err(|e| {
-        CliError::output(
-            format!("writing {}", path.display()),
-            std::io::Error::other(e.to_string()),
-        )
-    })
 }
 
 /// A fresh simulated device (one per run, so that every run starts from power-on).
