@@ -384,4 +384,26 @@ mod tests {
         assert_eq!((d[0].code, d[0].span.line), (MbtCode::EvalError, 6));
         assert!(d[0].message.contains("outside 0..1"), "{}", d[0].message);
     }
+
+    proptest::proptest! {
+        /// A counter modulo M with K input values: exactly M states and M·K transitions, whatever
+        /// the bounds, and the explored space survives the .aut round trip.
+        #[test]
+        fn counters_explore_to_their_size_and_round_trip(m in 1i64..40, k in 1i64..5) {
+            let text = format!(
+                "model m\ninput I = 1 (a: u8)\nprocess p {{\n var n: 0..{} = 0\n location A\n A -> A: in I(0..{}) do n := (n + a + 1) % {m}\n}}\n",
+                m - 1,
+                k - 1
+            );
+            let (model, d) = one(&text);
+            proptest::prop_assert!(d.is_empty(), "{:?}", d);
+            let (space, d) = explore(&model.unwrap(), 10_000);
+            proptest::prop_assert!(d.is_empty());
+            proptest::prop_assert_eq!(space.lts.states as i64, m);
+            proptest::prop_assert_eq!(space.lts.transitions.len() as i64, m * k);
+            let (back, d) = crate::aut::read(&crate::aut::write(&space.lts));
+            proptest::prop_assert!(d.is_empty());
+            proptest::prop_assert_eq!(back, space.lts);
+        }
+    }
 }

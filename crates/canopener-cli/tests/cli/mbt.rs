@@ -107,11 +107,25 @@ fn runs_pass_fail_and_shrink_on_a_simulated_device() {
 fn synth_writes_the_test_graph_of_a_purpose() {
     let dir = temp_dir("mbt-synth");
     let out = dir.join("ctg.aut");
-    let output = run(&["mbt", "synth", "nmt", "--node", "5", "--purpose", "stop_and_start", "--aut", out.to_str().unwrap()]);
+    let output = run(&[
+        "mbt",
+        "synth",
+        "nmt",
+        "--node",
+        "5",
+        "--purpose",
+        "stop_and_start",
+        "--aut",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.starts_with("des (0, ") && text.contains("PASS"), "{text}");
     let missing = run(&["mbt", "synth", "nmt", "--purpose", "nope"]);
     assert_eq!(missing.status.code(), Some(2));
-    assert!(stderr(&missing).contains("stop_and_start"), "{}", stderr(&missing));
+    assert!(
+        stderr(&missing).contains("stop_and_start"),
+        "{}",
+        stderr(&missing)
+    );
 }
