@@ -8,6 +8,7 @@
 #![allow(clippy::disallowed_methods, clippy::print_stdout, clippy::print_stderr)]
 
 mod master_cli;
+mod mbt_local_node;
 mod networkx;
 mod sim_master;
 mod support;
