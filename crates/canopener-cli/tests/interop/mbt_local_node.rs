@@ -13,7 +13,7 @@
 //! default is 100 ms) absorb the Python process's latency on a loaded machine; with 100 ms, one run in
 //! several failed on a late answer under load, which says nothing about LocalNode's conformance.
 
-use std::path::PathBuf;
+use std::path::Path;
 use std::process::Command;
 
 use canopener_testkit::corpus::{self, Kind};
@@ -25,7 +25,7 @@ use crate::support::{HubProc, canopener, python, python_peer};
 const EDS: &str = "jinr-greenlab__canopen__disk2__CANopen__eds__Test.eds";
 const NODE: &str = "34";
 
-fn mbt_run(hub: &HubProc, eds: &PathBuf, model: &str, seed: u64) -> (Option<i32>, Value) {
+fn mbt_run(hub: &HubProc, eds: &Path, model: &str, seed: u64) -> (Option<i32>, Value) {
     let mut command: Command = canopener();
     command.args([
         "mbt",
