@@ -119,6 +119,7 @@ fn protocol_faults_are_caught() {
         (&["nmt"], Fault::HeartbeatJitter),
         (&["nmt"], Fault::IgnoresNmtStop),
         (&["nmt"], Fault::NmtBroadcastIgnored),
+        (&["nmt"], Fault::GuardingAndHeartbeat),
         (&["sdo"], Fault::SdoSlow),
         (&["sdo"], Fault::SdoExpeditedSizeWrong),
         (&["sdo"], Fault::WrongAbortCode),
