@@ -33,6 +33,11 @@ pub const MODELS: &[Shipped] = &[
         covers: "LSS slave: waiting/configuration, switch state global and selective, inquire identity and node-ID (CiA 305)",
         text: include_str!("../models/lss.mbt"),
     },
+    Shipped {
+        name: "emcy",
+        covers: "EMCY producer: heartbeat-consumer event 8130h with error register 11h after 1016h's time, and the error reset 0000h when heartbeats resume (CiA 301 §7.2.7)",
+        text: include_str!("../models/emcy.mbt"),
+    },
 ];
 
 /// The text of the shipped model `name`.

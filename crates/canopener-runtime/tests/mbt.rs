@@ -76,7 +76,13 @@ fn show(o: &Outcome) -> String {
 #[test]
 fn clean_devices_pass_every_shipped_model() {
     let eds = eds();
-    for names in [&["nmt"][..], &["sdo"][..], &["sync"][..], &["lss"][..]] {
+    for names in [
+        &["nmt"][..],
+        &["sdo"][..],
+        &["sync"][..],
+        &["lss"][..],
+        &["emcy"][..],
+    ] {
         let model = model(names, &eds);
         for seed in 1..=3 {
             let outcome = test(&model, &eds, &[], seed, 150);
@@ -127,6 +133,8 @@ fn protocol_faults_are_caught() {
         (&["sync"], Fault::SyncCounterMissing),
         (&["lss"], Fault::LssStateNotChanged),
         (&["lss"], Fault::NoLss),
+        (&["emcy"], Fault::NoEmcy),
+        (&["emcy"], Fault::EmcyNoErrorReset),
     ];
     for (names, fault) in cases {
         let model = model(names, &eds);

@@ -7,6 +7,9 @@ use crate::diagnostics::{MbtCode, MbtDiagnostic, diag};
 use crate::syntax::ast::*;
 use crate::syntax::lexer::{Tok, Token, lex};
 
+/// The functions of the expression language.
+pub const FUNCTIONS: &[&str] = &["od", "exists", "pdo_bytes", "min", "max"];
+
 /// Deeper nesting than this is refused, so that hostile input cannot overflow the stack.
 const MAX_DEPTH: usize = 64;
 
@@ -764,7 +767,9 @@ impl Parser {
                     let otherwise = self.expr()?;
                     ExprKind::If(Box::new(cond), Box::new(then), Box::new(otherwise))
                 }
-                _ if self.at_punct("(") => {
+                // Only the language's functions take arguments, so that a name can end the COB-ID
+                // of a gate before its field list: `input PEER = 0x700 + WATCH (state: u8)`.
+                _ if self.at_punct("(") && FUNCTIONS.contains(&word.as_str()) => {
                     self.advance();
                     ExprKind::Call(word, self.expr_list(")")?)
                 }
