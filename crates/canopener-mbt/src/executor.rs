@@ -56,9 +56,9 @@ pub struct RunConfig {
     /// After an output, how long the tester keeps listening before it decides, so that frames a
     /// device sends together (a boot-up and the heartbeat after it) are all seen first.
     pub settle_us: i64,
-    /// A fixed input script instead of chosen inputs (replay and shrinking): label texts in order.
+    /// A fixed input script instead of chosen inputs (replay and shrinking).
     #[serde(skip)]
-    pub script: Option<Vec<String>>,
+    pub script: Option<Vec<ScriptStep>>,
 }
 
 impl Default for RunConfig {
@@ -71,6 +71,26 @@ impl Default for RunConfig {
             input_percent: 60,
             settle_us: 5_000,
             script: None,
+        }
+    }
+}
+
+/// One input of a script: its label and, if recorded, when it was sent (µs after the start). A
+/// timed input goes out at that offset or, if the model does not allow it yet, as soon as it does;
+/// an untimed one as soon as the model allows it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct ScriptStep {
+    /// `?GATE !v ...`.
+    pub label: String,
+    /// Microseconds after the start of the run.
+    pub at_us: Option<i64>,
+}
+
+impl From<&str> for ScriptStep {
+    fn from(label: &str) -> ScriptStep {
+        ScriptStep {
+            label: label.to_owned(),
+            at_us: None,
         }
     }
 }
@@ -136,12 +156,28 @@ pub struct Outcome {
     pub allowed: Vec<String>,
     /// The inputs the tester chose, in order (not the reset stimuli): the script to replay.
     pub inputs: Vec<String>,
+    /// When each input was sent, µs after the start.
+    pub input_times_us: Vec<i64>,
     /// Steps taken.
     pub steps: usize,
     /// How many frames the device sent that the model judged.
     pub outputs_seen: usize,
     /// Coverage.
     pub coverage: Coverage,
+}
+
+impl Outcome {
+    /// The run's inputs with their times: the script that replays it.
+    pub fn script(&self) -> Vec<ScriptStep> {
+        self.inputs
+            .iter()
+            .enumerate()
+            .map(|(i, label)| ScriptStep {
+                label: label.clone(),
+                at_us: self.input_times_us.get(i).copied(),
+            })
+            .collect()
+    }
 }
 
 /// What the run visited.
@@ -194,8 +230,10 @@ pub struct Executor<'m> {
     locations: BTreeSet<(usize, i64)>,
     states: BTreeSet<Vec<i64>>,
     inputs_sent: Vec<String>,
+    input_times: Vec<i64>,
     script_pos: usize,
     script_waits: usize,
+    waiting_for_script: bool,
     outcome: Option<Outcome>,
     reported: bool,
 }
@@ -225,8 +263,10 @@ impl<'m> Executor<'m> {
             locations: BTreeSet::new(),
             states: BTreeSet::new(),
             inputs_sent: Vec::new(),
+            input_times: Vec::new(),
             script_pos: 0,
             script_waits: 0,
+            waiting_for_script: false,
             outcome: None,
             reported: false,
         };
@@ -377,6 +417,7 @@ impl<'m> Executor<'m> {
             trace: self.trace.clone(),
             allowed,
             inputs: self.inputs_sent.clone(),
+            input_times_us: self.input_times.clone(),
             steps: self.steps,
             outputs_seen: self.outputs_seen,
             coverage: Coverage {
@@ -414,6 +455,7 @@ impl<'m> Executor<'m> {
             let reason = format!("{} steps without a failure", self.steps);
             let _ = self.conclude(Verdict::Pass, reason, Vec::new());
         } else if self.outcome.is_none() {
+            self.waiting_for_script = false;
             self.phase = Phase::Deciding(now + self.config.settle_us);
         }
     }
@@ -625,6 +667,7 @@ impl<'m> Executor<'m> {
         self.outbox.push_back(frame);
         self.inputs_sent
             .push(format!("?{}", self.model.label_text(label)));
+        self.input_times.push(now - self.start);
         self.confs = self.closure(next);
         self.visit();
         self.steps += 1;
@@ -650,9 +693,12 @@ impl<'m> Executor<'m> {
     }
 
     fn decide(&mut self, now: i64) {
+        if !self.expire(now) {
+            return;
+        }
         if let Some(script) = self.config.script.clone() {
-            // Replay: the next scripted input as soon as the model allows it, observing meanwhile.
-            let Some(next_label) = script.get(self.script_pos) else {
+            // Replay: each input at its recorded offset, or as soon as the model allows it.
+            let Some(next) = script.get(self.script_pos) else {
                 // The failure a script provokes may show only in what follows its last input.
                 if self.script_waits >= SCRIPT_PATIENCE {
                     let reason = "the scripted inputs all ran without a failure".to_owned();
@@ -663,10 +709,17 @@ impl<'m> Executor<'m> {
                 }
                 return;
             };
+            if let Some(at) = next.at_us.map(|at| self.start + at)
+                && at > now
+            {
+                self.phase = Phase::Observing(at, now);
+                self.waiting_for_script = true;
+                return;
+            }
             let inputs = self.inputs();
             match inputs
                 .iter()
-                .find(|(l, _)| format!("?{}", self.model.label_text(l)) == *next_label)
+                .find(|(l, _)| format!("?{}", self.model.label_text(l)) == next.label)
             {
                 Some((label, _)) => {
                     let label = label.clone();
@@ -677,7 +730,7 @@ impl<'m> Executor<'m> {
                 // Outputs may make it allowed; if a few observations do not, the script no
                 // longer fits what the device does.
                 None if self.script_waits >= SCRIPT_PATIENCE => {
-                    let reason = format!("the scripted input {next_label} is not allowed here");
+                    let reason = format!("the scripted input {} is not allowed here", next.label);
                     let _ = self.conclude(Verdict::Inconclusive, reason, Vec::new());
                 }
                 None => {
@@ -739,7 +792,11 @@ impl<'m> Executor<'m> {
                 if !self.expire(now) {
                     return;
                 }
-                if now >= until {
+                if now >= until && self.waiting_for_script {
+                    // Waiting for a scripted input's time is not an observation of its own.
+                    self.waiting_for_script = false;
+                    self.phase = Phase::Deciding(now);
+                } else if now >= until {
                     self.trace.push(TraceStep {
                         t: self.t(now),
                         dir: Dir::Quiescence,
@@ -991,11 +1048,9 @@ mod tests {
 
     #[test]
     fn a_script_replays_its_inputs_in_order() {
-        let script = vec![
-            "?REQ !0x02".to_owned(),
-            "?REQ !0x02".to_owned(),
-            "?REQ !0x01".to_owned(),
-        ];
+        let script: Vec<ScriptStep> = ["?REQ !0x02", "?REQ !0x02", "?REQ !0x01"]
+            .map(ScriptStep::from)
+            .to_vec();
         let outcome = run(
             RunConfig {
                 script: Some(script.clone()),
@@ -1010,7 +1065,35 @@ mod tests {
             .filter(|s| s.dir == Dir::In)
             .map(|s| s.label.as_str())
             .collect();
-        assert_eq!(sent, script);
+        let labels: Vec<&str> = script.iter().map(|s| s.label.as_str()).collect();
+        assert_eq!(sent, labels);
+        // Timed steps go out at their offsets.
+        let timed = vec![
+            ScriptStep {
+                label: "?REQ !0x02".into(),
+                at_us: Some(500_000),
+            },
+            ScriptStep {
+                label: "?REQ !0x01".into(),
+                at_us: Some(900_000),
+            },
+        ];
+        let outcome = run(
+            RunConfig {
+                script: Some(timed),
+                ..config(1000)
+            },
+            echo(5_000, 0),
+        );
+        assert_eq!(outcome.verdict, Verdict::Pass, "{outcome:#?}");
+        assert_eq!(outcome.input_times_us, [500_000, 900_000], "{outcome:#?}");
+        // One observation after the reset; waiting for the scripted times is not observed as quiescence.
+        let early = outcome
+            .trace
+            .iter()
+            .filter(|s| s.dir == Dir::Quiescence && s.t < 0.9)
+            .count();
+        assert_eq!(early, 1, "{:#?}", outcome.trace);
         let bad = run(
             RunConfig {
                 script: Some(vec!["?REQ !0x03".into()]),

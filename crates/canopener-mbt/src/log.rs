@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::executor::{Outcome, RunConfig, Strategy};
+use crate::executor::{Outcome, RunConfig, ScriptStep, Strategy};
 
 /// The log format's version.
 pub const VERSION: u32 = 1;
@@ -55,7 +55,7 @@ impl RunHeader {
     }
 
     /// The configuration to run again with, replaying `script` if given.
-    pub fn config(&self, script: Option<Vec<String>>) -> RunConfig {
+    pub fn config(&self, script: Option<Vec<ScriptStep>>) -> RunConfig {
         RunConfig {
             seed: self.seed,
             steps: self.steps,
@@ -79,8 +79,8 @@ pub struct Log {
     pub header: RunHeader,
     /// The verdict it had.
     pub verdict: String,
-    /// The inputs the tester chose.
-    pub inputs: Vec<String>,
+    /// The inputs the tester chose, with their times when the log has them.
+    pub script: Vec<ScriptStep>,
     /// How many steps the log records.
     pub steps: usize,
 }
@@ -116,6 +116,7 @@ pub fn write(header: &RunHeader, outcome: &Outcome) -> String {
         "reason": outcome.reason,
         "allowed": outcome.allowed,
         "inputs": outcome.inputs,
+        "input_times_us": outcome.input_times_us,
         "steps": outcome.steps,
         "coverage": outcome.coverage,
     }));
@@ -150,12 +151,24 @@ pub fn read(text: &str) -> Result<Log, LogError> {
                     .get("inputs")
                     .and_then(|v| serde_json::from_value(v.clone()).ok())
                     .ok_or_else(|| err("the `verdict` line has no `inputs` list".into()))?;
+                let times: Vec<i64> = value
+                    .get("input_times_us")
+                    .and_then(|v| serde_json::from_value(v.clone()).ok())
+                    .unwrap_or_default();
+                let script: Vec<ScriptStep> = inputs
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, label)| ScriptStep {
+                        label,
+                        at_us: times.get(i).copied(),
+                    })
+                    .collect();
                 let v = value
                     .get("verdict")
                     .and_then(|v| v.as_str())
                     .unwrap_or("")
                     .to_owned();
-                verdict = Some((v, inputs));
+                verdict = Some((v, script));
             }
             _ => {
                 return Err(err(
@@ -168,14 +181,14 @@ pub fn read(text: &str) -> Result<Log, LogError> {
         line: 1,
         message: "no `run` line: is this an mbt log?".into(),
     })?;
-    let (verdict, inputs) = verdict.ok_or(LogError {
+    let (verdict, script) = verdict.ok_or(LogError {
         line: text.lines().count(),
         message: "no `verdict` line: the run did not finish".into(),
     })?;
     Ok(Log {
         header,
         verdict,
-        inputs,
+        script,
         steps,
     })
 }
@@ -204,6 +217,7 @@ mod tests {
             }],
             allowed: vec!["EC !0x05".into()],
             inputs: vec!["?NMT !0x01 !0x05".into()],
+            input_times_us: vec![500_000],
             steps: 1,
             outputs_seen: 0,
             coverage: Coverage {
@@ -218,10 +232,9 @@ mod tests {
         let log = read(&text).unwrap();
         assert_eq!(log.header, header);
         assert_eq!(log.header.config(None).seed, 42);
-        assert_eq!(
-            (log.verdict.as_str(), log.inputs.as_slice(), log.steps),
-            ("fail", outcome.inputs.as_slice(), 1)
-        );
+        assert_eq!((log.verdict.as_str(), log.steps), ("fail", 1));
+        assert_eq!(log.script, outcome.script());
+        assert_eq!(log.script[0].at_us, Some(500_000));
         assert_eq!(read("{\"kind\":\"step\"}\nnot json").unwrap_err().line, 2);
         assert_eq!(
             read(&text.replace("\"version\":1", "\"version\":9"))

@@ -74,7 +74,7 @@ fn main() {
     }
     println!();
     println!("|---|{}", "---|".repeat(models.len()));
-    let mut caught: Vec<(Fault, usize, Vec<String>)> = Vec::new();
+    let mut caught: Vec<(Fault, usize, Vec<canopener_mbt::executor::ScriptStep>)> = Vec::new();
     for fault in Fault::ALL {
         print!("| {} |", fault.name());
         for (m, (_, model)) in models.iter().enumerate() {
@@ -82,7 +82,7 @@ fn main() {
             for seed in 1..=fault_seeds {
                 let o = test(model, &eds, &[fault], seed, FAULT_STEPS);
                 if o.verdict == Verdict::Fail {
-                    fails.push((o.steps, o.trace.last().map_or(0.0, |s| s.t), o.inputs.clone()));
+                    fails.push((o.steps, o.trace.last().map_or(0.0, |s| s.t), o.script()));
                 }
             }
             if fails.is_empty() {

@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use canopener_mbt::executor::{Executor, Outcome, RunConfig};
+use canopener_mbt::executor::{Executor, Outcome, RunConfig, ScriptStep};
 use canopener_mbt::model::Model;
 
 use crate::link::{Ended, Flow, Link, LinkError, drive};
@@ -38,28 +38,28 @@ pub fn run<L: Link + ?Sized>(
 #[derive(Debug, Clone)]
 pub struct Shrunk {
     /// The inputs of the failing run.
-    pub before: Vec<String>,
-    /// The shortest failing script found; 1-minimal.
-    pub after: Vec<String>,
+    pub before: Vec<ScriptStep>,
+    /// The shortest failing script found; 1-minimal. Kept inputs keep their recorded times.
+    pub after: Vec<ScriptStep>,
     /// How many runs shrinking took.
     pub runs: usize,
     /// The outcome of the shortened script (a `fail`).
     pub outcome: Outcome,
 }
 
-/// Shrinks `inputs` (a failing run's, see [`Outcome::inputs`]) to the shortest script that still
+/// Shrinks `inputs` (a failing run's, see [`Outcome::script`]) to the shortest script that still
 /// fails on the device. `link_for_run` gives the link for each run: a fresh simulation on virtual
 /// time, or the same bus again (each run starts with the model's reset stimuli).
 pub fn shrink<L: Link, E: From<LinkError>>(
     link_for_run: &mut dyn FnMut() -> Result<L, E>,
     model: &Model,
     config: &RunConfig,
-    inputs: &[String],
+    inputs: &[ScriptStep],
     limit: Option<Duration>,
 ) -> Result<Option<Shrunk>, E> {
     let mut error = None;
-    let mut last_fail: Option<(Vec<String>, Outcome)> = None;
-    let mut fails = |script: &[String]| -> bool {
+    let mut last_fail: Option<(Vec<ScriptStep>, Outcome)> = None;
+    let mut fails = |script: &[ScriptStep]| -> bool {
         if error.is_some() {
             return false;
         }

@@ -178,7 +178,7 @@ fn failing_runs_shrink_to_one_minimal_scripts() {
             bus.run_until(Instant::from_millis(100))?;
             Ok::<_, canopener_runtime::link::LinkError>(bus)
         };
-        let shrunk = shrink(&mut new_bus, &model, &config, &failing.inputs, None)
+        let shrunk = shrink(&mut new_bus, &model, &config, &failing.script(), None)
             .unwrap()
             .expect("still fails");
         assert_eq!(shrunk.outcome.verdict, Verdict::Fail);

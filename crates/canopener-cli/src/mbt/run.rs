@@ -53,7 +53,7 @@ pub(crate) fn replay(args: ReplayArgs) -> CliResult {
     let eds = description(args.eds.as_ref().or(args.device.sim.as_ref()))?;
     let loaded = load(&log.header.models, log.header.node, eds.as_ref(), &[])?;
     warn_hash(&log.header, &loaded.model);
-    let config = log.header.config(Some(log.inputs.clone()));
+    let config = log.header.config(Some(log.script.clone()));
     let outcome = execute(&args.device, log.header.node, &loaded.model, config)?;
     report(&log.header, &loaded.model, &outcome, args.format)
 }
@@ -71,21 +71,21 @@ pub(crate) fn shrink(args: ShrinkArgs) -> CliResult {
             &mut || simulated(file, &args.device, node),
             &loaded.model,
             &config,
-            &log.inputs,
+            &log.script,
             limit,
         )?,
         None => mbt_run::shrink(
             &mut || bus_link(&args.device),
             &loaded.model,
             &config,
-            &log.inputs,
+            &log.script,
             limit,
         )?,
     };
     let Some(shrunk) = shrunk else {
         eprintln!(
             "the log's {} inputs no longer make the device fail",
-            log.inputs.len()
+            log.script.len()
         );
         return Err(CliError::Exit(exit_code::CHECK_FAILED));
     };
@@ -100,7 +100,11 @@ pub(crate) fn shrink(args: ShrinkArgs) -> CliResult {
         shrunk.outcome.reason
     );
     for input in &shrunk.after {
-        text.push_str(&format!("  {input}\n"));
+        let at = input
+            .at_us
+            .map(|t| format!("{:>9.3}s ", t as f64 / 1e6))
+            .unwrap_or_default();
+        text.push_str(&format!("  {at}{}\n", input.label));
     }
     print_stdout(&text)
 }
