@@ -123,7 +123,7 @@ pub fn write(header: &RunHeader, outcome: &Outcome) -> String {
     out
 }
 
-/// Reads a log written by [`write`].
+/// Reads a log written by [`write()`].
 pub fn read(text: &str) -> Result<Log, LogError> {
     let mut header: Option<RunHeader> = None;
     let mut verdict = None;
