@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::{BusArg, parse_duration};
+use crate::args::{BusArg, parse_duration, parse_node_id};
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum MbtCommand {
@@ -201,18 +201,6 @@ pub(crate) struct ShrinkArgs {
     pub(crate) output: Option<PathBuf>,
 }
 
-/// A node-ID 1..127, decimal or `0x` hexadecimal.
-pub(crate) fn parse_node_id(text: &str) -> Result<u8, String> {
-    let t = text.trim();
-    let parsed = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
-        Some(hex) => u8::from_str_radix(hex, 16).ok(),
-        None => t.parse().ok(),
-    };
-    parsed
-        .filter(|n| (1..=127).contains(n))
-        .ok_or_else(|| format!("'{text}' is not a node-ID; give 1..127, e.g. 5 or 0x05"))
-}
-
 /// `NAME=VALUE`, the value a number (decimal or 0x) or a duration with a unit (in µs, as models
 /// count time).
 fn parse_setting(text: &str) -> Result<(String, i64), String> {
@@ -241,10 +229,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn node_ids_and_settings_parse() {
-        assert_eq!(parse_node_id("0x7F"), Ok(127));
-        assert_eq!(parse_node_id("5"), Ok(5));
-        assert!(parse_node_id("128").unwrap_err().contains("1..127"));
+    fn settings_parse() {
         assert_eq!(parse_setting("SDO_T=200ms"), Ok(("SDO_T".into(), 200_000)));
         assert_eq!(parse_setting("N=0x10"), Ok(("N".into(), 16)));
         assert!(parse_setting("N").is_err());
