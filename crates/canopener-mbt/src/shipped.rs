@@ -38,6 +38,11 @@ pub const MODELS: &[Shipped] = &[
         covers: "EMCY producer: heartbeat-consumer event 8130h with error register 11h after 1016h's time, and the error reset 0000h when heartbeats resume (CiA 301 §7.2.7)",
         text: include_str!("../models/emcy.mbt"),
     },
+    Shipped {
+        name: "energybus-ems",
+        covers: "DRAFT: EnergyBus EMS virtual device FSA (CiA 454) from public material only: control word 6001h transitions, status word 6002h state, automatic steps; no device to test it on here",
+        text: include_str!("../models/energybus-ems.mbt"),
+    },
 ];
 
 /// The text of the shipped model `name`.
