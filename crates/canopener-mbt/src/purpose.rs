@@ -179,6 +179,91 @@ impl Purpose {
     }
 }
 
+/// A purpose read from an Aldebaran `.aut` LTS in TGV's convention: state 0 of the header is the
+/// initial state, an `ACCEPT` or `REFUSE` loop marks a state, `*` is "otherwise", `QUIESCENCE` is
+/// δ, and any other label is a pattern `[?|!]GATE v1 v2 ...` whose values are numbers or `_`.
+pub fn from_aut(name: &str, lts: &crate::explore::Lts) -> Result<Purpose, String> {
+    let mut states: Vec<(String, Marker)> =
+        (0..lts.states).map(|s| (format!("s{s}"), Marker::None)).collect();
+    let mut transitions = Vec::new();
+    for (from, label, to) in &lts.transitions {
+        let pattern = match label.as_str() {
+            "ACCEPT" | "REFUSE" => {
+                if from != to {
+                    return Err(format!(
+                        "`{label}` marks a state: it must be a loop, not {from} -> {to}"
+                    ));
+                }
+                states[*from].1 = if label == "ACCEPT" {
+                    Marker::Accept
+                } else {
+                    Marker::Refuse
+                };
+                continue;
+            }
+            "*" => LabelPattern::Otherwise,
+            "QUIESCENCE" | "delta" => LabelPattern::Quiescence,
+            text => {
+                let (direction, rest) = match text.chars().next() {
+                    Some('?') => (Some(Direction::Input), &text[1..]),
+                    Some('!') => (Some(Direction::Output), &text[1..]),
+                    _ => (None, text),
+                };
+                let parsed = LabelText::parse(rest)
+                    .ok_or_else(|| format!("an empty label between {from} and {to}"))?;
+                let mut values = Vec::new();
+                for offer in &parsed.values {
+                    values.push(match offer {
+                        Offer::Any => ValuePattern::Any,
+                        Offer::Number(v) => ValuePattern::Set(vec![*v]),
+                        Offer::Text(t) => {
+                            return Err(format!("`{t}` in `{text}` is neither a number nor `_`"));
+                        }
+                    });
+                }
+                LabelPattern::Gate {
+                    direction,
+                    gate: parsed.gate,
+                    values,
+                    guard: None,
+                }
+            }
+        };
+        transitions.push(PurposeTransition {
+            from: *from,
+            to: *to,
+            pattern,
+        });
+    }
+    // State 0 is initial in a purpose; the header's initial state is renumbered to 0.
+    if lts.initial != 0 {
+        let swap = |s: usize| {
+            if s == 0 {
+                lts.initial
+            } else if s == lts.initial {
+                0
+            } else {
+                s
+            }
+        };
+        states.swap(0, lts.initial);
+        for t in &mut transitions {
+            t.from = swap(t.from);
+            t.to = swap(t.to);
+        }
+    }
+    let purpose = Purpose {
+        name: name.to_owned(),
+        title: String::new(),
+        states,
+        transitions,
+    };
+    match purpose.problems().first() {
+        Some(problem) => Err(problem.clone()),
+        None => Ok(purpose),
+    }
+}
+
 /// Whether two patterns can match one label, judged on what is written (predicates are taken to
 /// be satisfiable).
 fn overlap(a: &LabelPattern, b: &LabelPattern) -> bool {
@@ -300,5 +385,29 @@ mod tests {
         assert_eq!(problems.len(), 2, "{problems:?}");
         assert!(problems[0].contains("sinks"));
         assert!(problems[1].contains("not deterministic"));
+    }
+
+    #[test]
+    fn purposes_read_from_aut_in_the_tgv_convention() {
+        let (lts, d) = crate::aut::read(
+            "des (1, 5, 3)\n(1, \"?NMT !0x02 !_\", 0)\n(0, \"!EC !0x04\", 2)\n(0, *, 0)\n(2, ACCEPT, 2)\n(1, QUIESCENCE, 1)\n",
+        );
+        assert!(d.is_empty(), "{d:?}");
+        let p = from_aut("stop", &lts).unwrap();
+        assert_eq!(p.marker(2), Marker::Accept);
+        let l = |t: &str| LabelText::parse(t).unwrap();
+        // The header's initial state 1 became state 0.
+        let stopped = p.step(0, Seen::Label(Some(Direction::Input), &l("NMT !0x02 !0x05")));
+        assert_eq!(stopped, 1);
+        assert_eq!(
+            p.step(stopped, Seen::Label(Some(Direction::Output), &l("EC !0x04"))),
+            2
+        );
+        assert_eq!(
+            p.step(stopped, Seen::Label(Some(Direction::Output), &l("EC !0x05"))),
+            stopped
+        );
+        let (bad, _) = crate::aut::read("des (0, 1, 2)\n(0, ACCEPT, 1)\n");
+        assert!(from_aut("x", &bad).unwrap_err().contains("loop"));
     }
 }

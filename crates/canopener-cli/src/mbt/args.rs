@@ -31,6 +31,7 @@ Exit status: 0 explored, 3 the model has errors, 5 an output file could not be w
     #[command(after_help = "Examples:
   canopener mbt synth nmt --purpose stop_and_start --aut ctg.aut
   canopener mbt synth nmt --purpose stop_and_start --spec-aut nmt-from-cadp.aut
+  canopener mbt synth nmt --purpose-aut my-purpose.aut
 The graph keeps the specification's labels (?GATE tester sends, !GATE device sends, QUIESCENCE);
 states with a PASS or INCONCLUSIVE loop are verdicts; outputs missing from the graph are fail.
 Exit status: 0 synthesised, 6 the purpose cannot be reached, 3 a model or .aut that does not read.")]
@@ -107,8 +108,17 @@ pub(crate) struct SynthArgs {
     #[command(flatten)]
     pub(crate) model: ModelArgs,
     /// The test purpose: the name of a `purpose` block of the models.
-    #[arg(long, value_name = "P")]
-    pub(crate) purpose: String,
+    #[arg(
+        long,
+        value_name = "P",
+        required_unless_present = "purpose_aut",
+        conflicts_with = "purpose_aut"
+    )]
+    pub(crate) purpose: Option<String>,
+    /// The test purpose as an .aut file in TGV's convention (ACCEPT / REFUSE loops mark states, `*` is
+    /// any other label, labels are [?|!]GATE v1 v2 .. with numbers or `_`).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) purpose_aut: Option<PathBuf>,
     /// Take the specification from this .aut file (e.g. made by CADP or mCRL2) instead of exploring
     /// the models; its labels are ?GATE .. (inputs), !GATE .. (outputs) and i or tau.
     #[arg(long, value_name = "FILE")]

@@ -90,34 +90,40 @@ pub(crate) fn synth(args: SynthArgs) -> CliResult {
     let eds = description(args.model.eds.as_ref())?;
     let loaded = load(&args.model.models, args.model.node, eds.as_ref(), &args.model.set)?;
     eprint!("{}", loaded.warnings);
-    let Some(purpose) = loaded.model.purposes.iter().find(|p| p.name == args.purpose) else {
-        let names: Vec<&str> = loaded.model.purposes.iter().map(|p| p.name.as_str()).collect();
-        return Err(CliError::Usage(format!(
-            "the models have no purpose `{}`; they have: {}",
-            args.purpose,
-            if names.is_empty() {
-                "none".to_owned()
-            } else {
-                names.join(", ")
-            }
-        )));
-    };
-    let spec = match &args.spec_aut {
-        Some(path) => {
-            let bytes = canopener_runtime::files::read(path).map_err(|e| CliError::read_file(path, e))?;
-            let (lts, diagnostics) = canopener_mbt::aut::read(&String::from_utf8_lossy(&bytes));
-            let text = canopener_mbt::diagnostics::render(&path.display().to_string(), &diagnostics);
-            if canopener_mbt::diagnostics::has_errors(&diagnostics) {
-                return Err(CliError::InvalidInput(format!(
-                    "{text}the .aut file does not read"
+    let purpose = match (&args.purpose, &args.purpose_aut) {
+        (_, Some(path)) => {
+            let lts = read_aut(path)?;
+            let name = path
+                .file_stem()
+                .map_or_else(|| "purpose".to_owned(), |s| s.to_string_lossy().into_owned());
+            canopener_mbt::purpose::from_aut(&name, &lts)
+                .map_err(|e| CliError::InvalidInput(format!("{}: {e}", path.display())))?
+        }
+        (Some(name), None) => match loaded.model.purposes.iter().find(|p| &p.name == name) {
+            Some(p) => p.clone(),
+            None => {
+                let names: Vec<&str> = loaded.model.purposes.iter().map(|p| p.name.as_str()).collect();
+                return Err(CliError::Usage(format!(
+                    "the models have no purpose `{name}`; they have: {}",
+                    if names.is_empty() {
+                        "none".to_owned()
+                    } else {
+                        names.join(", ")
+                    }
                 )));
             }
-            eprint!("{text}");
-            lts
+        },
+        (None, None) => {
+            return Err(CliError::Usage(
+                "give --purpose NAME or --purpose-aut FILE".into(),
+            ));
         }
+    };
+    let spec = match &args.spec_aut {
+        Some(path) => read_aut(path)?,
         None => canopener_mbt::explore::explore(&loaded.model, 100_000).0.lts,
     };
-    let Some(ctg) = canopener_mbt::synth::synthesize(&spec, purpose) else {
+    let Some(ctg) = canopener_mbt::synth::synthesize(&spec, &purpose) else {
         eprintln!(
             "the purpose `{}` cannot be reached in the specification",
             purpose.name
@@ -137,4 +143,18 @@ pub(crate) fn synth(args: SynthArgs) -> CliResult {
         }
         None => print_stdout(&text),
     }
+}
+
+/// Reads an .aut file; errors are exit 3 with every diagnostic named by place.
+fn read_aut(path: &std::path::Path) -> CliResult<canopener_mbt::explore::Lts> {
+    let bytes = canopener_runtime::files::read(path).map_err(|e| CliError::read_file(path, e))?;
+    let (lts, diagnostics) = canopener_mbt::aut::read(&String::from_utf8_lossy(&bytes));
+    let text = canopener_mbt::diagnostics::render(&path.display().to_string(), &diagnostics);
+    if canopener_mbt::diagnostics::has_errors(&diagnostics) {
+        return Err(CliError::InvalidInput(format!(
+            "{text}the .aut file does not read"
+        )));
+    }
+    eprint!("{text}");
+    Ok(lts)
 }

@@ -121,6 +121,27 @@ fn synth_writes_the_test_graph_of_a_purpose() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.starts_with("des (0, ") && text.contains("PASS"), "{text}");
+    // The same kind of purpose from an .aut file in TGV's convention.
+    let purpose = dir.join("stop.aut");
+    std::fs::write(
+        &purpose,
+        "des (0, 4, 3)\n(0, \"?NMT !0x02 !_\", 1)\n(1, \"!EC !0x04\", 2)\n(1, *, 1)\n(2, ACCEPT, 2)\n",
+    )
+    .unwrap();
+    let from_aut = run(&[
+        "mbt",
+        "synth",
+        "nmt",
+        "--node",
+        "5",
+        "--purpose-aut",
+        purpose.to_str().unwrap(),
+    ]);
+    assert_eq!(from_aut.status.code(), Some(0), "{}", stderr(&from_aut));
+    assert!(stdout(&from_aut).contains("PASS"), "{}", stdout(&from_aut));
+    std::fs::write(&purpose, "des (0, 1, 2)\n(0, ACCEPT, 1)\n").unwrap();
+    let bad = run(&["mbt", "synth", "nmt", "--purpose-aut", purpose.to_str().unwrap()]);
+    assert_eq!(bad.status.code(), Some(3), "{}", stderr(&bad));
     let missing = run(&["mbt", "synth", "nmt", "--purpose", "nope"]);
     assert_eq!(missing.status.code(), Some(2));
     assert!(
