@@ -19,9 +19,10 @@ use std::collections::{BTreeSet, VecDeque};
 use canopener_can::{CanFrame, Core, Instant, StandardId};
 use serde::Serialize;
 
-use crate::label::Label;
+use crate::label::{Label, LabelText};
 use crate::model::{Kind, Model};
-use crate::syntax::ast::Direction;
+use crate::purpose::{Purpose, Seen};
+use crate::syntax::ast::{Direction, Marker};
 
 /// How many configurations the set may hold before the run stops as inconclusive.
 pub const MAX_CONFIGURATIONS: usize = 4096;
@@ -59,6 +60,10 @@ pub struct RunConfig {
     /// A fixed input script instead of chosen inputs (replay and shrinking).
     #[serde(skip)]
     pub script: Option<Vec<ScriptStep>>,
+    /// A test purpose: the run passes once it is reached (inconclusive if refused), and inputs that
+    /// advance it are chosen first.
+    #[serde(skip)]
+    pub purpose: Option<Purpose>,
 }
 
 impl Default for RunConfig {
@@ -71,6 +76,7 @@ impl Default for RunConfig {
             input_percent: 60,
             settle_us: 5_000,
             script: None,
+            purpose: None,
         }
     }
 }
@@ -164,6 +170,8 @@ pub struct Outcome {
     pub outputs_seen: usize,
     /// Coverage.
     pub coverage: Coverage,
+    /// The test purpose, if the run had one: its name and whether it was reached.
+    pub purpose: Option<(String, bool)>,
 }
 
 impl Outcome {
@@ -234,6 +242,7 @@ pub struct Executor<'m> {
     script_pos: usize,
     script_waits: usize,
     waiting_for_script: bool,
+    purpose_state: usize,
     outcome: Option<Outcome>,
     reported: bool,
 }
@@ -267,6 +276,7 @@ impl<'m> Executor<'m> {
             script_pos: 0,
             script_waits: 0,
             waiting_for_script: false,
+            purpose_state: 0,
             outcome: None,
             reported: false,
         };
@@ -411,6 +421,11 @@ impl<'m> Executor<'m> {
         self.phase = Phase::Finished;
         self.outbox.clear();
         let taken: Vec<usize> = self.taken.iter().copied().collect();
+        let purpose = self
+            .config
+            .purpose
+            .as_ref()
+            .map(|p| (p.name.clone(), p.marker(self.purpose_state) == Marker::Accept));
         let outcome = Outcome {
             verdict,
             reason,
@@ -426,6 +441,7 @@ impl<'m> Executor<'m> {
                 taken,
                 states_seen: self.states.len(),
             },
+            purpose,
         };
         self.outcome = Some(outcome.clone());
         outcome
@@ -579,6 +595,15 @@ impl<'m> Executor<'m> {
             );
             return;
         }
+        // The label the purpose sees: the first gate the frame decodes as that an output took.
+        let seen = decoded
+            .iter()
+            .find_map(|(g, v)| LabelText::parse(&self.model.label_text(&Label::concrete(*g, v))));
+        if let Some(text) = seen
+            && self.purpose_step(Seen::Label(Some(Direction::Output), &text))
+        {
+            return;
+        }
         self.count_step(now);
     }
 
@@ -670,6 +695,12 @@ impl<'m> Executor<'m> {
         self.input_times.push(now - self.start);
         self.confs = self.closure(next);
         self.visit();
+        let text = LabelText::parse(&self.model.label_text(label));
+        if let Some(text) = text
+            && self.purpose_step(Seen::Label(Some(Direction::Input), &text))
+        {
+            return;
+        }
         self.steps += 1;
         if self.steps >= self.config.steps {
             let reason = format!("{} steps without a failure", self.steps);
@@ -678,6 +709,36 @@ impl<'m> Executor<'m> {
         }
         // After a stimulus, always observe: the answer is what the step is for.
         self.observe_from(now);
+    }
+
+    /// Moves the purpose on by what was seen; `true` if that ended the run (reached or refused).
+    fn purpose_step(&mut self, seen: Seen<'_>) -> bool {
+        let Some(purpose) = &self.config.purpose else {
+            return false;
+        };
+        self.purpose_state = purpose.step(self.purpose_state, seen);
+        let (name, marker) = (purpose.name.clone(), purpose.marker(self.purpose_state));
+        match marker {
+            Marker::Accept => {
+                let reason = format!("the purpose `{name}` was reached without a failure");
+                let _ = self.conclude(Verdict::Pass, reason, Vec::new());
+                true
+            }
+            Marker::Refuse => {
+                let reason = format!("the run left the purpose `{name}` (a refusing state)");
+                let _ = self.conclude(Verdict::Inconclusive, reason, Vec::new());
+                true
+            }
+            Marker::None => false,
+        }
+    }
+
+    /// Where the purpose goes on `label` (an input), for choosing inputs that advance it.
+    fn purpose_after(&self, label: &Label) -> Option<(usize, Marker)> {
+        let purpose = self.config.purpose.as_ref()?;
+        let text = LabelText::parse(&self.model.label_text(label))?;
+        let next = purpose.step(self.purpose_state, Seen::Label(Some(Direction::Input), &text));
+        Some((next, purpose.marker(next)))
     }
 
     fn quiescence_bound(&self) -> i64 {
@@ -750,7 +811,17 @@ impl<'m> Executor<'m> {
                     .collect(),
                 Strategy::Uniform => Vec::new(),
             };
-            let pool: Vec<&(Label, Vec<usize>)> = if fresh.is_empty() {
+            // Inputs that move the purpose on (and not into a refusing state) come first.
+            let advancing: Vec<&(Label, Vec<usize>)> = inputs
+                .iter()
+                .filter(|(l, _)| {
+                    self.purpose_after(l)
+                        .is_some_and(|(next, marker)| next != self.purpose_state && marker != Marker::Refuse)
+                })
+                .collect();
+            let pool: Vec<&(Label, Vec<usize>)> = if !advancing.is_empty() {
+                advancing
+            } else if fresh.is_empty() {
                 inputs.iter().collect()
             } else {
                 fresh
@@ -803,6 +874,9 @@ impl<'m> Executor<'m> {
                         label: format!("quiescence {:.3}s", (now - since) as f64 / 1e6),
                         frame: None,
                     });
+                    if self.purpose_step(Seen::Quiescence) {
+                        return;
+                    }
                     self.count_step(now);
                 }
             }

@@ -32,6 +32,9 @@ pub struct RunHeader {
     pub input_percent: u8,
     /// `uniform` or `coverage`.
     pub strategy: String,
+    /// The test purpose the run followed, by name, if any.
+    #[serde(default)]
+    pub purpose: Option<String>,
 }
 
 impl RunHeader {
@@ -51,6 +54,7 @@ impl RunHeader {
                 Strategy::Uniform => "uniform".into(),
                 Strategy::Coverage => "coverage".into(),
             },
+            purpose: config.purpose.as_ref().map(|p| p.name.clone()),
         }
     }
 
@@ -68,6 +72,7 @@ impl RunHeader {
             input_percent: self.input_percent,
             settle_us: self.settle_us,
             script,
+            purpose: None,
         }
     }
 }
@@ -226,6 +231,7 @@ mod tests {
                 taken: vec![0],
                 states_seen: 1,
             },
+            purpose: None,
         };
         let text = write(&header, &outcome);
         assert_eq!(text.lines().count(), 3);

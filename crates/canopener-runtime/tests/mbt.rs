@@ -217,3 +217,47 @@ fn failing_runs_shrink_to_one_minimal_scripts() {
         );
     }
 }
+
+#[test]
+fn a_purpose_guides_the_run_and_ends_it_when_reached() {
+    let eds = eds();
+    let model = model(&["nmt"], &eds);
+    let purpose = model
+        .purposes
+        .iter()
+        .find(|p| p.name == "stop_and_start")
+        .expect("shipped purpose")
+        .clone();
+    for seed in 1..=5 {
+        let mut bus = Simulation::ideal()
+            .device(&eds, NODE)
+            .start()
+            .expect("simulation");
+        bus.run_until(Instant::from_millis(100)).expect("virtual time");
+        let config = RunConfig {
+            seed,
+            steps: 400,
+            purpose: Some(purpose.clone()),
+            ..RunConfig::default()
+        };
+        let outcome = run(&mut bus, &model, config, None).expect("link");
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+        assert_eq!(outcome.purpose, Some(("stop_and_start".to_owned(), true)));
+        // Guided: a stop and a start are all the inputs it takes.
+        assert!(outcome.inputs.len() <= 4, "seed {seed}: {:?}", outcome.inputs);
+    }
+    let mut bus = Simulation::ideal()
+        .device(&eds, NODE)
+        .fault(Fault::IgnoresNmtStop)
+        .start()
+        .expect("simulation");
+    bus.run_until(Instant::from_millis(100)).expect("virtual time");
+    let config = RunConfig {
+        steps: 400,
+        purpose: Some(purpose),
+        ..RunConfig::default()
+    };
+    let outcome = run(&mut bus, &model, config, None).expect("link");
+    assert_eq!(outcome.verdict, Verdict::Fail, "{}", show(&outcome));
+    assert_eq!(outcome.purpose, Some(("stop_and_start".to_owned(), false)));
+}

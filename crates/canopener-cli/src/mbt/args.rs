@@ -42,6 +42,7 @@ Exit status: 0 synthesised, 6 the purpose cannot be reached, 3 a model or .aut t
   canopener mbt run nmt --sim device.eds --node 5 --fault ignores-nmt-stop --log run.jsonl
   canopener mbt run nmt --bus socketcand://127.0.0.1:29536/can0 --node 5 --eds device.eds --steps 500
   canopener mbt run sync --sim device.eds --node 5 --format json | jq .verdict
+  canopener mbt run nmt --sim device.eds --node 5 --purpose stop_and_start
 Exit status: 0 pass, 6 fail or inconclusive, 7 the device did not answer at all, 3 a model that does
 not check, 2 bad arguments, 4 bus error.")]
     Run(RunArgs),
@@ -168,6 +169,10 @@ pub(crate) struct RunArgs {
     /// Write the run as JSON Lines (for `replay` and `shrink`).
     #[arg(long, value_name = "OUT.jsonl")]
     pub(crate) log: Option<PathBuf>,
+    /// Follow this test purpose (a `purpose` block of the models): pass once it is reached,
+    /// inconclusive if the run leaves it; inputs that advance it are chosen first.
+    #[arg(long, value_name = "P")]
+    pub(crate) purpose: Option<String>,
     /// Write the coverage as DOT: visited locations and transitions coloured.
     #[arg(long, value_name = "OUT.dot")]
     pub(crate) coverage_dot: Option<PathBuf>,

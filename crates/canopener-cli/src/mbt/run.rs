@@ -32,6 +32,7 @@ pub(crate) fn run(args: RunArgs) -> CliResult {
             Strategy::Uniform => canopener_mbt::executor::Strategy::Uniform,
             Strategy::Coverage => canopener_mbt::executor::Strategy::Coverage,
         },
+        purpose: find_purpose(&loaded.model, args.purpose.as_deref())?,
         ..RunConfig::default()
     };
     let header = RunHeader::new(&args.model.models, &loaded.model.hash, args.model.node, &config);
@@ -53,7 +54,8 @@ pub(crate) fn replay(args: ReplayArgs) -> CliResult {
     let eds = description(args.eds.as_ref().or(args.device.sim.as_ref()))?;
     let loaded = load(&log.header.models, log.header.node, eds.as_ref(), &[])?;
     warn_hash(&log.header, &loaded.model);
-    let config = log.header.config(Some(log.script.clone()));
+    let mut config = log.header.config(Some(log.script.clone()));
+    config.purpose = find_purpose(&loaded.model, log.header.purpose.as_deref())?;
     let outcome = execute(&args.device, log.header.node, &loaded.model, config)?;
     report(&log.header, &loaded.model, &outcome, args.format)
 }
@@ -63,7 +65,8 @@ pub(crate) fn shrink(args: ShrinkArgs) -> CliResult {
     let eds = description(args.eds.as_ref().or(args.device.sim.as_ref()))?;
     let loaded = load(&log.header.models, log.header.node, eds.as_ref(), &[])?;
     warn_hash(&log.header, &loaded.model);
-    let config = log.header.config(None);
+    let mut config = log.header.config(None);
+    config.purpose = find_purpose(&loaded.model, log.header.purpose.as_deref())?;
     let node = log.header.node;
     let limit = args.device.time_limit;
     let shrunk = match &args.device.sim {
@@ -107,6 +110,25 @@ pub(crate) fn shrink(args: ShrinkArgs) -> CliResult {
         text.push_str(&format!("  {at}{}\n", input.label));
     }
     print_stdout(&text)
+}
+
+/// The purpose called `name` in the models.
+fn find_purpose(model: &Model, name: Option<&str>) -> CliResult<Option<canopener_mbt::purpose::Purpose>> {
+    let Some(name) = name else { return Ok(None) };
+    match model.purposes.iter().find(|p| p.name == name) {
+        Some(p) => Ok(Some(p.clone())),
+        None => {
+            let names: Vec<&str> = model.purposes.iter().map(|p| p.name.as_str()).collect();
+            Err(CliError::Usage(format!(
+                "the models have no purpose `{name}`; they have: {}",
+                if names.is_empty() {
+                    "none".to_owned()
+                } else {
+                    names.join(", ")
+                }
+            )))
+        }
+    }
 }
 
 fn read_log(path: &std::path::Path) -> CliResult<log::Log> {
@@ -170,7 +192,9 @@ fn report(header: &RunHeader, model: &Model, outcome: &Outcome, format: Format) 
                 "trace": trace,
                 "allowed": outcome.allowed,
                 "inputs": outcome.inputs,
+                "purpose": outcome.purpose.as_ref().map(|(name, reached)| serde_json::json!({"name": name, "reached": reached})),
                 "coverage": {
+                    "purposes": outcome.purpose.as_ref().map(|(_, reached)| [usize::from(*reached), 1]),
                     "states": [outcome.coverage.states_seen, space.lts.states],
                     "transitions": outcome.coverage.transitions,
                     "locations": outcome.coverage.locations,
@@ -208,6 +232,10 @@ fn report(header: &RunHeader, model: &Model, outcome: &Outcome, format: Format) 
                 for a in &outcome.allowed {
                     text.push_str(&format!("  {a}\n"));
                 }
+            }
+            if let Some((name, reached)) = &outcome.purpose {
+                let state = if *reached { "reached" } else { "not reached" };
+                text.push_str(&format!("purpose {name}: {state}\n"));
             }
             text.push_str(&format!(
                 "coverage: {}/{} transitions, {}/{} locations, {} states seen of {}\n",
