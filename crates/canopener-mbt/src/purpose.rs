@@ -179,10 +179,19 @@ impl Purpose {
     }
 }
 
+/// The most states a purpose read from `.aut` may declare (each gets a name).
+pub const MAX_AUT_PURPOSE_STATES: usize = 100_000;
+
 /// A purpose read from an Aldebaran `.aut` LTS in TGV's convention: state 0 of the header is the
 /// initial state, an `ACCEPT` or `REFUSE` loop marks a state, `*` is "otherwise", `QUIESCENCE` is
 /// δ, and any other label is a pattern `[?|!]GATE v1 v2 ...` whose values are numbers or `_`.
 pub fn from_aut(name: &str, lts: &crate::explore::Lts) -> Result<Purpose, String> {
+    if lts.states > MAX_AUT_PURPOSE_STATES {
+        return Err(format!(
+            "{} states: a test purpose has at most {MAX_AUT_PURPOSE_STATES}",
+            lts.states
+        ));
+    }
     let mut states: Vec<(String, Marker)> =
         (0..lts.states).map(|s| (format!("s{s}"), Marker::None)).collect();
     let mut transitions = Vec::new();

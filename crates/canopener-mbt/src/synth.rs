@@ -40,15 +40,18 @@ fn is_internal(label: &str) -> bool {
 
 /// The complete test graph of `spec` for `purpose`, or `None` if no accepting state is reachable.
 pub fn synthesize(spec: &Lts, purpose: &Purpose) -> Option<Lts> {
-    let mut succ: Vec<Vec<(&str, usize)>> = vec![Vec::new(); spec.states];
+    // By state, only for the states transitions mention: a header may declare any number of states.
+    let mut succ: BTreeMap<usize, Vec<(&str, usize)>> = BTreeMap::new();
     for (from, label, to) in &spec.transitions {
-        succ[*from].push((label.as_str(), *to));
+        succ.entry(*from).or_default().push((label.as_str(), *to));
     }
+    let none: Vec<(&str, usize)> = Vec::new();
+    let succ = |s: usize| succ.get(&s).unwrap_or(&none);
     let closure = |set: BTreeSet<usize>| -> BTreeSet<usize> {
         let mut out = set.clone();
         let mut work: Vec<usize> = set.into_iter().collect();
         while let Some(s) = work.pop() {
-            for (l, t) in &succ[s] {
+            for (l, t) in succ(s) {
                 if is_internal(l) && out.insert(*t) {
                     work.push(*t);
                 }
@@ -58,7 +61,7 @@ pub fn synthesize(spec: &Lts, purpose: &Purpose) -> Option<Lts> {
     };
     // Suspension: a state is quiescent if it has no output and no internal step.
     let quiescent = |s: usize| {
-        succ[s]
+        succ(s)
             .iter()
             .all(|(l, _)| direction(l) == Some(Direction::Input))
     };
@@ -77,7 +80,7 @@ pub fn synthesize(spec: &Lts, purpose: &Purpose) -> Option<Lts> {
         }
         let mut by_label: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
         for &s in &set {
-            for (l, t) in &succ[s] {
+            for (l, t) in succ(s) {
                 if !is_internal(l) {
                     by_label.entry((*l).to_owned()).or_default().insert(*t);
                 }
