@@ -192,6 +192,12 @@ pub fn from_aut(name: &str, lts: &crate::explore::Lts) -> Result<Purpose, String
             lts.states
         ));
     }
+    if lts.initial >= lts.states {
+        return Err(format!(
+            "the initial state {} is not one of the {} states",
+            lts.initial, lts.states
+        ));
+    }
     let mut states: Vec<(String, Marker)> =
         (0..lts.states).map(|s| (format!("s{s}"), Marker::None)).collect();
     let mut transitions = Vec::new();
@@ -418,5 +424,8 @@ mod tests {
         );
         let (bad, _) = crate::aut::read("des (0, 1, 2)\n(0, ACCEPT, 1)\n");
         assert!(from_aut("x", &bad).unwrap_err().contains("loop"));
+        // Found by the fuzzer: an initial state beyond the declared ones.
+        let (bad, _) = crate::aut::read("des(2,0,1)");
+        assert!(from_aut("x", &bad).unwrap_err().contains("initial state 2"));
     }
 }
