@@ -202,6 +202,12 @@ pub fn from_aut(name: &str, lts: &crate::explore::Lts) -> Result<Purpose, String
         (0..lts.states).map(|s| (format!("s{s}"), Marker::None)).collect();
     let mut transitions = Vec::new();
     for (from, label, to) in &lts.transitions {
+        if *from >= lts.states || *to >= lts.states {
+            return Err(format!(
+                "the transition {from} -> {to} leaves the {} states",
+                lts.states
+            ));
+        }
         let pattern = match label.as_str() {
             "ACCEPT" | "REFUSE" => {
                 if from != to {

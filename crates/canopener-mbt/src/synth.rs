@@ -94,7 +94,9 @@ pub fn synthesize(spec: &Lts, purpose: &Purpose) -> Option<Lts> {
             let seen = if label == QUIESCENCE {
                 Seen::Quiescence
             } else {
-                let Some(text) = LabelText::parse(&label[1..]) else {
+                // Any text may come from an .aut file: strip the direction by character.
+                let rest = label.strip_prefix(['?', '!']).unwrap_or(&label);
+                let Some(text) = LabelText::parse(rest) else {
                     continue;
                 };
                 seen_text = text;
@@ -262,5 +264,25 @@ mod tests {
         let model = model.unwrap();
         let (space, _) = explore(&model, 100);
         assert_eq!(synthesize(&space.lts, &model.purposes[0]), None);
+    }
+
+    /// Found by the fuzzer: a label starting with a multi-byte character.
+    #[test]
+    fn labels_of_any_text_synthesise_without_panicking() {
+        let spec = Lts {
+            initial: 0,
+            states: 2,
+            transitions: vec![(0, "\u{FFFD}x".into(), 1), (0, "?é".into(), 1)],
+        };
+        let purpose = crate::purpose::from_aut(
+            "p",
+            &Lts {
+                initial: 0,
+                states: 2,
+                transitions: vec![(0, "*".into(), 1), (1, "ACCEPT".into(), 1)],
+            },
+        )
+        .unwrap();
+        assert!(synthesize(&spec, &purpose).is_some());
     }
 }
