@@ -1,0 +1,473 @@
+//! Emergency, heartbeat and node guarding tests (CCT groups "Emergency", "Guarding", "Heartbeat",
+//! "Heartbeat versus guarding").
+
+use std::time::Duration;
+
+use canopener_wire::NmtCommand;
+
+use crate::catalogue::TestDef;
+use crate::cia301::helpers::{
+    TEST_HEARTBEAT_MS, download_text, refused_unexpectedly, start_heartbeat, upload_text,
+};
+use crate::context::{Ctx, Reply, hex};
+use crate::finding::{Evidence, Finding, Outcome};
+use crate::model::Measurement;
+use crate::requirements as req;
+
+/// How far one heartbeat interval may stray from the period. CiA 301 sets no producer tolerance;
+/// canopener allows a tenth of the period (a consumer is typically set to 1.5–2 periods), and
+/// `docs/conformance.md` says so.
+pub const HEARTBEAT_TOLERANCE: f64 = 0.1;
+
+/// The emergency tests.
+pub fn emcy_tests() -> Vec<TestDef> {
+    vec![
+        TestDef {
+            id: "cia301.emcy.1",
+            suite: "cia301",
+            group: "emcy",
+            title: "1014h holds the EMCY COB-ID 80h + node-ID",
+            references: &[req::EMCY, "CCT Emergency 01"],
+            precondition: "the EDS has 1014h",
+            tags: &["emcy"],
+            run: emcy_cob_id,
+        },
+        TestDef {
+            id: "cia301.emcy.2",
+            suite: "cia301",
+            group: "emcy",
+            title: "1001h (error register) reads as one byte",
+            references: &[req::ERROR_OBJECTS, "CCT Emergency 02", "CCT Emergency 05"],
+            precondition: "always (1001h is mandatory)",
+            tags: &["emcy"],
+            run: error_register,
+        },
+        TestDef {
+            id: "cia301.emcy.3",
+            suite: "cia301",
+            group: "emcy",
+            title: "A too short RPDO raises EMCY 8210h",
+            references: &[req::EMCY, req::PDO, "CCT Emergency 04", "CCT Emergency 06"],
+            precondition: "an enabled RPDO with mapped data, and an EMCY producer (1014h)",
+            tags: &["emcy", "pdo", "nmt"],
+            run: rpdo_length_emcy,
+        },
+        TestDef {
+            id: "cia301.emcy.4",
+            suite: "cia301",
+            group: "emcy",
+            title: "When the RPDO length error is gone, EMCY 0000h (error reset) follows",
+            references: &[req::EMCY, "CCT Emergency 04"],
+            precondition: "as cia301.emcy.3, and the device raised 8210h",
+            tags: &["emcy", "pdo", "nmt"],
+            run: emcy_error_reset,
+        },
+    ]
+}
+
+/// The heartbeat and guarding tests.
+pub fn tests() -> Vec<TestDef> {
+    vec![
+        TestDef {
+            id: "cia301.ec.1",
+            suite: "cia301",
+            group: "ec",
+            title: "Heartbeat producer: 1017h accepts a period and heartbeats follow it",
+            references: &[req::HEARTBEAT, "CCT Heartbeat 01", "CCT Heartbeat 02"],
+            precondition: "the EDS has a writable 1017h",
+            tags: &["heartbeat", "timing"],
+            run: heartbeat_period,
+        },
+        TestDef {
+            id: "cia301.ec.2",
+            suite: "cia301",
+            group: "ec",
+            title: "Heartbeat producer time 0 stops heartbeats",
+            references: &[
+                req::HEARTBEAT,
+                "CCT Heartbeat 03",
+                "CCT Heartbeat versus guarding 02",
+            ],
+            precondition: "the EDS has a writable 1017h",
+            tags: &["heartbeat"],
+            run: heartbeat_off,
+        },
+        TestDef {
+            id: "cia301.ec.3",
+            suite: "cia301",
+            group: "ec",
+            title: "While heartbeats run, node guarding requests are not answered",
+            references: &[
+                req::HEARTBEAT,
+                req::GUARDING,
+                "CCT Heartbeat versus guarding 05",
+                "CCT Heartbeat versus guarding 07",
+            ],
+            precondition: "the EDS has a writable 1017h",
+            tags: &["heartbeat", "guarding"],
+            run: no_guarding_with_heartbeat,
+        },
+        TestDef {
+            id: "cia301.ec.4",
+            suite: "cia301",
+            group: "ec",
+            title: "Node guarding: each request answered with the state and an alternating toggle bit",
+            references: &[
+                req::GUARDING,
+                "CCT Guarding 01",
+                "CCT Guarding 02",
+                "CCT Guarding 03",
+                "CCT Heartbeat versus guarding 03",
+            ],
+            precondition: "the EDS has 100Ch and 100Dh",
+            tags: &["guarding"],
+            run: guarding_toggle,
+        },
+    ]
+}
+
+fn u32_of(reply: &Reply) -> Option<u32> {
+    match reply {
+        Reply::Done(d) if d.len() == 4 => Some(u32::from_le_bytes([d[0], d[1], d[2], d[3]])),
+        _ => None,
+    }
+}
+
+fn emcy_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !ctx.model().has(0x1014) {
+        return Ok(Finding::not_applicable("the EDS has no 1014h"));
+    }
+    let expected = 0x80 + u32::from(ctx.node());
+    let reply = ctx.read(0x1014, 0)?;
+    Ok(match u32_of(&reply) {
+        Some(cob) if cob & 0x7FF == expected => Finding::pass(format!("{expected:#X}")),
+        _ => Finding::fail(
+            format!("1014h: {}", reply.describe()),
+            Evidence {
+                request: upload_text((0x1014, 0)),
+                requirement: format!(
+                    "{}: the default EMCY COB-ID is 80h + node-ID = {expected:#X}",
+                    req::EMCY
+                ),
+                answer: reply.describe(),
+                cause: "1014h is not filled from the node-ID".to_owned(),
+            },
+        ),
+    })
+}
+
+fn error_register(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    Ok(match ctx.read(0x1001, 0)? {
+        Reply::Done(d) if d.len() == 1 => Finding::pass(format!("error register {:02X}h", d[0])),
+        other => refused_unexpectedly(
+            &upload_text((0x1001, 0)),
+            &other,
+            req::ERROR_OBJECTS,
+            "1001h is mandatory",
+        ),
+    })
+}
+
+fn rpdo_length_emcy(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    rpdo_length(ctx, false)
+}
+
+fn emcy_error_reset(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    rpdo_length(ctx, true)
+}
+
+/// Sends a too short RPDO and looks for EMCY 8210h; with `error_reset`, then a correct one and looks
+/// for EMCY 0000h.
+fn rpdo_length(ctx: &mut Ctx<'_, '_>, error_reset: bool) -> Outcome {
+    if !ctx.model().has(0x1014) {
+        return Ok(Finding::not_applicable("the EDS has no EMCY producer (1014h)"));
+    }
+    let emcy_cob = match u32_of(&ctx.read(0x1014, 0)?) {
+        Some(cob) if cob & 0x8000_0000 == 0 => (cob & 0x7FF) as u16,
+        _ => {
+            return Ok(Finding::not_applicable(
+                "the EMCY producer is disabled (1014h bit 31) or unreadable",
+            ));
+        }
+    };
+    // The first enabled RPDO with at least one byte mapped.
+    let mut chosen = None;
+    for pdo in ctx.model().pdos(crate::device_model::PdoDirection::Receive) {
+        let Some(mapping) = pdo.mapping else { continue };
+        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+            continue;
+        };
+        if cob & 0x8000_0000 != 0 {
+            continue;
+        }
+        let Reply::Done(count) = ctx.read(mapping, 0)? else {
+            continue;
+        };
+        let mut bits = 0u32;
+        for sub in 1..=count.first().copied().unwrap_or(0) {
+            if let Reply::Done(d) = ctx.read(mapping, sub)? {
+                bits += u32::from(d.first().copied().unwrap_or(0));
+            }
+        }
+        if bits >= 8 {
+            chosen = Some((pdo.number, (cob & 0x7FF) as u16, bits.div_ceil(8) as usize));
+            break;
+        }
+    }
+    let Some((number, cob, bytes)) = chosen else {
+        return Ok(Finding::not_applicable("no enabled RPDO with mapped data"));
+    };
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(50), |_| false)?;
+    let short = vec![0u8; bytes - 1];
+    ctx.send(cob, &short)?;
+    let emcy = ctx.id(emcy_cob);
+    let seen = ctx.listen(Duration::from_millis(500), |f| f.id() == emcy)?;
+    let request = format!(
+        "NMT start, then RPDO{number} on {cob:#X} with {} bytes where {bytes} are mapped",
+        bytes - 1
+    );
+    if error_reset {
+        if !seen.iter().any(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
+            return Ok(Finding::not_applicable(
+                "the device raised no EMCY 8210h (cia301.emcy.3 judges that)",
+            ));
+        }
+        ctx.send(cob, &vec![0u8; bytes])?;
+        let after = ctx.listen(Duration::from_millis(500), |f| f.id() == emcy)?;
+        return Ok(
+            match after.iter().find(|l| l.frame.data().starts_with(&[0x00, 0x00])) {
+                Some(_) => Finding::pass("EMCY 0000h after a correct RPDO"),
+                None => Finding::fail(
+                    "no EMCY 0000h (error reset) after the RPDO length error was gone",
+                    Evidence {
+                        request: format!("{request}, then RPDO{number} with {bytes} bytes"),
+                        requirement: format!(
+                            "{}: when an error is gone the device sends an EMCY with error code 0000h (error reset or no error)",
+                            req::EMCY
+                        ),
+                        answer: if after.is_empty() {
+                            "no EMCY within 500 ms".to_owned()
+                        } else {
+                            format!("EMCY {}", hex(after[0].frame.data()))
+                        },
+                        cause: "the EMCY producer does not report that the error was cleared".to_owned(),
+                    },
+                ),
+            },
+        );
+    }
+    // Leave no error behind for the next test: a PDO of the right length clears the condition.
+    ctx.send(cob, &vec![0u8; bytes])?;
+    ctx.listen(Duration::from_millis(50), |_| false)?;
+    Ok(
+        match seen.iter().find(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
+            Some(_) => Finding::pass("EMCY 8210h"),
+            None => Finding::fail(
+                "no EMCY 8210h after a too short RPDO",
+                Evidence {
+                    request,
+                    requirement: format!(
+                        "{}: a PDO shorter than its mapping is an error reported with EMCY 8210h",
+                        req::PDO
+                    ),
+                    answer: if seen.is_empty() {
+                        "no EMCY within 500 ms".to_owned()
+                    } else {
+                        format!("EMCY {}", hex(seen[0].frame.data()))
+                    },
+                    cause: "the RPDO length is not checked, or the EMCY producer is missing".to_owned(),
+                },
+            ),
+        },
+    )
+}
+
+fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !start_heartbeat(ctx)? {
+        return Ok(Finding::not_applicable("no writable 1017h"));
+    }
+    let id = ctx.id(0x700 + u16::from(ctx.node()));
+    // One period to settle, then ten.
+    ctx.listen(Duration::from_millis(u64::from(TEST_HEARTBEAT_MS)), |_| false)?;
+    let frames = ctx.listen(
+        Duration::from_millis(u64::from(TEST_HEARTBEAT_MS) * 10 + 50),
+        |f| f.id() == id && !f.is_remote(),
+    )?;
+    let period = f64::from(TEST_HEARTBEAT_MS);
+    let intervals: Vec<f64> = frames
+        .windows(2)
+        .map(|w| w[1].at.saturating_duration_since(w[0].at).as_secs_f64() * 1000.0)
+        .collect();
+    ctx.measure("heartbeat_interval", Measurement::new("ms", intervals.clone()));
+    let request = download_text((0x1017, 0), &TEST_HEARTBEAT_MS.to_le_bytes());
+    let worst = intervals
+        .iter()
+        .copied()
+        .max_by(|a, b| (a - period).abs().total_cmp(&(b - period).abs()));
+    Ok(match worst {
+        _ if frames.len() < 9 => Finding::fail(
+            format!(
+                "{} heartbeats in 1 s at a {TEST_HEARTBEAT_MS} ms period",
+                frames.len()
+            ),
+            Evidence {
+                request,
+                requirement: format!("{}: a heartbeat every producer time", req::HEARTBEAT),
+                answer: format!("{} heartbeats in 1050 ms", frames.len()),
+                cause: "the producer does not run at the configured period".to_owned(),
+            },
+        ),
+        Some(worst) if (worst - period).abs() > period * HEARTBEAT_TOLERANCE => Finding::fail(
+            format!("a heartbeat interval of {worst:.1} ms at a {TEST_HEARTBEAT_MS} ms period"),
+            Evidence {
+                request,
+                requirement: format!(
+                    "{}: a heartbeat every producer time (canopener allows ±{:.0} %)",
+                    req::HEARTBEAT,
+                    HEARTBEAT_TOLERANCE * 100.0
+                ),
+                answer: format!(
+                    "intervals {}",
+                    intervals
+                        .iter()
+                        .map(|i| format!("{i:.1}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                cause: "the producer timer is late or sends extra heartbeats".to_owned(),
+            },
+        ),
+        _ => Finding::pass(format!(
+            "{} heartbeats, every interval within ±10 %",
+            frames.len()
+        )),
+    })
+}
+
+fn heartbeat_off(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !start_heartbeat(ctx)? {
+        return Ok(Finding::not_applicable("no writable 1017h"));
+    }
+    let reply = ctx.write(0x1017, 0, vec![0, 0])?;
+    if !matches!(reply, Reply::Done(_)) {
+        return Ok(refused_unexpectedly(
+            &download_text((0x1017, 0), &[0, 0]),
+            &reply,
+            req::HEARTBEAT,
+            "1017h = 0 is always valid",
+        ));
+    }
+    let id = ctx.id(0x700 + u16::from(ctx.node()));
+    // A heartbeat already queued may still arrive right after the write.
+    ctx.listen(Duration::from_millis(u64::from(TEST_HEARTBEAT_MS)), |_| false)?;
+    let frames = ctx.listen(Duration::from_millis(u64::from(TEST_HEARTBEAT_MS) * 5), |f| {
+        f.id() == id && !f.is_remote()
+    })?;
+    Ok(if frames.is_empty() {
+        Finding::pass("no heartbeat after 1017h = 0")
+    } else {
+        Finding::fail(
+            format!("{} heartbeats after 1017h = 0", frames.len()),
+            Evidence {
+                request: download_text((0x1017, 0), &[0, 0]),
+                requirement: format!("{}: producer time 0 disables the heartbeat", req::HEARTBEAT),
+                answer: format!("{} heartbeats in {} ms", frames.len(), TEST_HEARTBEAT_MS * 5),
+                cause: "the producer ignores 1017h = 0".to_owned(),
+            },
+        )
+    })
+}
+
+fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !start_heartbeat(ctx)? {
+        return Ok(Finding::not_applicable("no writable 1017h"));
+    }
+    let node = u16::from(ctx.node());
+    let id = ctx.id(0x700 + node);
+    let mut answers = 0;
+    for _ in 0..3 {
+        ctx.send_remote(0x700 + node, 1)?;
+        // A guarding answer comes at once; a heartbeat is due only every period.
+        let frames = ctx.listen(Duration::from_millis(10), |f| f.id() == id && !f.is_remote())?;
+        answers += frames.len();
+        ctx.listen(Duration::from_millis(u64::from(TEST_HEARTBEAT_MS / 3)), |_| false)?;
+    }
+    Ok(if answers == 0 {
+        Finding::pass("3 guarding requests, none answered")
+    } else {
+        Finding::fail(
+            format!("{answers} answers within 10 ms of 3 guarding requests while heartbeats run"),
+            Evidence {
+                request: format!(
+                    "1017h = {TEST_HEARTBEAT_MS} ms, then 3 remote frames on {:#X}",
+                    0x700 + node
+                ),
+                requirement: format!(
+                    "{}: with a producer time other than 0 the heartbeat protocol is used, not node guarding",
+                    req::HEARTBEAT
+                ),
+                answer: format!("{answers} error control frames within 10 ms of the requests"),
+                cause: "the device answers guarding requests whatever 1017h says".to_owned(),
+            },
+        )
+    })
+}
+
+fn guarding_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !ctx.model().has_guarding() {
+        return Ok(Finding::not_applicable("the EDS has no 100Ch/100Dh"));
+    }
+    if ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
+        ctx.modify(0x1017, 0, vec![0, 0])?;
+    }
+    let node = u16::from(ctx.node());
+    let id = ctx.id(0x700 + node);
+    let mut answers = Vec::new();
+    for _ in 0..4 {
+        ctx.send_remote(0x700 + node, 1)?;
+        let frames = ctx.listen(Duration::from_millis(100), |f| f.id() == id && !f.is_remote())?;
+        answers.push(
+            frames
+                .first()
+                .map(|l| l.frame.data().first().copied().unwrap_or(0)),
+        );
+    }
+    let request = format!("4 remote frames on {:#X}, 100 ms apart", 0x700 + node);
+    let requirement = format!(
+        "{}: each request answered with the NMT state and a toggle bit that alternates",
+        req::GUARDING
+    );
+    let got: Vec<u8> = answers.iter().flatten().copied().collect();
+    if got.len() < answers.len() {
+        return Ok(Finding::fail(
+            format!("{} of 4 guarding requests answered", got.len()),
+            Evidence {
+                request,
+                requirement,
+                answer: format!("answers {}", hex(&got)),
+                cause: "node guarding is not served".to_owned(),
+            },
+        ));
+    }
+    let toggles_alternate = got.windows(2).all(|w| (w[0] ^ w[1]) & 0x80 != 0);
+    let state_right = got.iter().all(|b| b & 0x7F == 0x7F);
+    Ok(if toggles_alternate && state_right {
+        Finding::pass(format!("answers {}", hex(&got)))
+    } else {
+        Finding::fail(
+            format!("guarding answers {}", hex(&got)),
+            Evidence {
+                request,
+                requirement: format!("{requirement}; the state is pre-operational (7Fh)"),
+                answer: format!("answers {}", hex(&got)),
+                cause: if toggles_alternate {
+                    "the state byte is wrong"
+                } else {
+                    "the toggle bit does not alternate"
+                }
+                .to_owned(),
+            },
+        )
+    })
+}

@@ -1,0 +1,60 @@
+//! Running the CiA 301 suite against simulated devices on virtual time, shared by the integration
+//! tests.
+
+use std::time::Duration;
+
+use canopener_conformance::catalogue::{Selection, catalogue};
+use canopener_conformance::device_model::DeviceModel;
+use canopener_conformance::model::Report;
+use canopener_conformance::runner::{self, RunSpec};
+use canopener_device::faults::Fault;
+use canopener_runtime::simulator::simulation::Simulation;
+
+/// The node every simulated device under test has.
+pub(crate) const NODE: u8 = 5;
+
+/// The start time the reports state (the only field that may differ between runs).
+pub(crate) const STARTED: &str = "2024-01-01T00:00:00Z";
+
+/// Runs the tests `only` selects (all when empty) against a simulated device from the vendored
+/// corpus EDS `name` with `faults`.
+pub(crate) fn run(name: &str, faults: &[Fault], only: &[&str]) -> Report {
+    run_at(name, NODE, faults, only)
+}
+
+/// [`run`] with the device on `node` (an EDS whose defaults are written for one node-ID).
+pub(crate) fn run_at(name: &str, node: u8, faults: &[Fault], only: &[&str]) -> Report {
+    let path = canopener_testkit::corpus::eds(name);
+    let bytes = canopener_testkit::fixture::read(&path).expect("corpus file");
+    let eds = canopener_eds::load(&bytes).eds;
+    let model = DeviceModel::new(&eds, node);
+    let mut bus = Simulation::ideal()
+        .device(&eds, node)
+        .faults(faults.iter().copied())
+        .start()
+        .expect("simulation");
+    let selection = Selection {
+        only: only.iter().map(|s| (*s).to_owned()).collect(),
+        ..Selection::default()
+    };
+    let tests = selection.pick(&catalogue()).expect("selection");
+    let spec = RunSpec {
+        node,
+        model: &model,
+        eds: name.to_owned(),
+        bus: "virtual (ideal)".to_owned(),
+        started: STARTED.to_owned(),
+        sdo_timeout: Duration::from_millis(500),
+    };
+    runner::run(&mut bus, &spec, &tests, |_| {}).expect("run").report
+}
+
+/// The ids of the tests that failed.
+pub(crate) fn failed(report: &Report) -> Vec<String> {
+    report
+        .tests
+        .iter()
+        .filter(|t| t.verdict == canopener_conformance::model::Verdict::Fail)
+        .map(|t| t.id.clone())
+        .collect()
+}
