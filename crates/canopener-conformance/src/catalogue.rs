@@ -48,7 +48,7 @@ pub const SUITES: &[&str] = &["eds", "cia301"];
 
 /// Every test, in catalogue order.
 pub fn catalogue() -> Vec<TestDef> {
-    let mut all = Vec::new();
+    let mut all = crate::cia301::eds::tests();
     all.extend(crate::cia301::sdo::tests());
     all.extend(crate::cia301::pdo::tests());
     all.extend(crate::cia301::object_dictionary::tests());
@@ -114,7 +114,8 @@ impl Selection {
         }
         Ok(tests
             .iter()
-            .filter(|t| suite.is_none_or(|s| t.suite == s))
+            // The `eds` suite is the EDS check the CiA 301 suite starts with.
+            .filter(|t| suite.is_none_or(|s| t.suite == s || (s == "eds" && t.group == "eds")))
             .filter(|t| self.only.is_empty() || self.only.iter().any(|p| matches(p, t)))
             .filter(|t| !self.skip.iter().any(|p| matches(p, t)))
             .filter(|t| self.tags.is_empty() || self.tags.iter().any(|tag| t.tags.contains(&tag.as_str())))

@@ -77,6 +77,7 @@ struct Restore {
 pub struct Ctx<'r, 'l> {
     sdo: SdoSession<&'r mut Recorder<'l>>,
     model: &'r DeviceModel,
+    eds_errors: Option<&'r [String]>,
     restores: Vec<Restore>,
     measurements: BTreeMap<String, Measurement>,
 }
@@ -91,11 +92,17 @@ impl std::fmt::Debug for Ctx<'_, '_> {
 }
 
 impl<'r, 'l> Ctx<'r, 'l> {
-    /// A test's context on the session `sdo` with the device described by `model`.
-    pub fn new(sdo: SdoSession<&'r mut Recorder<'l>>, model: &'r DeviceModel) -> Ctx<'r, 'l> {
+    /// A test's context on the session `sdo` with the device described by `model`; `eds_errors` are
+    /// the errors canopener's EDS checks found in the file (`None` when it was not checked).
+    pub fn new(
+        sdo: SdoSession<&'r mut Recorder<'l>>,
+        model: &'r DeviceModel,
+        eds_errors: Option<&'r [String]>,
+    ) -> Ctx<'r, 'l> {
         Ctx {
             sdo,
             model,
+            eds_errors,
             restores: Vec::new(),
             measurements: BTreeMap::new(),
         }
@@ -104,6 +111,11 @@ impl<'r, 'l> Ctx<'r, 'l> {
     /// What the EDS says.
     pub fn model(&self) -> &'r DeviceModel {
         self.model
+    }
+
+    /// The errors of canopener's EDS checks, when the file was checked.
+    pub fn eds_errors(&self) -> Option<&'r [String]> {
+        self.eds_errors
     }
 
     /// The node under test.

@@ -31,6 +31,9 @@ pub struct RunSpec<'a> {
     pub started: String,
     /// The SDO timeout.
     pub sdo_timeout: Duration,
+    /// The errors of canopener's EDS checks on the file ([`crate::cia301::eds::errors`]); `None`
+    /// when the description was not an EDS/DCF.
+    pub eds_errors: Option<Vec<String>>,
 }
 
 /// How far a run got, for a progress bar.
@@ -147,7 +150,7 @@ fn prepare(
     report: &mut Report,
 ) -> Result<Result<bool, Stop>, RunError> {
     let session = SdoSession::new(&mut *recorder, spec.node, spec.sdo_timeout)?;
-    let mut ctx = Ctx::new(session, spec.model);
+    let mut ctx = Ctx::new(session, spec.model, spec.eds_errors.as_deref());
     let result = (|| -> Result<bool, Stop> {
         ctx.nmt(NmtCommand::ResetNode, false)?;
         let boot = ctx.id(0x700 + u16::from(spec.node));
@@ -197,7 +200,7 @@ type OneResult = (
 
 fn run_one(recorder: &mut Recorder<'_>, spec: &RunSpec<'_>, test: &TestDef) -> Result<OneResult, RunError> {
     let session = SdoSession::new(&mut *recorder, spec.node, spec.sdo_timeout)?;
-    let mut ctx = Ctx::new(session, spec.model);
+    let mut ctx = Ctx::new(session, spec.model, spec.eds_errors.as_deref());
     let (finding, mut stopped) = match (test.run)(&mut ctx) {
         Ok(finding) => (finding, false),
         Err(Stop::Cancelled) => (

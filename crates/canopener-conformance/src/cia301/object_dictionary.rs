@@ -353,6 +353,22 @@ fn limits(ctx: &mut Ctx<'_, '_>) -> Outcome {
             continue;
         };
         let at = (entry.index, entry.sub);
+        // A value outside its own limits could not be written back after the test: leave the
+        // entry alone (its DefaultValue contradicts its limits, an EDS problem, not the device's).
+        let Reply::Done(current) = ctx.read(at.0, at.1)? else {
+            continue;
+        };
+        let inside = canopener_od::Number::decode(data_type, &current).is_some_and(|v| {
+            entry
+                .low
+                .is_none_or(|low| !matches!(v.partial_cmp(&low), Some(std::cmp::Ordering::Less)))
+                && entry
+                    .high
+                    .is_none_or(|high| !matches!(v.partial_cmp(&high), Some(std::cmp::Ordering::Greater)))
+        });
+        if !inside {
+            continue;
+        }
         for (limit, up) in [(entry.high, true), (entry.low, false)] {
             let Some(limit) = limit else { continue };
             let (accepted, name) = if up {

@@ -213,7 +213,17 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
             break;
         }
         let writable = |sub| ctx.model().entry(pdo.comm, sub).is_some_and(|e| e.writable());
-        if configurable.is_none() && writable(1) && writable(2) && cob & 0x7FF != 0 {
+        if configurable.is_some() || !writable(1) || !writable(2) || cob & 0x7FF == 0 {
+            continue;
+        }
+        // A mapping of 0 entries disables the PDO (CiA 301 §7.5.2.38): nothing would answer.
+        let mapped = match pdo.mapping {
+            Some(mapping) => {
+                matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0))
+            }
+            None => false,
+        };
+        if mapped {
             configurable = Some((pdo, cob));
         }
     }

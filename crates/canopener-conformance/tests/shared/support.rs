@@ -26,7 +26,9 @@ pub(crate) fn run(name: &str, faults: &[Fault], only: &[&str]) -> Report {
 pub(crate) fn run_at(name: &str, node: u8, faults: &[Fault], only: &[&str]) -> Report {
     let path = canopener_testkit::corpus::eds(name);
     let bytes = canopener_testkit::fixture::read(&path).expect("corpus file");
-    let eds = canopener_eds::load(&bytes).eds;
+    let loaded = canopener_eds::load(&bytes);
+    let eds_errors = Some(canopener_conformance::cia301::eds::errors(&loaded, Some(name)));
+    let eds = loaded.eds;
     let model = DeviceModel::new(&eds, node);
     let mut bus = Simulation::ideal()
         .device(&eds, node)
@@ -45,6 +47,7 @@ pub(crate) fn run_at(name: &str, node: u8, faults: &[Fault], only: &[&str]) -> R
         bus: "virtual (ideal)".to_owned(),
         started: STARTED.to_owned(),
         sdo_timeout: Duration::from_millis(500),
+        eds_errors,
     };
     runner::run(&mut bus, &spec, &tests, |_| {}).expect("run").report
 }
