@@ -271,6 +271,21 @@ impl Report {
     }
 }
 
+/// `2024-01-01T00:00:00Z`: `time` in RFC 3339, UTC, whole seconds (for [`Report::started`]).
+pub fn rfc3339_utc(time: std::time::SystemTime) -> String {
+    let secs = time
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (year, month, day) = canopener_master::dcf_dump::civil_from_days((secs / 86_400) as i64);
+    let of_day = secs % 86_400;
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
+        of_day / 3600,
+        of_day % 3600 / 60,
+        of_day % 60
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -287,6 +302,13 @@ mod tests {
         assert_eq!(Statistics::of(&[7.0]).unwrap().p99, 7.0);
         assert!(Statistics::of(&[]).is_none());
         assert!(Statistics::of(&[1.0, f64::NAN]).is_none());
+    }
+
+    #[test]
+    fn start_times_read_as_rfc_3339() {
+        let time = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_704_067_200 + 3_723);
+        assert_eq!(rfc3339_utc(time), "2024-01-01T01:02:03Z");
+        assert_eq!(rfc3339_utc(std::time::UNIX_EPOCH), "1970-01-01T00:00:00Z");
     }
 
     #[test]
