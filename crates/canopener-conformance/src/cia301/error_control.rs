@@ -386,18 +386,30 @@ fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let node = u16::from(ctx.node());
     let id = ctx.id(0x700 + node);
     let mut answers = 0;
+    let period = Duration::from_millis(u64::from(TEST_HEARTBEAT_MS));
     for _ in 0..3 {
+        // Right after a heartbeat the next one is a period away: whatever answers within 20 ms of
+        // the request is a guarding answer, not the heartbeat.
+        if ctx
+            .wait_for(period * 2, |f| f.id() == id && !f.is_remote())?
+            .is_none()
+        {
+            return Ok(Finding::inconclusive(
+                "no heartbeat to time the guarding requests by",
+            ));
+        }
+        // A duplicated heartbeat (a fault cia301.ec.1 judges) comes within a few milliseconds.
+        ctx.listen(Duration::from_millis(5), |_| false)?;
         ctx.send_remote(0x700 + node, 1)?;
-        // A guarding answer comes at once; a heartbeat is due only every period.
-        let frames = ctx.listen(Duration::from_millis(10), |f| f.id() == id && !f.is_remote())?;
-        answers += frames.len();
-        ctx.listen(Duration::from_millis(u64::from(TEST_HEARTBEAT_MS / 3)), |_| false)?;
+        answers += ctx
+            .listen(Duration::from_millis(20), |f| f.id() == id && !f.is_remote())?
+            .len();
     }
     Ok(if answers == 0 {
         Finding::pass("3 guarding requests, none answered")
     } else {
         Finding::fail(
-            format!("{answers} answers within 10 ms of 3 guarding requests while heartbeats run"),
+            format!("{answers} answers within 20 ms of 3 guarding requests while heartbeats run"),
             Evidence {
                 request: format!(
                     "1017h = {TEST_HEARTBEAT_MS} ms, then 3 remote frames on {:#X}",
@@ -407,7 +419,9 @@ fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
                     "{}: with a producer time other than 0 the heartbeat protocol is used, not node guarding",
                     req::HEARTBEAT
                 ),
-                answer: format!("{answers} error control frames within 10 ms of the requests"),
+                answer: format!(
+                    "{answers} error control frames within 20 ms of the requests (the next heartbeat was due a period later)"
+                ),
                 cause: "the device answers guarding requests whatever 1017h says".to_owned(),
             },
         )

@@ -640,7 +640,9 @@ fn block_upload(ctx: &mut Ctx<'_, '_>) -> Outcome {
                     req::NO_BLOCK_TRANSFER.list()
                 ),
                 answer: other.describe(),
-                cause: "the block upload server is broken (CRC, sequence numbers or end frame)".to_owned(),
+                cause: "the block upload server is broken (CRC, sequence numbers, end frame), or a server without \
+                        block transfer answers instead of refusing with 0504 0001h"
+                    .to_owned(),
             },
         ),
     })
