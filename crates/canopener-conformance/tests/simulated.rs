@@ -80,7 +80,22 @@ fn check_clean(report: &canopener_conformance::model::Report, what: &str, allowe
 #[test]
 fn clean_simulated_devices_pass_within_ten_virtual_seconds() {
     for (name, what) in CLEAN {
-        check_clean(&support::run(name, &[], &[]), what, &[]);
+        let report = support::run(name, &[], &[]);
+        check_clean(&report, what, &[]);
+        // The figures docs/conformance.md and the closing note quote.
+        let not_applicable: Vec<String> = report
+            .tests
+            .iter()
+            .filter(|t| t.verdict == Verdict::NotApplicable)
+            .map(|t| format!("{} ({})", t.id, t.reason))
+            .collect();
+        eprintln!(
+            "{what}: {} passed, {} not applicable in {:.2} s virtual time: {}",
+            report.summary.pass,
+            report.summary.not_applicable,
+            report.duration_s,
+            not_applicable.join("; ")
+        );
     }
 }
 
