@@ -266,3 +266,32 @@ fn json_report_keeps_the_version_1_names() {
     assert_eq!(telegram["id"], "0x605");
     assert_eq!(json["summary"]["pass"], 1);
 }
+
+#[test]
+fn junit_has_one_test_case_per_test_and_the_failure_with_its_analysis() {
+    let report = support::run(FAULT_DEVICE, &[Fault::LimitNotEnforced], &["cia301.sdo"]);
+    let xml = canopener_conformance::render::junit::render(&report);
+    let doc = roxmltree::Document::parse(&xml).expect("well-formed JUnit XML");
+    let cases: Vec<_> = doc.descendants().filter(|n| n.has_tag_name("testcase")).collect();
+    assert_eq!(cases.len(), report.tests.len());
+    let failures: Vec<_> = doc.descendants().filter(|n| n.has_tag_name("failure")).collect();
+    assert_eq!(failures.len(), 1);
+    assert!(
+        failures[0].text().is_some_and(|t| t.contains("0609 0031h")),
+        "{xml}"
+    );
+    let failed_case = failures[0].parent().expect("testcase");
+    assert!(
+        failed_case
+            .attribute("name")
+            .is_some_and(|n| n.starts_with("cia301.sdo.9 "))
+    );
+    let out = failed_case
+        .children()
+        .find(|n| n.has_tag_name("system-out"))
+        .and_then(|n| n.text());
+    assert!(
+        out.is_some_and(|t| t.contains("0x605")),
+        "the telegrams are the system-out"
+    );
+}

@@ -2,6 +2,8 @@
 
 use std::fmt::Write as _;
 
+use canopener_eds::xml_text::{self, XmlPlace, XmlStyle};
+
 use crate::model::{Report, Verdict};
 
 /// The JUnit XML of `report`.
@@ -16,15 +18,15 @@ pub fn render(report: &Report) -> String {
         s.inconclusive,
         s.not_applicable,
         report.duration_s,
-        escape(&report.started)
+        attr(&report.started)
     );
     for test in &report.tests {
         let _ = writeln!(
             out,
             "  <testcase classname=\"{}.{}\" name=\"{}\" time=\"{:.6}\">",
-            escape(&test.suite),
-            escape(&test.group),
-            escape(&format!("{} {}", test.id, test.title)),
+            attr(&test.suite),
+            attr(&test.group),
+            attr(&format!("{} {}", test.id, test.title)),
             test.duration_s
         );
         match test.verdict {
@@ -32,15 +34,15 @@ pub fn render(report: &Report) -> String {
                 let _ = writeln!(
                     out,
                     "    <failure message=\"{}\">{}</failure>",
-                    escape(&test.reason),
-                    escape(&test.analysis)
+                    attr(&test.reason),
+                    content(&test.analysis)
                 );
             }
             Verdict::Inconclusive => {
-                let _ = writeln!(out, "    <error message=\"{}\"/>", escape(&test.reason));
+                let _ = writeln!(out, "    <error message=\"{}\"/>", attr(&test.reason));
             }
             Verdict::NotApplicable => {
-                let _ = writeln!(out, "    <skipped message=\"{}\"/>", escape(&test.reason));
+                let _ = writeln!(out, "    <skipped message=\"{}\"/>", attr(&test.reason));
             }
             Verdict::Pass => {}
         }
@@ -49,26 +51,19 @@ pub fn render(report: &Report) -> String {
             .iter()
             .map(|t| format!("{:.6} {:?} {} {}  {}\n", t.t, t.dir, t.id, t.data, t.meaning))
             .collect();
-        let _ = writeln!(out, "    <system-out>{}</system-out>", escape(&log));
+        let _ = writeln!(out, "    <system-out>{}</system-out>", content(&log));
         let _ = writeln!(out, "  </testcase>");
     }
     out.push_str("</testsuite>\n");
     out
 }
 
-/// Escapes the five XML special characters and drops the control characters XML 1.0 forbids.
-fn escape(text: &str) -> String {
-    text.chars()
-        .filter(|c| !c.is_control() || matches!(c, '\n' | '\t' | '\r'))
-        .map(|c| match c {
-            '&' => "&amp;".to_owned(),
-            '<' => "&lt;".to_owned(),
-            '>' => "&gt;".to_owned(),
-            '"' => "&quot;".to_owned(),
-            '\'' => "&apos;".to_owned(),
-            c => c.to_string(),
-        })
-        .collect()
+fn attr(text: &str) -> String {
+    xml_text::escape(text, XmlPlace::Attribute, XmlStyle::DECIMAL)
+}
+
+fn content(text: &str) -> String {
+    xml_text::escape(text, XmlPlace::Content, XmlStyle::DECIMAL)
 }
 
 #[cfg(test)]
@@ -77,6 +72,7 @@ mod tests {
 
     #[test]
     fn markup_in_reasons_is_escaped() {
-        assert_eq!(escape("a<b & \"c\"\u{1}"), "a&lt;b &amp; &quot;c&quot;");
+        assert_eq!(attr("a<b & \"c\""), "a&lt;b &amp; &quot;c&quot;");
+        assert_eq!(content("x < y"), "x &lt; y");
     }
 }
