@@ -13,3 +13,5 @@ pub mod nmt;
 pub mod object_dictionary;
 pub mod pdo;
 pub mod sdo;
+pub mod store;
+pub mod sync;

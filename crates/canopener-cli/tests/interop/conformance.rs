@@ -79,6 +79,10 @@ fn a_clean_simulated_device_passes_and_its_logs_decode_and_replay() {
         out.to_str().unwrap(),
         "--log",
         logs.to_str().unwrap(),
+        // The simulated device runs on this (loaded, shared) host's scheduler, not on a real-time
+        // controller: its heartbeat intervals are judged on virtual time (tests/simulated.rs), not here.
+        "--skip",
+        "cia301.ec.1",
     ]);
     let report = report(&out);
     let undecided: Vec<String> = report["tests"]
@@ -102,6 +106,10 @@ fn a_clean_simulated_device_passes_and_its_logs_decode_and_replay() {
     // One candump log per test; every one decodes, and one replays onto the bus.
     let files = fixture::list(&logs).expect("log dir");
     assert_eq!(files.len(), report["tests"].as_array().map_or(0, Vec::len));
+    assert!(
+        !files.iter().any(|f| f.ends_with("cia301.ec.1.log")),
+        "--skip left a log"
+    );
     for file in &files {
         let output = canopener()
             .args(["bus", "decode"])
@@ -244,6 +252,10 @@ const LOCAL_NODE_GAPS: &[&str] = &[
     "cia301.pdo.5",
     // Entries without a DefaultValue in the EDS are aborted with 060A 0023h.
     "cia301.od.1",
+    // 1019h takes any value at any time, and 1005h bit 30 is accepted but no SYNC is produced.
+    "cia301.sync.2",
+    "cia301.sync.3",
+    "cia301.sync.4",
     // No EMCY producer, no node guarding, and its SDO server runs in stopped.
     "cia301.emcy.3",
     "cia301.ec.4",
