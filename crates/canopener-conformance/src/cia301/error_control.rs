@@ -7,7 +7,7 @@ use canopener_wire::NmtCommand;
 
 use crate::catalogue::TestDef;
 use crate::cia301::helpers::{
-    TEST_HEARTBEAT_MS, download_text, refused_unexpectedly, start_heartbeat, upload_text,
+    TEST_HEARTBEAT_MS, download_text, refused_unexpectedly, start_heartbeat, u32_of, upload_text,
 };
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome};
@@ -124,13 +124,6 @@ pub fn tests() -> Vec<TestDef> {
             run: guarding_toggle,
         },
     ]
-}
-
-fn u32_of(reply: &Reply) -> Option<u32> {
-    match reply {
-        Reply::Done(d) if d.len() == 4 => Some(u32::from_le_bytes([d[0], d[1], d[2], d[3]])),
-        _ => None,
-    }
 }
 
 fn emcy_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {

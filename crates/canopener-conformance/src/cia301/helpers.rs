@@ -135,3 +135,31 @@ pub fn state_name(state: u8) -> String {
     };
     format!("{name} ({state:02X}h)")
 }
+
+/// A 4-byte value read as UNSIGNED32.
+pub fn u32_of(reply: &Reply) -> Option<u32> {
+    match reply {
+        Reply::Done(d) if d.len() == 4 => Some(u32::from_le_bytes([d[0], d[1], d[2], d[3]])),
+        _ => None,
+    }
+}
+
+/// NMT enter pre-operational, and a moment for the device to get there.
+pub fn back_to_pre_operational(ctx: &mut Ctx<'_, '_>) -> Result<(), Stop> {
+    ctx.nmt(canopener_wire::NmtCommand::EnterPreOperational, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false).map(drop)
+}
+
+/// NMT reset node and the boot-up after it; `false` without one within
+/// [`BOOT_UP_WAIT`](crate::cia301::nmt::BOOT_UP_WAIT).
+pub fn reset_node(ctx: &mut Ctx<'_, '_>) -> Result<bool, Stop> {
+    ctx.nmt(canopener_wire::NmtCommand::ResetNode, false)?;
+    let boot = ctx.id(0x700 + u16::from(ctx.node()));
+    let heard = ctx
+        .wait_for(crate::cia301::nmt::BOOT_UP_WAIT, |f| {
+            f.id() == boot && f.data() == [0]
+        })?
+        .is_some();
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    Ok(heard)
+}

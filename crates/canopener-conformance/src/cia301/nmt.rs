@@ -7,9 +7,11 @@ use std::time::Duration;
 use canopener_wire::NmtCommand;
 
 use crate::catalogue::TestDef;
-use crate::cia301::helpers::{observed_state, start_heartbeat, state_name, upload_text};
+use crate::cia301::helpers::{
+    back_to_pre_operational, observed_state, start_heartbeat, state_name, upload_text,
+};
 use crate::context::{Ctx, Reply};
-use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::finding::{Evidence, Finding, Outcome};
 use crate::requirements as req;
 
 const PRE_OPERATIONAL: u8 = 0x7F;
@@ -275,9 +277,4 @@ fn stopped_services(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         ),
     })
-}
-
-fn back_to_pre_operational(ctx: &mut Ctx<'_, '_>) -> Result<(), Stop> {
-    ctx.nmt(NmtCommand::EnterPreOperational, false)?;
-    ctx.listen(Duration::from_millis(20), |_| false).map(drop)
 }

@@ -3,7 +3,7 @@
 use canopener_eds::AccessType;
 
 use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, is_pdo_or_special, upload_text};
+use crate::cia301::helpers::{download_text, expect_refusal, is_pdo_or_special, reset_node, upload_text};
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{EntryModel, OBJ_FLAG_REFUSE_WRITE, number_bytes, number_text, step_beyond};
 use crate::finding::{Evidence, Finding, Outcome};
@@ -223,14 +223,7 @@ fn runtime_value(entry: &EntryModel) -> bool {
 }
 
 fn defaults(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    ctx.nmt(canopener_wire::NmtCommand::ResetNode, false)?;
-    let boot = ctx.id(0x700 + u16::from(ctx.node()));
-    if ctx
-        .wait_for(crate::cia301::nmt::BOOT_UP_WAIT, |f| {
-            f.id() == boot && f.data() == [0]
-        })?
-        .is_none()
-    {
+    if !reset_node(ctx)? {
         return Ok(Finding::inconclusive(
             "no boot-up within 2 s of the reset node: defaults not compared",
         ));

@@ -6,7 +6,7 @@ use std::time::Duration;
 use canopener_wire::NmtCommand;
 
 use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, upload_text};
+use crate::cia301::helpers::{back_to_pre_operational, download_text, expect_refusal, u32_of, upload_text};
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{PdoDirection, PdoModel};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
@@ -66,13 +66,6 @@ pub fn tests() -> Vec<TestDef> {
             run: unmappable,
         },
     ]
-}
-
-fn u32_of(reply: &Reply) -> Option<u32> {
-    match reply {
-        Reply::Done(d) if d.len() == 4 => Some(u32::from_le_bytes([d[0], d[1], d[2], d[3]])),
-        _ => None,
-    }
 }
 
 fn all_pdos(ctx: &Ctx<'_, '_>) -> Vec<PdoModel> {
@@ -279,11 +272,6 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
     } else {
         Finding::pass(format!("TPDO{number} answered: {}", hex(answer[0].frame.data())))
     })
-}
-
-fn back_to_pre_operational(ctx: &mut Ctx<'_, '_>) -> Result<(), Stop> {
-    ctx.nmt(NmtCommand::EnterPreOperational, false)?;
-    ctx.listen(Duration::from_millis(20), |_| false).map(drop)
 }
 
 /// The first TPDO whose COB-ID the EDS makes writable, with its current COB-ID.

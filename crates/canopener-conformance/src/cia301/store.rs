@@ -5,12 +5,8 @@
 //! defaults ("load" to 1011h:01 and a reset node), so parameters a user had stored before are gone
 //! afterwards. `--skip cia301.other` leaves the memory alone.
 
-use std::time::Duration;
-
-use canopener_wire::NmtCommand;
-
 use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, upload_text};
+use crate::cia301::helpers::{download_text, expect_refusal, reset_node, upload_text};
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::requirements as req;
@@ -89,18 +85,6 @@ fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
     })
 }
 
-/// Resets the node and waits for its boot-up; `false` without one.
-fn reset(ctx: &mut Ctx<'_, '_>) -> Result<bool, Stop> {
-    ctx.nmt(NmtCommand::ResetNode, false)?;
-    let boot = ctx.id(0x700 + u16::from(ctx.node()));
-    Ok(ctx
-        .wait_for(crate::cia301::nmt::BOOT_UP_WAIT, |f| {
-            f.id() == boot && f.data() == [0]
-        })?
-        .is_some()
-        && ctx.listen(Duration::from_millis(20), |_| false).is_ok())
-}
-
 fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !on_command(ctx, 0x1010)? || !on_command(ctx, 0x1011)? {
         return Ok(Finding::not_applicable(
@@ -148,7 +132,7 @@ fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         ));
     }
-    if !reset(ctx)? {
+    if !reset_node(ctx)? {
         restore_defaults(ctx)?;
         return Ok(Finding::inconclusive("no boot-up after the reset node"));
     }
@@ -197,7 +181,7 @@ fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
 /// "load" to 1011h:01, reset node, and 1017h as it then reads (`None` without a boot-up).
 fn restore_defaults(ctx: &mut Ctx<'_, '_>) -> Result<Option<Reply>, Stop> {
     ctx.write(0x1011, 1, LOAD.to_vec())?;
-    if !reset(ctx)? {
+    if !reset_node(ctx)? {
         return Ok(None);
     }
     Ok(Some(ctx.read(0x1017, 0)?))

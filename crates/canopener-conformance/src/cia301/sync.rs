@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, upload_text};
+use crate::cia301::helpers::{download_text, expect_refusal, u32_of, upload_text};
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::model::Measurement;
@@ -64,13 +64,6 @@ pub fn tests() -> Vec<TestDef> {
             run: producer,
         },
     ]
-}
-
-fn u32_of(reply: &Reply) -> Option<u32> {
-    match reply {
-        Reply::Done(d) if d.len() == 4 => Some(u32::from_le_bytes([d[0], d[1], d[2], d[3]])),
-        _ => None,
-    }
 }
 
 fn writable(ctx: &Ctx<'_, '_>, index: u16) -> bool {
