@@ -55,6 +55,7 @@ pub fn catalogue() -> Vec<TestDef> {
     all.extend(crate::cia301::error_control::emcy_tests());
     all.extend(crate::cia301::sync::tests());
     all.extend(crate::cia301::error_control::tests());
+    all.extend(crate::cia301::consumer::tests());
     all.extend(crate::cia301::store::tests());
     all.extend(crate::cia301::nmt::tests());
     all

@@ -6,6 +6,7 @@
 //! [`Ctx::modify`](crate::context::Ctx::modify) and written back by the runner, which then puts the
 //! device into pre-operational.
 
+pub mod consumer;
 pub mod eds;
 pub mod error_control;
 pub mod helpers;

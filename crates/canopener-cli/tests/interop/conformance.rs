@@ -12,8 +12,9 @@ use serde_json::Value;
 
 use crate::support::{HubProc, Proc, canopener, python, python_peer};
 
-/// A vendored EDS with node guarding, limits, EMCY and RPDOs: every CiA 301 test applies.
-const SIM_EDS: &str = "ros-industrial__ros_canopen__ipa_canopen_test__config__PRL120.eds";
+/// A vendored EDS (maxon EPOS4) with limits, EMCY, RPDOs, a heartbeat consumer and 1029h: all but
+/// the guarding, RTR and long-entry tests apply.
+const SIM_EDS: &str = "YamamotoSoya__maxon_epos4compact50-5can_ros2__maxon_epos4_ros2__config__bus_config_cia402_epos4_pos__maxon_epos4_0x1018.eds";
 /// How long one whole run may take on the wall clock before the test calls it hung.
 const RUN_LIMIT: Duration = Duration::from_secs(120);
 

@@ -51,13 +51,3 @@ pub(crate) fn run_at(name: &str, node: u8, faults: &[Fault], only: &[&str]) -> R
     };
     runner::run(&mut bus, &spec, &tests, |_| {}).expect("run").report
 }
-
-/// The ids of the tests that failed.
-pub(crate) fn failed(report: &Report) -> Vec<String> {
-    report
-        .tests
-        .iter()
-        .filter(|t| t.verdict == canopener_conformance::model::Verdict::Fail)
-        .map(|t| t.id.clone())
-        .collect()
-}
