@@ -51,6 +51,7 @@ pub fn catalogue() -> Vec<TestDef> {
     let mut all = crate::cia301::eds::tests();
     all.extend(crate::cia301::sdo::tests());
     all.extend(crate::cia301::pdo::tests());
+    all.extend(crate::cia301::pdo_transmission::tests());
     all.extend(crate::cia301::object_dictionary::tests());
     all.extend(crate::cia301::error_control::emcy_tests());
     all.extend(crate::cia301::sync::tests());

@@ -247,7 +247,10 @@ const LOCAL_NODE_GAPS: &[&str] = &[
     "cia301.od.7",
     // It answers a block upload with a normal upload instead of refusing it with 0504 0001h.
     "cia301.sdo.15",
-    // No RTR on TPDOs, no checks of PDO COB-IDs or mapping entries.
+    // No PDO timing (event timer, synchronous transmission), no RTR on TPDOs, no checks of PDO
+    // COB-IDs or mapping entries.
+    "cia301.pdo.6",
+    "cia301.pdo.7",
     "cia301.pdo.3",
     "cia301.pdo.4",
     "cia301.pdo.5",

@@ -176,9 +176,12 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     // The heartbeat stops: the event is due TEST_CONSUMER_MS after the last one.
     let id = ctx.id(emcy);
-    let after = ctx.listen(Duration::from_millis(u64::from(TEST_CONSUMER_MS) * 2), |f| {
-        f.id() == id
-    })?;
+    let after: Vec<_> = ctx
+        .wait_for(Duration::from_millis(u64::from(TEST_CONSUMER_MS) * 2), |f| {
+            f.id() == id && f.data().starts_with(&[0x30, 0x81])
+        })?
+        .into_iter()
+        .collect();
     let state = observed_state(ctx, true)?;
     // The producer comes back, so the consumer's error goes before the write-back.
     produce(ctx, producer, 2, emcy)?;

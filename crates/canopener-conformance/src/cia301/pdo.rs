@@ -189,10 +189,8 @@ fn default_mappings(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
     // A TPDO already set up for RTR-only transmission (FCh/FDh) with RTR allowed, else the first TPDO
-    // whose parameters the EDS makes writable, configured so: disabled, type FDh, enabled with bit 30
-    // clear (CiA 301 §7.5.2.37).
+    // whose parameters the EDS makes writable, configured so.
     let mut chosen = None;
-    let mut configurable = None;
     for pdo in ctx.model().pdos(PdoDirection::Transmit) {
         let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
             continue;
@@ -205,43 +203,19 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
             chosen = Some((pdo.number, (cob & 0x7FF) as u16, kind));
             break;
         }
-        let writable = |sub| ctx.model().entry(pdo.comm, sub).is_some_and(|e| e.writable());
-        if configurable.is_some() || !writable(1) || !writable(2) || cob & 0x7FF == 0 {
-            continue;
-        }
-        // A mapping of 0 entries disables the PDO (CiA 301 §7.5.2.38): nothing would answer.
-        let mapped = match pdo.mapping {
-            Some(mapping) => {
-                matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0))
-            }
-            None => false,
-        };
-        if mapped {
-            configurable = Some((pdo, cob));
-        }
     }
     if chosen.is_none() {
-        let Some((pdo, cob)) = configurable else {
+        let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
             return Ok(Finding::not_applicable(
                 "no TPDO set up for RTR, and none whose COB-ID and transmission type are writable",
             ));
         };
-        let steps = [
-            (1u8, (cob | 0x8000_0000).to_le_bytes().to_vec()),
-            (2, vec![0xFD]),
-            (1, (cob & 0x3FFF_FFFF).to_le_bytes().to_vec()),
-        ];
-        for (sub, data) in steps {
-            let reply = ctx.modify(pdo.comm, sub, data.clone())?;
-            if !matches!(reply, Reply::Done(_)) {
-                // RTR-only transmission and RTR on PDOs are optional (CiA 301 §7.2.2.2.1).
-                return Ok(Finding::not_applicable(format!(
-                    "TPDO{} cannot be set up for RTR: {} got {}",
-                    pdo.number,
-                    download_text((pdo.comm, sub), &data),
-                    reply.describe()
-                )));
-            }
+        // RTR-only transmission and RTR on PDOs are optional (CiA 301 §7.2.2.2.1).
+        if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![0xFD])], true)? {
+            return Ok(Finding::not_applicable(format!(
+                "TPDO{} cannot be set up for RTR: {refused}",
+                pdo.number
+            )));
         }
         chosen = Some((pdo.number, (cob & 0x7FF) as u16, 0xFD));
     }
@@ -252,7 +226,10 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
     ctx.listen(Duration::from_millis(20), |_| false)?;
     ctx.send_remote(cob, 0)?;
     let id = ctx.id(cob);
-    let answer = ctx.listen(Duration::from_millis(100), |f| f.id() == id && !f.is_remote())?;
+    let answer: Vec<_> = ctx
+        .wait_for(Duration::from_millis(100), |f| f.id() == id && !f.is_remote())?
+        .into_iter()
+        .collect();
     back_to_pre_operational(ctx)?;
     Ok(if answer.is_empty() {
         Finding::fail(
@@ -272,6 +249,58 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
     } else {
         Finding::pass(format!("TPDO{number} answered: {}", hex(answer[0].frame.data())))
     })
+}
+
+/// The first TPDO whose communication parameter sub-indices `subs` the EDS makes writable, with a
+/// CAN-ID and at least one mapped object (a mapping of 0 entries disables a PDO, CiA 301
+/// §7.5.2.38), and its current COB-ID.
+pub fn configurable_tpdo(ctx: &mut Ctx<'_, '_>, subs: &[u8]) -> Result<Option<(PdoModel, u32)>, Stop> {
+    for pdo in ctx.model().pdos(PdoDirection::Transmit) {
+        if !subs
+            .iter()
+            .all(|sub| ctx.model().entry(pdo.comm, *sub).is_some_and(|e| e.writable()))
+        {
+            continue;
+        }
+        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+            continue;
+        };
+        let Some(mapping) = pdo.mapping else {
+            continue;
+        };
+        let mapped = matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0));
+        if mapped && cob & 0x7FF != 0 {
+            return Ok(Some((pdo, cob)));
+        }
+    }
+    Ok(None)
+}
+
+/// Configures a TPDO the way CiA 301 §7.5.2.37 allows: disabled, `settings` written (sub-index,
+/// value), enabled again with its CAN-ID (and RTR allowed when `rtr`). Every value is written back
+/// after the test. Returns the refusal that stopped it, if any.
+pub fn configure_tpdo(
+    ctx: &mut Ctx<'_, '_>,
+    pdo: &PdoModel,
+    cob: u32,
+    settings: &[(u8, Vec<u8>)],
+    rtr: bool,
+) -> Result<Option<String>, Stop> {
+    let enabled = if rtr { cob & 0x3FFF_FFFF } else { cob & 0x7FFF_FFFF };
+    let mut steps = vec![(1u8, (cob | 0x8000_0000).to_le_bytes().to_vec())];
+    steps.extend(settings.iter().cloned());
+    steps.push((1, enabled.to_le_bytes().to_vec()));
+    for (sub, data) in steps {
+        let reply = ctx.modify(pdo.comm, sub, data.clone())?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(Some(format!(
+                "{} got {}",
+                download_text((pdo.comm, sub), &data),
+                reply.describe()
+            )));
+        }
+    }
+    Ok(None)
 }
 
 /// The first TPDO whose COB-ID the EDS makes writable, with its current COB-ID.
