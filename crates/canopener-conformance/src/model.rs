@@ -304,6 +304,18 @@ mod tests {
         assert!(Statistics::of(&[1.0, f64::NAN]).is_none());
     }
 
+    proptest::proptest! {
+        #[test]
+        fn statistics_are_ordered_and_bounded(samples in proptest::collection::vec(-1e6f64..1e6, 1..200)) {
+            let stats = Statistics::of(&samples).unwrap();
+            proptest::prop_assert_eq!(stats.count, samples.len());
+            proptest::prop_assert!(stats.min <= stats.p50 && stats.p50 <= stats.p90);
+            proptest::prop_assert!(stats.p90 <= stats.p99 && stats.p99 <= stats.max);
+            proptest::prop_assert!(stats.min <= stats.mean + 1e-6 && stats.mean <= stats.max + 1e-6);
+            proptest::prop_assert!(samples.contains(&stats.p50) && samples.contains(&stats.p99));
+        }
+    }
+
     #[test]
     fn start_times_read_as_rfc_3339() {
         let time = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_704_067_200 + 3_723);

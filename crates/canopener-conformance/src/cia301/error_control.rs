@@ -7,11 +7,11 @@ use canopener_wire::NmtCommand;
 
 use crate::catalogue::TestDef;
 use crate::cia301::helpers::{
-    TEST_HEARTBEAT_MS, download_text, refused_unexpectedly, start_heartbeat, u32_of, upload_text,
+    TEST_HEARTBEAT_MS, download_text, intervals_text, measure_intervals, refused_unexpectedly,
+    start_heartbeat, u32_of, upload_text,
 };
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome};
-use crate::model::Measurement;
 use crate::requirements as req;
 
 /// How far one heartbeat interval may stray from the period. CiA 301 sets no producer tolerance;
@@ -299,11 +299,7 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
         |f| f.id() == id && !f.is_remote(),
     )?;
     let period = f64::from(TEST_HEARTBEAT_MS);
-    let intervals: Vec<f64> = frames
-        .windows(2)
-        .map(|w| w[1].at.saturating_duration_since(w[0].at).as_secs_f64() * 1000.0)
-        .collect();
-    ctx.measure("heartbeat_interval", Measurement::new("ms", intervals.clone()));
+    let intervals = measure_intervals(ctx, "heartbeat_interval", &frames);
     let request = download_text((0x1017, 0), &TEST_HEARTBEAT_MS.to_le_bytes());
     let worst = intervals
         .iter()
@@ -331,14 +327,7 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
                     req::HEARTBEAT,
                     HEARTBEAT_TOLERANCE * 100.0
                 ),
-                answer: format!(
-                    "intervals {}",
-                    intervals
-                        .iter()
-                        .map(|i| format!("{i:.1}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
+                answer: format!("intervals {}", intervals_text(&intervals)),
                 cause: "the producer timer is late or sends extra heartbeats".to_owned(),
             },
         ),

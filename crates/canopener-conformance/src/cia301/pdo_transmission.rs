@@ -6,11 +6,10 @@ use std::time::Duration;
 use canopener_wire::NmtCommand;
 
 use crate::catalogue::TestDef;
-use crate::cia301::helpers::back_to_pre_operational;
+use crate::cia301::helpers::{back_to_pre_operational, intervals_text, measure_intervals};
 use crate::cia301::pdo::{configurable_tpdo, configure_tpdo};
 use crate::context::Ctx;
 use crate::finding::{Evidence, Finding, Outcome};
-use crate::model::Measurement;
 use crate::requirements as req;
 
 /// The event timer the test sets, in ms.
@@ -75,11 +74,7 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     )?;
     back_to_pre_operational(ctx)?;
     // The first TPDO may come at once on entering operational; the timer's intervals follow it.
-    let intervals: Vec<f64> = frames
-        .windows(2)
-        .map(|w| w[1].at.saturating_duration_since(w[0].at).as_secs_f64() * 1000.0)
-        .collect();
-    ctx.measure("event_timer_interval", Measurement::new("ms", intervals.clone()));
+    let intervals = measure_intervals(ctx, "event_timer_interval", &frames);
     let period = f64::from(TEST_EVENT_TIMER_MS);
     let request = format!(
         "TPDO{} ({:#X}) with type FFh and event timer {TEST_EVENT_TIMER_MS} ms; NMT start, 1050 ms",
@@ -115,14 +110,7 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
             Evidence {
                 request,
                 requirement,
-                answer: format!(
-                    "intervals {}",
-                    intervals
-                        .iter()
-                        .map(|i| format!("{i:.1}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
+                answer: format!("intervals {}", intervals_text(&intervals)),
                 cause: "the event timer runs late".to_owned(),
             },
         )

@@ -4,10 +4,9 @@
 use std::time::Duration;
 
 use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, u32_of, upload_text};
+use crate::cia301::helpers::{download_text, expect_refusal, measure_intervals, u32_of, upload_text};
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
-use crate::model::Measurement;
 use crate::requirements as req;
 
 /// The SYNC period the producer test sets, in µs.
@@ -181,11 +180,7 @@ fn producer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let frames = ctx.listen(Duration::from_millis(105), |f| f.id() == id && !f.is_remote())?;
     // Stop producing before the write-back, so the frames in the log end here.
     ctx.write(0x1005, 0, cob.to_le_bytes().to_vec())?;
-    let intervals: Vec<f64> = frames
-        .windows(2)
-        .map(|w| w[1].at.saturating_duration_since(w[0].at).as_secs_f64() * 1000.0)
-        .collect();
-    ctx.measure("sync_interval", Measurement::new("ms", intervals));
+    measure_intervals(ctx, "sync_interval", &frames);
     let counters: Vec<u8> = frames
         .iter()
         .map(|l| l.frame.data().first().copied().unwrap_or(0))
