@@ -12,7 +12,7 @@ use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::{Report, rfc3339_utc};
 use canopener_conformance::render::{candump, human, junit};
 use canopener_conformance::runner::{self, RunSpec};
-use canopener_runtime::files::{create_dir_all, write_atomic};
+use canopener_runtime::files::{WriteError, create_dir_all, same_file, write_atomic};
 use canopener_runtime::link::{BusLink, Link};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
@@ -41,12 +41,20 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
             "give --node N and --eds FILE, e.g. canopener test --bus socketcan:can0 --node 5 --eds device.eds".to_owned(),
         ));
     };
+    if let Some(out) = &args.output
+        && same_file(out, eds_path)
+    {
+        return Err(CliError::Usage(format!(
+            "-o {} is the EDS under test; write the report elsewhere, e.g. -o report.txt",
+            out.display()
+        )));
+    }
     let description = canopener_runtime::description::read_description(eds_path)
         .map_err(|err| CliError::InvalidInput(err.to_string()))?;
     let eds_errors = eds_errors(eds_path)?;
     let model = DeviceModel::new(&description.eds, node);
     if let Some(dir) = &args.log {
-        create_dir_all(dir).map_err(|err| CliError::output(err.to_string(), std::io::Error::other("")))?;
+        create_dir_all(dir).map_err(write_error)?;
     }
     let bus = open_bus(args.bus.spec.as_deref(), "test")?;
     let mut link = BusLink::new(bus, StopFlag::install()?.token())?;
@@ -78,12 +86,7 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
         ReportFormat::Junit => junit::render(report),
     };
     match &args.output {
-        Some(path) => write_atomic(path, text.as_bytes(), false).map_err(|err| {
-            CliError::output(
-                format!("writing {}", path.display()),
-                std::io::Error::other(err.to_string()),
-            )
-        })?,
+        Some(path) => write_atomic(path, text.as_bytes(), false).map_err(write_error)?,
         None => print_stdout(&text)?,
     }
     if report.interrupted {
@@ -123,14 +126,17 @@ fn eds_errors(path: &Path) -> CliResult<Option<Vec<String>>> {
 fn write_logs(dir: &Path, report: &Report) -> CliResult {
     for test in &report.tests {
         let path = dir.join(candump::file_name(test));
-        write_atomic(&path, candump::log(test).as_bytes(), false).map_err(|err| {
-            CliError::output(
-                format!("writing {}", path.display()),
-                std::io::Error::other(err.to_string()),
-            )
-        })?;
+        write_atomic(&path, candump::log(test).as_bytes(), false).map_err(write_error)?;
     }
     Ok(())
+}
+
+/// A file or directory that could not be written: exit 5, naming what and where.
+fn write_error(err: WriteError) -> CliError {
+    CliError::output(
+        format!("cannot {} {}", err.action, err.path.display()),
+        err.source,
+    )
 }
 
 fn progress_bar(len: usize) -> ProgressBar {
