@@ -245,8 +245,10 @@ const LOCAL_NODE_GAPS: &[&str] = &[
     // Its SDO server answers a sub-index a VAR does not have, and sub-indices beyond an array's.
     "cia301.sdo.4",
     "cia301.od.7",
-    // It answers a block upload with a normal upload instead of refusing it with 0504 0001h.
+    // It answers a block upload (even one with block size 128) with a normal upload instead of
+    // refusing it with 0504 0001h.
     "cia301.sdo.15",
+    "cia301.sdo.18",
     // No PDO timing (event timer, synchronous transmission), no RTR on TPDOs, no checks of PDO
     // COB-IDs or mapping entries.
     "cia301.pdo.6",
@@ -302,11 +304,23 @@ fn a_foreign_device_runs_to_the_end_and_names_its_real_gaps() {
         "json",
         "-o",
         out.to_str().unwrap(),
+        // A Python process on a loaded, shared host is no real-time device: its heartbeat jitter
+        // would measure the host, not python canopen.
+        "--skip",
+        "cia301.ec.1",
     ]);
     assert_eq!(code, Some(6), "stderr: {stderr}");
     let report = report(&out);
     assert_eq!(report["interrupted"], false);
-    assert_eq!(report["summary"]["inconclusive"], 0);
+    // Without node guarding, life guarding cannot be judged (cia301.ec.4 fails for guarding itself).
+    let undecided: Vec<&str> = report["tests"]
+        .as_array()
+        .expect("tests")
+        .iter()
+        .filter(|t| t["verdict"] == "inconclusive")
+        .map(|t| t["id"].as_str().unwrap_or_default())
+        .collect();
+    assert_eq!(undecided, ["cia301.ec.7"]);
     let mut expected: Vec<String> = LOCAL_NODE_GAPS.iter().map(|s| (*s).to_owned()).collect();
     expected.sort();
     let mut got = failed(&report);

@@ -47,7 +47,58 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["heartbeat", "emcy", "nmt", "timing", "writes"],
             run: consumer_reaction,
         },
+        TestDef {
+            id: "cia301.ec.7",
+            suite: "cia301",
+            group: "ec",
+            title: "Life guarding: when guarding requests stop, EMCY 8130h and the 1029h reaction",
+            references: &[
+                req::GUARDING,
+                req::HEARTBEAT_CONSUMER,
+                "CCT Guarding 05",
+                "CCT Guarding 06",
+            ],
+            precondition: "writable 100Ch/100Dh and an EMCY producer (1014h)",
+            tags: &["guarding", "emcy", "nmt", "timing", "writes"],
+            run: life_guarding,
+        },
     ]
+}
+
+/// 1029h:01 and the state it asks for after a communication error in operational (CiA 301 §7.5.2.40:
+/// 0, the default and the behaviour without 1029h, pre-operational; 1 no change; 2 stopped); a
+/// finding when it cannot be judged.
+fn error_behaviour(ctx: &mut Ctx<'_, '_>) -> Result<Result<(u8, u8), Finding>, Stop> {
+    let behaviour = match ctx.model().entry(0x1029, 1) {
+        Some(_) => match ctx.read(0x1029, 1)? {
+            Reply::Done(d) if d.len() == 1 => d[0],
+            other => {
+                return Ok(Err(Finding::inconclusive(format!(
+                    "1029h:01 could not be read: {}",
+                    other.describe()
+                ))));
+            }
+        },
+        None => 0,
+    };
+    Ok(match behaviour {
+        0 => Ok((0, 0x7F)),
+        1 => Ok((1, 0x05)),
+        2 => Ok((2, 0x04)),
+        other => Err(Finding::not_applicable(format!(
+            "1029h:01 = {other} is manufacturer-specific"
+        ))),
+    })
+}
+
+/// The EMCY COB-ID, when the EDS has an enabled EMCY producer.
+fn emcy_id(ctx: &mut Ctx<'_, '_>) -> Result<Option<u16>, Stop> {
+    if !ctx.model().has(0x1014) {
+        return Ok(None);
+    }
+    Ok(u32_of(&ctx.read(0x1014, 0)?)
+        .filter(|c| c & 0x8000_0000 == 0)
+        .map(|c| (c & 0x7FF) as u16))
 }
 
 fn writable(ctx: &Ctx<'_, '_>, sub: u8) -> bool {
@@ -106,45 +157,20 @@ fn produce(ctx: &mut Ctx<'_, '_>, producer: u8, count: usize, emcy: u16) -> Resu
 }
 
 fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    if !writable(ctx, 1) || !ctx.model().has(0x1014) {
-        return Ok(Finding::not_applicable(
-            "no writable 1016h:01 or no EMCY producer",
-        ));
+    if !writable(ctx, 1) {
+        return Ok(Finding::not_applicable("no writable 1016h:01"));
     }
-    let Some(emcy) = u32_of(&ctx.read(0x1014, 0)?).filter(|c| c & 0x8000_0000 == 0) else {
-        return Ok(Finding::not_applicable(
-            "the EMCY producer is disabled or 1014h unreadable",
-        ));
+    let Some(emcy) = emcy_id(ctx)? else {
+        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
     };
-    let emcy = (emcy & 0x7FF) as u16;
     if !start_heartbeat(ctx)? {
         return Ok(Finding::not_applicable(
             "no writable 1017h to observe the state by",
         ));
     }
-    // CiA 301 §7.5.2.40: 1029h:01 = 0 (the default, and the behaviour without 1029h) pre-operational
-    // when operational, 1 no change, 2 stopped.
-    let behaviour = match ctx.model().entry(0x1029, 1) {
-        Some(_) => match ctx.read(0x1029, 1)? {
-            Reply::Done(d) if d.len() == 1 => d[0],
-            other => {
-                return Ok(Finding::inconclusive(format!(
-                    "1029h:01 could not be read: {}",
-                    other.describe()
-                )));
-            }
-        },
-        None => 0,
-    };
-    let expected_state = match behaviour {
-        0 => 0x7F,
-        1 => 0x05,
-        2 => 0x04,
-        other => {
-            return Ok(Finding::not_applicable(format!(
-                "1029h:01 = {other} is manufacturer-specific"
-            )));
-        }
+    let (behaviour, expected_state) = match error_behaviour(ctx)? {
+        Ok(pair) => pair,
+        Err(finding) => return Ok(finding),
     };
     let producer = producer_node(ctx);
     let consumer = entry(producer, TEST_CONSUMER_MS);
@@ -224,6 +250,104 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
                     format!("its heartbeat reports {}", state_name(s))
                 }),
                 cause: "the error behaviour 1029h is not applied to the heartbeat event".to_owned(),
+            },
+        )
+    })
+}
+
+/// The guard time the life guarding test sets, in ms; with a life time factor of 3.
+pub const TEST_GUARD_MS: u16 = 100;
+
+fn life_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let writable_var = |ctx: &Ctx<'_, '_>, index| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
+    if !writable_var(ctx, 0x100C) || !writable_var(ctx, 0x100D) {
+        return Ok(Finding::not_applicable("100Ch/100Dh are not both writable"));
+    }
+    let Some(emcy) = emcy_id(ctx)? else {
+        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
+    };
+    let (behaviour, expected_state) = match error_behaviour(ctx)? {
+        Ok(pair) => pair,
+        Err(finding) => return Ok(finding),
+    };
+    // Node guarding applies while the heartbeat producer is off (CiA 301 §7.2.8.3.2).
+    if writable_var(ctx, 0x1017) {
+        ctx.modify(0x1017, 0, vec![0, 0])?;
+    }
+    for (index, data) in [
+        (0x100Cu16, TEST_GUARD_MS.to_le_bytes().to_vec()),
+        (0x100D, vec![3]),
+    ] {
+        let reply = ctx.modify(index, 0, data.clone())?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(Finding::inconclusive(format!(
+                "{} got {}",
+                download_text((index, 0), &data),
+                reply.describe()
+            )));
+        }
+    }
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    let node = u16::from(ctx.node());
+    let guard = ctx.id(0x700 + node);
+    let mut answered = 0;
+    for _ in 0..4 {
+        ctx.send_remote(0x700 + node, 1)?;
+        answered += ctx
+            .listen(Duration::from_millis(u64::from(TEST_GUARD_MS)), |f| {
+                f.id() == guard && !f.is_remote()
+            })?
+            .len();
+    }
+    let setup = format!(
+        "100Ch = {TEST_GUARD_MS} ms, 100Dh = 3, NMT start, 4 guarding requests {TEST_GUARD_MS} ms apart"
+    );
+    if answered < 4 {
+        return Ok(Finding::inconclusive(format!(
+            "{answered} of 4 guarding requests answered (cia301.ec.4 judges guarding)"
+        )));
+    }
+    // The life time is 300 ms from the last request.
+    let id = ctx.id(emcy);
+    let event = ctx.wait_for(Duration::from_millis(u64::from(TEST_GUARD_MS) * 6), |f| {
+        f.id() == id && f.data().starts_with(&[0x30, 0x81])
+    })?;
+    let state = observed_state(ctx, false)?;
+    let request = format!("{setup}; then no request");
+    if event.is_none() {
+        return Ok(Finding::fail(
+            "no EMCY 8130h when the guarding requests stopped",
+            Evidence {
+                request,
+                requirement: format!(
+                    "{}: no guarding request within the life time (guard time × life time factor) is a life guarding event, signalled with EMCY 8130h",
+                    req::GUARDING
+                ),
+                answer: format!("no EMCY 8130h within {} ms", u64::from(TEST_GUARD_MS) * 6),
+                cause: "life guarding is not implemented, or its event sends no EMCY".to_owned(),
+            },
+        ));
+    }
+    Ok(if state == Some(expected_state) {
+        Finding::pass(format!("EMCY 8130h, then {}", state_name(expected_state)))
+    } else {
+        Finding::fail(
+            format!(
+                "after the life guarding event the device is in {}, 1029h:01 = {behaviour} asks for {}",
+                state.map_or("no reported state".to_owned(), state_name),
+                state_name(expected_state)
+            ),
+            Evidence {
+                request,
+                requirement: format!(
+                    "{}: on a communication error in operational, 1029h:01 = {behaviour} means {}",
+                    req::HEARTBEAT_CONSUMER,
+                    state_name(expected_state)
+                ),
+                answer: state.map_or("no guarding answer".to_owned(), |s| {
+                    format!("its guarding answer reports {}", state_name(s))
+                }),
+                cause: "the error behaviour 1029h is not applied to the life guarding event".to_owned(),
             },
         )
     })

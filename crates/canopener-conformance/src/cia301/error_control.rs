@@ -62,6 +62,16 @@ pub fn emcy_tests() -> Vec<TestDef> {
             tags: &["emcy", "pdo", "nmt"],
             run: emcy_error_reset,
         },
+        TestDef {
+            id: "cia301.emcy.5",
+            suite: "cia301",
+            group: "emcy",
+            title: "After EMCY 8210h, 1003h:01 holds 8210h and the entry after the last error has no data",
+            references: &[req::ERROR_OBJECTS, "CCT Emergency 03", "CCT Emergency 06"],
+            precondition: "as cia301.emcy.3, and the EDS has 1003h",
+            tags: &["emcy", "pdo", "nmt"],
+            run: emcy_history,
+        },
     ]
 }
 
@@ -162,16 +172,31 @@ fn error_register(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn rpdo_length_emcy(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    rpdo_length(ctx, false)
+    rpdo_length(ctx, Look::Emcy)
 }
 
 fn emcy_error_reset(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    rpdo_length(ctx, true)
+    rpdo_length(ctx, Look::ErrorReset)
 }
 
-/// Sends a too short RPDO and looks for EMCY 8210h; with `error_reset`, then a correct one and looks
-/// for EMCY 0000h.
-fn rpdo_length(ctx: &mut Ctx<'_, '_>, error_reset: bool) -> Outcome {
+fn emcy_history(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    rpdo_length(ctx, Look::History)
+}
+
+/// What the RPDO length error tests look at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Look {
+    /// EMCY 8210h.
+    Emcy,
+    /// EMCY 0000h once a correct RPDO follows.
+    ErrorReset,
+    /// 1003h: the error at sub-index 1, no data beyond the number of errors.
+    History,
+}
+
+/// Sends a too short RPDO and looks for EMCY 8210h, then at what `look` says.
+fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
+    let error_reset = look == Look::ErrorReset;
     if !ctx.model().has(0x1014) {
         return Ok(Finding::not_applicable("the EDS has no EMCY producer (1014h)"));
     }
@@ -261,6 +286,17 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, error_reset: bool) -> Outcome {
             },
         );
     }
+    if look == Look::History {
+        if !seen.iter().any(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
+            return Ok(Finding::not_applicable(
+                "the device raised no EMCY 8210h (cia301.emcy.3 judges that)",
+            ));
+        }
+        let finding = error_history(ctx, &request)?;
+        ctx.send(cob, &vec![0u8; bytes])?;
+        ctx.listen(Duration::from_millis(50), |_| false)?;
+        return Ok(finding);
+    }
     // Leave no error behind for the next test: a PDO of the right length clears the condition.
     ctx.send(cob, &vec![0u8; bytes])?;
     ctx.listen(Duration::from_millis(50), |_| false)?;
@@ -287,6 +323,68 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, error_reset: bool) -> Outcome {
     )
 }
 
+/// After EMCY 8210h: 1003h:01 holds 8210h in its low 16 bits (the newest error first), and the
+/// sub-index after the number of errors has no data (CiA 301 §7.5.2.4).
+fn error_history(ctx: &mut Ctx<'_, '_>, request: &str) -> Result<Finding, crate::finding::Stop> {
+    let Some(highest) = ctx.model().objects.get(&0x1003).map(|o| o.highest_sub()) else {
+        return Ok(Finding::not_applicable("the EDS has no 1003h"));
+    };
+    let count = match ctx.read(0x1003, 0)? {
+        Reply::Done(d) if d.len() == 1 => d[0],
+        other => {
+            return Ok(refused_unexpectedly(
+                &upload_text((0x1003, 0)),
+                &other,
+                req::ERROR_OBJECTS,
+                "1003h is described",
+            ));
+        }
+    };
+    let newest = ctx.read(0x1003, 1)?;
+    let holds = u32_of(&newest).is_some_and(|v| v & 0xFFFF == 0x8210);
+    if count == 0 || !holds {
+        return Ok(Finding::fail(
+            format!(
+                "after EMCY 8210h, 1003h:00 = {count} and 1003h:01 is {}",
+                newest.describe()
+            ),
+            Evidence {
+                request: format!(
+                    "{request}, then {} and {}",
+                    upload_text((0x1003, 0)),
+                    upload_text((0x1003, 1))
+                ),
+                requirement: format!(
+                    "{}: 1003h:01 holds the newest error, its code 8210h in the low 16 bits",
+                    req::ERROR_OBJECTS
+                ),
+                answer: format!("1003h:00 = {count}, 1003h:01 = {}", newest.describe()),
+                cause: "the pre-defined error field is not kept with the EMCY producer".to_owned(),
+            },
+        ));
+    }
+    if count >= highest {
+        return Ok(Finding::pass(format!(
+            "1003h:01 = 8210h; all {count} entries in use"
+        )));
+    }
+    let beyond = ctx.read(0x1003, count + 1)?;
+    Ok(
+        match crate::cia301::helpers::expect_refusal(
+            &upload_text((0x1003, count + 1)),
+            &beyond,
+            req::NO_DATA,
+            req::ERROR_OBJECTS,
+            "entries beyond the number of errors are served",
+        ) {
+            refused if refused.verdict == crate::model::Verdict::Pass => {
+                Finding::pass(format!("1003h:01 = 8210h, 1003h:{:02X} has no data", count + 1))
+            }
+            failed => failed,
+        },
+    )
+}
+
 fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !start_heartbeat(ctx)? {
         return Ok(Finding::not_applicable("no writable 1017h"));
@@ -295,7 +393,7 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
     // One period to settle, then ten.
     ctx.listen(Duration::from_millis(u64::from(TEST_HEARTBEAT_MS)), |_| false)?;
     let frames = ctx.listen(
-        Duration::from_millis(u64::from(TEST_HEARTBEAT_MS) * 10 + 50),
+        Duration::from_millis(u64::from(TEST_HEARTBEAT_MS) * 21 / 2),
         |f| f.id() == id && !f.is_remote(),
     )?;
     let period = f64::from(TEST_HEARTBEAT_MS);
@@ -308,13 +406,17 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
     Ok(match worst {
         _ if frames.len() < 9 => Finding::fail(
             format!(
-                "{} heartbeats in 1 s at a {TEST_HEARTBEAT_MS} ms period",
+                "{} heartbeats in 10.5 periods of {TEST_HEARTBEAT_MS} ms",
                 frames.len()
             ),
             Evidence {
                 request,
                 requirement: format!("{}: a heartbeat every producer time", req::HEARTBEAT),
-                answer: format!("{} heartbeats in 1050 ms", frames.len()),
+                answer: format!(
+                    "{} heartbeats in {} ms",
+                    frames.len(),
+                    u64::from(TEST_HEARTBEAT_MS) * 21 / 2
+                ),
                 cause: "the producer does not run at the configured period".to_owned(),
             },
         ),

@@ -11,7 +11,7 @@ use crate::requirements::{Accepted, code_meaning};
 
 /// The heartbeat period the tests configure: short enough for a quick run, long enough for any
 /// device's timer resolution.
-pub const TEST_HEARTBEAT_MS: u16 = 100;
+pub const TEST_HEARTBEAT_MS: u16 = 50;
 
 /// The verdict on a request that CiA 301 requires the device to refuse with one of `accepted`.
 pub fn expect_refusal(

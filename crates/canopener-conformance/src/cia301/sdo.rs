@@ -198,6 +198,16 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["sdo"],
             run: specific_abort_codes,
         },
+        TestDef {
+            id: "cia301.sdo.18",
+            suite: "cia301",
+            group: "sdo",
+            title: "A block upload with block size 128 is aborted",
+            references: &[req::SDO_BLOCK_UPLOAD, req::SDO_ABORT, "CCT SDO 26"],
+            precondition: "always (a device without block transfer refuses with 0504 0001h, which is accepted)",
+            tags: &["sdo", "block"],
+            run: block_size_128,
+        },
     ]
 }
 
@@ -733,5 +743,51 @@ fn specific_abort_codes(ctx: &mut Ctx<'_, '_>) -> Outcome {
                         .to_owned(),
             },
         ),
+    })
+}
+
+fn block_size_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let at = long_entry(ctx).unwrap_or((0x1000, 0));
+    let [lo, hi] = at.0.to_le_bytes();
+    // Initiate block upload (ccs 5, CRC offered) with blksize 128: CiA 301 allows 1..127.
+    let request = [0xA4, lo, hi, at.1, 128, 0, 0, 0];
+    let answer = ctx.raw_sdo(request)?;
+    let text = format!(
+        "SDO block upload initiate {} of {:04X}h:{:02X} (block size 128)",
+        hex(&request),
+        at.0,
+        at.1
+    );
+    Ok(match answer {
+        Some(data) if data.first() == Some(&0x80) && data.len() == 8 => {
+            let code = u32::from_le_bytes([data[4], data[5], data[6], data[7]]);
+            expect_refusal(
+                &text,
+                &Reply::Refused(code),
+                req::BLOCK_SIZE,
+                req::SDO_BLOCK_UPLOAD,
+                "",
+            )
+        }
+        other => {
+            // End whatever the server started.
+            let [a, b, c, d] = abort::INVALID_BLOCK_SIZE.to_le_bytes();
+            ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
+            Finding::fail(
+                "a block upload with block size 128 was not aborted",
+                Evidence {
+                    request: text,
+                    requirement: format!(
+                        "{}: the block size is 1..127; the server aborts with {}",
+                        req::SDO_BLOCK_UPLOAD,
+                        req::BLOCK_SIZE.list()
+                    ),
+                    answer: other.map_or("no answer within the SDO timeout".to_owned(), |d| {
+                        format!("the frame {}", hex(&d))
+                    }),
+                    cause: "the server does not check the client's block size".to_owned(),
+                },
+            )
+        }
     })
 }
