@@ -27,6 +27,8 @@ pub enum Reply {
     Refused(u32),
     /// The device did not answer in time.
     Silent,
+    /// A raw request got this frame, which is no abort.
+    Frame(Vec<u8>),
     /// The tester aborted: the device broke the protocol (the reason says how).
     Broken {
         /// The code the tester sent.
@@ -44,12 +46,26 @@ impl Reply {
             Reply::Done(data) => format!("the value {}", hex(data)),
             Reply::Refused(code) => format!("abort {}", code_meaning(*code)),
             Reply::Silent => "no answer within the SDO timeout".to_owned(),
+            Reply::Frame(data) => format!("the frame {}", hex(data)),
             Reply::Broken { code, reason } => {
                 format!(
                     "a protocol error; the tester aborted with {}: {reason}",
                     code_meaning(*code)
                 )
             }
+        }
+    }
+}
+
+impl Reply {
+    /// The answer to a raw SDO request ([`Ctx::raw_sdo`]): an abort frame is a refusal with its code.
+    pub fn of_raw(answer: Option<Vec<u8>>) -> Reply {
+        match answer {
+            Some(data) if data.len() == 8 && data[0] == 0x80 => {
+                Reply::Refused(u32::from_le_bytes([data[4], data[5], data[6], data[7]]))
+            }
+            Some(data) => Reply::Frame(data),
+            None => Reply::Silent,
         }
     }
 }

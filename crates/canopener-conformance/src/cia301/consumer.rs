@@ -230,29 +230,12 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         ));
     }
-    Ok(if state == Some(expected_state) {
-        Finding::pass(format!("EMCY 8130h, then {}", state_name(expected_state)))
-    } else {
-        Finding::fail(
-            format!(
-                "after the heartbeat event the device is in {}, 1029h:01 = {behaviour} asks for {}",
-                state.map_or("no reported state".to_owned(), state_name),
-                state_name(expected_state)
-            ),
-            Evidence {
-                request,
-                requirement: format!(
-                    "{}: on a communication error in operational, 1029h:01 = {behaviour} means {}",
-                    req::HEARTBEAT_CONSUMER,
-                    state_name(expected_state)
-                ),
-                answer: state.map_or("no heartbeat".to_owned(), |s| {
-                    format!("its heartbeat reports {}", state_name(s))
-                }),
-                cause: "the error behaviour 1029h is not applied to the heartbeat event".to_owned(),
-            },
-        )
-    })
+    let reaction = Reaction {
+        behaviour,
+        expected: expected_state,
+        observed: state,
+    };
+    Ok(reaction.verdict(request, "heartbeat event", "heartbeat"))
 }
 
 /// The guard time the life guarding test sets, in ms; with a life time factor of 3.
@@ -328,27 +311,51 @@ fn life_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         ));
     }
-    Ok(if state == Some(expected_state) {
-        Finding::pass(format!("EMCY 8130h, then {}", state_name(expected_state)))
-    } else {
+    let reaction = Reaction {
+        behaviour,
+        expected: expected_state,
+        observed: state,
+    };
+    Ok(reaction.verdict(request, "life guarding event", "guarding answer"))
+}
+
+/// The state a communication error in operational asks for, and the one the device reported.
+#[derive(Debug, Clone, Copy)]
+struct Reaction {
+    behaviour: u8,
+    expected: u8,
+    observed: Option<u8>,
+}
+
+impl Reaction {
+    /// The verdict on the state after `event` (EMCY 8130h already seen), as `observer` reported it.
+    fn verdict(self, request: String, event: &str, observer: &str) -> Finding {
+        let Reaction {
+            behaviour,
+            expected,
+            observed,
+        } = self;
+        if observed == Some(expected) {
+            return Finding::pass(format!("EMCY 8130h, then {}", state_name(expected)));
+        }
         Finding::fail(
             format!(
-                "after the life guarding event the device is in {}, 1029h:01 = {behaviour} asks for {}",
-                state.map_or("no reported state".to_owned(), state_name),
-                state_name(expected_state)
+                "after the {event} the device is in {}, 1029h:01 = {behaviour} asks for {}",
+                observed.map_or("no reported state".to_owned(), state_name),
+                state_name(expected)
             ),
             Evidence {
                 request,
                 requirement: format!(
                     "{}: on a communication error in operational, 1029h:01 = {behaviour} means {}",
                     req::HEARTBEAT_CONSUMER,
-                    state_name(expected_state)
+                    state_name(expected)
                 ),
-                answer: state.map_or("no guarding answer".to_owned(), |s| {
-                    format!("its guarding answer reports {}", state_name(s))
+                answer: observed.map_or(format!("no {observer}"), |s| {
+                    format!("its {observer} reports {}", state_name(s))
                 }),
-                cause: "the error behaviour 1029h is not applied to the life guarding event".to_owned(),
+                cause: format!("the error behaviour 1029h is not applied to the {event}"),
             },
         )
-    })
+    }
 }

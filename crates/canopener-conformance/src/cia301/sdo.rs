@@ -331,33 +331,13 @@ fn bad_command(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let request = [0xE0, 0x00, 0x10, 0x00, 0, 0, 0, 0];
     let answer = ctx.raw_sdo(request)?;
     let text = format!("SDO request {} (client command specifier 7)", hex(&request));
-    Ok(match answer {
-        Some(data) if data.first() == Some(&0x80) && data.len() == 8 => {
-            let code = u32::from_le_bytes([data[4], data[5], data[6], data[7]]);
-            expect_refusal(
-                &text,
-                &Reply::Refused(code),
-                req::BAD_COMMAND,
-                req::SDO_ABORT,
-                "the server aborts with an unrelated code",
-            )
-        }
-        other => Finding::fail(
-            "no abort for an invalid command specifier",
-            Evidence {
-                request: text,
-                requirement: format!(
-                    "{}: the server aborts with {}",
-                    req::SDO_ABORT,
-                    req::BAD_COMMAND.list()
-                ),
-                answer: other.map_or("no answer within the SDO timeout".to_owned(), |d| {
-                    format!("the frame {}", hex(&d))
-                }),
-                cause: "the server drops or misreads requests it does not know".to_owned(),
-            },
-        ),
-    })
+    Ok(expect_refusal(
+        &text,
+        &Reply::of_raw(answer),
+        req::BAD_COMMAND,
+        req::SDO_ABORT,
+        "the server drops, misreads or wrongly aborts requests it does not know",
+    ))
 }
 
 fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -542,36 +522,15 @@ fn wrong_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
         upload_text(at),
         hex(&segment)
     );
-    let finding = match &answer {
-        Some(data) if data.first() == Some(&0x80) && data.len() == 8 => {
-            let code = u32::from_le_bytes([data[4], data[5], data[6], data[7]]);
-            expect_refusal(
-                &text,
-                &Reply::Refused(code),
-                req::TOGGLE,
-                req::SDO_UPLOAD_SEGMENT,
-                "",
-            )
-        }
-        other => Finding::fail(
-            "a segment request with the wrong toggle bit was not aborted",
-            Evidence {
-                request: text,
-                requirement: format!(
-                    "{}: the server aborts with {}",
-                    req::SDO_UPLOAD_SEGMENT,
-                    req::TOGGLE.list()
-                ),
-                answer: other
-                    .as_ref()
-                    .map_or("no answer within the SDO timeout".to_owned(), |d| {
-                        format!("the frame {}", hex(d))
-                    }),
-                cause: "the server does not check the toggle bit of segment requests".to_owned(),
-            },
-        ),
-    };
-    if !matches!(&answer, Some(d) if d.first() == Some(&0x80)) {
+    let reply = Reply::of_raw(answer);
+    let finding = expect_refusal(
+        &text,
+        &reply,
+        req::TOGGLE,
+        req::SDO_UPLOAD_SEGMENT,
+        "the server does not check the toggle bit of segment requests",
+    );
+    if !matches!(reply, Reply::Refused(_)) {
         // End the transfer the server still thinks is running.
         let [a, b, c, d] = abort::GENERAL_ERROR.to_le_bytes();
         ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
@@ -758,36 +717,17 @@ fn block_size_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
         at.0,
         at.1
     );
-    Ok(match answer {
-        Some(data) if data.first() == Some(&0x80) && data.len() == 8 => {
-            let code = u32::from_le_bytes([data[4], data[5], data[6], data[7]]);
-            expect_refusal(
-                &text,
-                &Reply::Refused(code),
-                req::BLOCK_SIZE,
-                req::SDO_BLOCK_UPLOAD,
-                "",
-            )
-        }
-        other => {
-            // End whatever the server started.
-            let [a, b, c, d] = abort::INVALID_BLOCK_SIZE.to_le_bytes();
-            ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
-            Finding::fail(
-                "a block upload with block size 128 was not aborted",
-                Evidence {
-                    request: text,
-                    requirement: format!(
-                        "{}: the block size is 1..127; the server aborts with {}",
-                        req::SDO_BLOCK_UPLOAD,
-                        req::BLOCK_SIZE.list()
-                    ),
-                    answer: other.map_or("no answer within the SDO timeout".to_owned(), |d| {
-                        format!("the frame {}", hex(&d))
-                    }),
-                    cause: "the server does not check the client's block size".to_owned(),
-                },
-            )
-        }
-    })
+    let reply = Reply::of_raw(answer);
+    if !matches!(reply, Reply::Refused(_)) {
+        // End whatever the server started.
+        let [a, b, c, d] = abort::INVALID_BLOCK_SIZE.to_le_bytes();
+        ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
+    }
+    Ok(expect_refusal(
+        &text,
+        &reply,
+        req::BLOCK_SIZE,
+        req::SDO_BLOCK_UPLOAD,
+        "the server does not check the client's block size (1..127)",
+    ))
 }
