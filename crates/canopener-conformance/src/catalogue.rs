@@ -24,6 +24,13 @@ pub struct TestDef {
     pub run: fn(&mut Ctx<'_, '_>) -> Outcome,
 }
 
+impl TestDef {
+    /// Whether the test talks to the device (all but the EDS check do).
+    pub fn needs_device(&self) -> bool {
+        self.group != "eds"
+    }
+}
+
 impl std::fmt::Debug for TestDef {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("TestDef").field("id", &self.id).finish()

@@ -95,7 +95,15 @@ pub fn run(
         summary: Summary::default(),
     };
     let mut decoder = Decoder::new();
-    let prepared = prepare(&mut recorder, spec, &mut report)?;
+    // The EDS check alone needs no device: nothing to reset, nobody to ask.
+    let prepared = if tests.iter().all(|t| !t.needs_device()) {
+        report
+            .preparation
+            .push("no device needed: only the EDS check runs".to_owned());
+        Ok(true)
+    } else {
+        prepare(&mut recorder, spec, &mut report)?
+    };
     recorder.clear();
     let silent = matches!(prepared, Ok(false));
     if let Err(Stop::Cancelled) | Err(Stop::Link(_)) = prepared {
@@ -210,6 +218,9 @@ fn run_one(recorder: &mut Recorder<'_>, spec: &RunSpec<'_>, test: &TestDef) -> R
         Err(Stop::Link(error)) => (Finding::inconclusive(format!("the bus failed: {error}")), true),
     };
     let measurements = ctx.take_measurements();
+    if !test.needs_device() {
+        return Ok((finding, measurements, Vec::new(), stopped));
+    }
     // Pre-operational first: a device left stopped would not serve the SDO writes that restore it.
     let cleanup = (|| -> Result<Vec<String>, Stop> {
         ctx.nmt(NmtCommand::EnterPreOperational, false)?;

@@ -332,3 +332,17 @@ fn a_foreign_device_runs_to_the_end_and_names_its_real_gaps() {
         took.as_secs_f64()
     );
 }
+
+#[test]
+fn the_eds_suite_alone_needs_no_bus() {
+    let clean = corpus::eds("CANopenNode__CANopenDemo__demo__demoDevice.eds");
+    let (code, stdout, stderr, _) =
+        run_test(&["--node", "5", "--eds", clean.to_str().unwrap(), "--suite", "eds"]);
+    assert_eq!(code, Some(0), "stderr: {stderr}");
+    assert!(stdout.contains("EDS Test (1): 1 passed"), "{stdout}");
+    let flawed = corpus::eds("CANopenNode__CANopenNode__example__DS301_profile.eds");
+    let (code, stdout, stderr, _) =
+        run_test(&["--node", "5", "--eds", flawed.to_str().unwrap(), "--suite", "eds"]);
+    assert_eq!(code, Some(6), "stderr: {stderr}");
+    assert!(stdout.contains("C301 VendorNumber is empty"), "{stdout}");
+}
