@@ -19,6 +19,10 @@ use crate::requirements as req;
 /// `docs/conformance.md` says so.
 pub const HEARTBEAT_TOLERANCE: f64 = 0.1;
 
+/// The heartbeat period the timing test sets, in ms: long enough that a tenth of it is well above
+/// the timestamp resolution of any bus canopener reads.
+pub const TIMING_HEARTBEAT_MS: u16 = 100;
+
 /// The emergency tests.
 pub fn emcy_tests() -> Vec<TestDef> {
     vec![
@@ -386,19 +390,28 @@ fn error_history(ctx: &mut Ctx<'_, '_>, request: &str) -> Result<Finding, crate:
 }
 
 fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    if !start_heartbeat(ctx)? {
+    if !ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
         return Ok(Finding::not_applicable("no writable 1017h"));
+    }
+    let reply = ctx.modify(0x1017, 0, TIMING_HEARTBEAT_MS.to_le_bytes().to_vec())?;
+    if !matches!(reply, Reply::Done(_)) {
+        return Ok(refused_unexpectedly(
+            &download_text((0x1017, 0), &TIMING_HEARTBEAT_MS.to_le_bytes()),
+            &reply,
+            req::HEARTBEAT,
+            "1017h is writable in the EDS",
+        ));
     }
     let id = ctx.id(0x700 + u16::from(ctx.node()));
     // One period to settle, then ten.
-    ctx.listen(Duration::from_millis(u64::from(TEST_HEARTBEAT_MS)), |_| false)?;
+    ctx.listen(Duration::from_millis(u64::from(TIMING_HEARTBEAT_MS)), |_| false)?;
     let frames = ctx.listen(
-        Duration::from_millis(u64::from(TEST_HEARTBEAT_MS) * 21 / 2),
+        Duration::from_millis(u64::from(TIMING_HEARTBEAT_MS) * 21 / 2),
         |f| f.id() == id && !f.is_remote(),
     )?;
-    let period = f64::from(TEST_HEARTBEAT_MS);
+    let period = f64::from(TIMING_HEARTBEAT_MS);
     let intervals = measure_intervals(ctx, "heartbeat_interval", &frames);
-    let request = download_text((0x1017, 0), &TEST_HEARTBEAT_MS.to_le_bytes());
+    let request = download_text((0x1017, 0), &TIMING_HEARTBEAT_MS.to_le_bytes());
     let worst = intervals
         .iter()
         .copied()
@@ -406,7 +419,7 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
     Ok(match worst {
         _ if frames.len() < 9 => Finding::fail(
             format!(
-                "{} heartbeats in 10.5 periods of {TEST_HEARTBEAT_MS} ms",
+                "{} heartbeats in 10.5 periods of {TIMING_HEARTBEAT_MS} ms",
                 frames.len()
             ),
             Evidence {
@@ -415,13 +428,13 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 answer: format!(
                     "{} heartbeats in {} ms",
                     frames.len(),
-                    u64::from(TEST_HEARTBEAT_MS) * 21 / 2
+                    u64::from(TIMING_HEARTBEAT_MS) * 21 / 2
                 ),
                 cause: "the producer does not run at the configured period".to_owned(),
             },
         ),
         Some(worst) if (worst - period).abs() > period * HEARTBEAT_TOLERANCE => Finding::fail(
-            format!("a heartbeat interval of {worst:.1} ms at a {TEST_HEARTBEAT_MS} ms period"),
+            format!("a heartbeat interval of {worst:.1} ms at a {TIMING_HEARTBEAT_MS} ms period"),
             Evidence {
                 request,
                 requirement: format!(

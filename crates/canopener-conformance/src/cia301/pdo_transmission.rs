@@ -13,7 +13,7 @@ use crate::finding::{Evidence, Finding, Outcome};
 use crate::requirements as req;
 
 /// The event timer the test sets, in ms.
-pub const TEST_EVENT_TIMER_MS: u16 = 50;
+pub const TEST_EVENT_TIMER_MS: u16 = 100;
 /// The synchronous transmission type the test sets: every 3rd SYNC.
 pub const TEST_SYNC_EVERY: u8 = 3;
 /// SYNCs the tester sends (a multiple of [`TEST_SYNC_EVERY`]).
@@ -28,7 +28,7 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.6",
             suite: "cia301",
             group: "pdo",
-            title: "Event timer: an event-driven TPDO with 50 ms in 18xxh:05 comes every 50 ms",
+            title: "Event timer: an event-driven TPDO with 100 ms in 18xxh:05 comes every 100 ms",
             references: &[
                 req::PDO,
                 req::PDO_PARAMETERS,
