@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::{BusArg, parse_duration, parse_u32_number};
+use crate::args::{BusArg, parse_duration, parse_node_id};
 
 /// How long the device may take to answer one SDO request unless `--timeout` says otherwise (CiA 301
 /// leaves it to the implementation).
@@ -59,28 +59,4 @@ pub(crate) struct TestArgs {
     /// List the tests (ids, titles, CiA and CCT references, preconditions) instead of running them.
     #[arg(long)]
     pub(crate) list: bool,
-}
-
-/// A node-ID 1..127, decimal or `0x`.
-pub(crate) fn parse_node_id(text: &str) -> Result<u8, String> {
-    let value =
-        parse_u32_number(text).map_err(|_| format!("'{text}' is not a node-ID; write e.g. 5 or 0x05"))?;
-    u8::try_from(value)
-        .ok()
-        .filter(|n| (1..=127).contains(n))
-        .ok_or_else(|| format!("node-ID {value} is outside 1..127"))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn node_ids_read_decimal_and_hex_within_range() {
-        assert_eq!(parse_node_id("5"), Ok(5));
-        assert_eq!(parse_node_id("0x7F"), Ok(127));
-        assert!(parse_node_id("0").unwrap_err().contains("1..127"));
-        assert!(parse_node_id("128").unwrap_err().contains("1..127"));
-        assert!(parse_node_id("five").unwrap_err().contains("e.g. 5"));
-    }
 }

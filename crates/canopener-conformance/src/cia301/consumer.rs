@@ -208,6 +208,12 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
         })?
         .into_iter()
         .collect();
+    // A heartbeat built before the event may still be on its way (a late one is cia301.ec.1's
+    // business): the state is judged from the heartbeats of the period after the event.
+    ctx.listen(
+        Duration::from_millis(u64::from(crate::cia301::helpers::TEST_HEARTBEAT_MS)),
+        |_| false,
+    )?;
     let state = observed_state(ctx, true)?;
     // The producer comes back, so the consumer's error goes before the write-back.
     produce(ctx, producer, 2, emcy)?;

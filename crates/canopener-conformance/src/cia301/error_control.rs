@@ -23,6 +23,9 @@ pub const HEARTBEAT_TOLERANCE: f64 = 0.1;
 /// the timestamp resolution of any bus canopener reads.
 pub const TIMING_HEARTBEAT_MS: u16 = 100;
 
+/// The heartbeat period while `cia301.ec.3` sends guarding requests, in ms.
+pub const GUARD_CHECK_HEARTBEAT_MS: u16 = 200;
+
 /// The emergency tests.
 pub fn emcy_tests() -> Vec<TestDef> {
     vec![
@@ -488,13 +491,21 @@ fn heartbeat_off(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    if !start_heartbeat(ctx)? {
+    if !ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
         return Ok(Finding::not_applicable("no writable 1017h"));
+    }
+    // A long period: a heartbeat would have to come 90 % early to fall into the answer window.
+    let reply = ctx.modify(0x1017, 0, GUARD_CHECK_HEARTBEAT_MS.to_le_bytes().to_vec())?;
+    if !matches!(reply, Reply::Done(_)) {
+        return Ok(Finding::inconclusive(format!(
+            "1017h = {GUARD_CHECK_HEARTBEAT_MS} ms got {}",
+            reply.describe()
+        )));
     }
     let node = u16::from(ctx.node());
     let id = ctx.id(0x700 + node);
     let mut answers = 0;
-    let period = Duration::from_millis(u64::from(TEST_HEARTBEAT_MS));
+    let period = Duration::from_millis(u64::from(GUARD_CHECK_HEARTBEAT_MS));
     for _ in 0..3 {
         // Right after a heartbeat the next one is a period away: whatever answers within 20 ms of
         // the request is a guarding answer, not the heartbeat.
@@ -520,7 +531,7 @@ fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
             format!("{answers} answers within 20 ms of 3 guarding requests while heartbeats run"),
             Evidence {
                 request: format!(
-                    "1017h = {TEST_HEARTBEAT_MS} ms, then 3 remote frames on {:#X}",
+                    "1017h = {GUARD_CHECK_HEARTBEAT_MS} ms, then 3 remote frames on {:#X}",
                     0x700 + node
                 ),
                 requirement: format!(
