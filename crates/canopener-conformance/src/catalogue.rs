@@ -59,6 +59,7 @@ pub fn catalogue() -> Vec<TestDef> {
     all.extend(crate::cia301::sdo::tests());
     all.extend(crate::cia301::pdo::tests());
     all.extend(crate::cia301::pdo_transmission::tests());
+    all.extend(crate::cia301::pdo_mapping::tests());
     all.extend(crate::cia301::object_dictionary::tests());
     all.extend(crate::cia301::error_control::emcy_tests());
     all.extend(crate::cia301::sync::tests());

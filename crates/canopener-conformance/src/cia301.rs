@@ -13,6 +13,7 @@ pub mod helpers;
 pub mod nmt;
 pub mod object_dictionary;
 pub mod pdo;
+pub mod pdo_mapping;
 pub mod pdo_transmission;
 pub mod sdo;
 pub mod store;

@@ -154,11 +154,11 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         ],
         // 0800 0000h is in the accepted sets of most refusals (CCT), but not for an absent object
         // (cia301.sdo.17) nor for mapping a non-mappable object (the CCT's PDO set, §3.4).
-        Fault::WrongAbortCode => &["cia301.sdo.17", "cia301.pdo.5"],
+        Fault::WrongAbortCode => &["cia301.sdo.17", "cia301.pdo.5", "cia301.pdo.11"],
         Fault::SdoBadCommandSilent => &["cia301.sdo.6"],
         Fault::BlockCrcWrong => &["cia301.sdo.15"],
         Fault::LimitNotEnforced => &["cia301.sdo.9", "cia301.od.5"],
-        Fault::UnmappableAccepted => &["cia301.pdo.5"],
+        Fault::UnmappableAccepted => &["cia301.pdo.5", "cia301.pdo.11"],
         Fault::PdoCobIdUnchecked => &["cia301.pdo.4"],
         Fault::NoTpdoRtr => &["cia301.pdo.3"],
         Fault::NoEmcy => &["cia301.emcy.3", "cia301.ec.6", "cia301.ec.7"],

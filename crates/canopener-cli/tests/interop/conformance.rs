@@ -254,12 +254,16 @@ const LOCAL_NODE_GAPS: &[&str] = &[
     "cia301.sdo.15",
     "cia301.sdo.18",
     // No PDO timing (event timer, synchronous transmission), no RTR on TPDOs, no checks of PDO
-    // COB-IDs or mapping entries.
+    // COB-IDs, and no mapping procedure: entries are taken while the PDO is valid, beyond 64 bits,
+    // in the wrong direction and for objects that may not be mapped.
     "cia301.pdo.6",
     "cia301.pdo.7",
     "cia301.pdo.3",
     "cia301.pdo.4",
     "cia301.pdo.5",
+    "cia301.pdo.9",
+    "cia301.pdo.10",
+    "cia301.pdo.11",
     // Entries without a DefaultValue in the EDS are aborted with 060A 0023h.
     "cia301.od.1",
     // 1019h takes any value at any time, and 1005h bit 30 is accepted but no SYNC is produced.
