@@ -332,3 +332,28 @@ fn junit_has_one_test_case_per_test_and_the_failure_with_its_analysis() {
         "the telegrams are the system-out"
     );
 }
+
+#[test]
+fn a_cancelled_run_aborts_the_running_transfer_on_the_bus_and_keeps_what_ran() {
+    let report = support::run_cancelled_at(
+        FAULT_DEVICE,
+        support::NODE,
+        &[],
+        &["cia301.sdo"],
+        Some("cia301.sdo.3"),
+    );
+    assert!(report.interrupted);
+    let ids: Vec<&str> = report.tests.iter().map(|t| t.id.as_str()).collect();
+    assert_eq!(ids, ["cia301.sdo.1", "cia301.sdo.2", "cia301.sdo.3"]);
+    assert_eq!(report.tests[0].verdict, Verdict::Pass);
+    let stopped = &report.tests[2];
+    assert_eq!(stopped.verdict, Verdict::Inconclusive);
+    assert!(stopped.reason.contains("interrupted"), "{}", stopped.reason);
+    // The transfer that had started is ended with an abort 0800 0000h from the tester.
+    let abort = stopped
+        .telegrams
+        .iter()
+        .find(|t| t.id == "0x605" && t.data.starts_with("80 "))
+        .unwrap_or_else(|| panic!("no abort in {:#?}", stopped.telegrams));
+    assert!(abort.data.ends_with("00 00 00 08"), "{}", abort.data);
+}

@@ -24,6 +24,18 @@ pub(crate) fn run(name: &str, faults: &[Fault], only: &[&str]) -> Report {
 
 /// [`run`] with the device on `node` (an EDS whose defaults are written for one node-ID).
 pub(crate) fn run_at(name: &str, node: u8, faults: &[Fault], only: &[&str]) -> Report {
+    run_cancelled_at(name, node, faults, only, None)
+}
+
+/// [`run_at`], cancelling the link (as Ctrl-C does) when the test `cancel_at` starts.
+pub(crate) fn run_cancelled_at(
+    name: &str,
+    node: u8,
+    faults: &[Fault],
+    only: &[&str],
+    cancel_at: Option<&str>,
+) -> Report {
+    let cancel = canopener_runtime::cancel::Cancel::new();
     let path = canopener_testkit::corpus::eds(name);
     let bytes = canopener_testkit::fixture::read(&path).expect("corpus file");
     let loaded = canopener_eds::load(&bytes);
@@ -33,6 +45,7 @@ pub(crate) fn run_at(name: &str, node: u8, faults: &[Fault], only: &[&str]) -> R
     let mut bus = Simulation::ideal()
         .device(&eds, node)
         .faults(faults.iter().copied())
+        .cancel(cancel.clone())
         .start()
         .expect("simulation");
     let selection = Selection {
@@ -49,5 +62,11 @@ pub(crate) fn run_at(name: &str, node: u8, faults: &[Fault], only: &[&str]) -> R
         sdo_timeout: Duration::from_millis(500),
         eds_errors,
     };
-    runner::run(&mut bus, &spec, &tests, |_| {}).expect("run").report
+    runner::run(&mut bus, &spec, &tests, |progress| {
+        if progress.current.is_some_and(|t| Some(t.id) == cancel_at) {
+            cancel.cancel();
+        }
+    })
+    .expect("run")
+    .report
 }
