@@ -31,8 +31,12 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.sync.2",
             suite: "cia301",
             group: "sync",
-            title: "1019h refuses the reserved counter overflow values 1 and 241",
-            references: &[req::SYNC_OBJECTS, "CCT Synchronization 05"],
+            title: "1019h refuses the reserved counter overflow values 1 and 241 and accepts 0",
+            references: &[
+                req::SYNC_OBJECTS,
+                "CCT Synchronization 05",
+                "CCT Synchronization 06",
+            ],
             precondition: "a writable 1019h",
             tags: &["sync", "writes"],
             run: reserved_counter,
@@ -119,7 +123,17 @@ fn reserved_counter(ctx: &mut Ctx<'_, '_>) -> Outcome {
             return Ok(finding);
         }
     }
-    Ok(Finding::pass("1 and 241 refused"))
+    // 0 is valid: SYNC without a counter (CCT Synchronization 06).
+    let reply = ctx.modify(0x1019, 0, vec![0])?;
+    if !matches!(reply, Reply::Done(_)) {
+        return Ok(crate::cia301::helpers::refused_unexpectedly(
+            &download_text((0x1019, 0), &[0]),
+            &reply,
+            req::SYNC_OBJECTS,
+            "1019h refuses 0 (SYNC without counter), a value CiA 301 allows",
+        ));
+    }
+    Ok(Finding::pass("1 and 241 refused, 0 accepted"))
 }
 
 fn counter_while_running(ctx: &mut Ctx<'_, '_>) -> Outcome {
