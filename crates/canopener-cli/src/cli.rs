@@ -11,6 +11,7 @@ use crate::master::args::{
 use crate::mbt::args::MbtCommand;
 use crate::net::args::NetCommand;
 use crate::sim::args::SimArgs;
+use crate::test::args::TestArgs;
 
 /// canopener: verify CANopen devices, their EDS files and whole networks.
 #[derive(Debug, Parser)]
@@ -86,6 +87,17 @@ pub(crate) enum Command {
 Logs boot-up, NMT state changes, SDO writes and aborts, EMCY and LSS (stderr, or JSON lines on stdout).
 Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error.")]
     Sim(SimArgs),
+    /// Test a device's conformance (CiA 301 device test with CCT coverage, EDS check): verdicts with evidence.
+    #[command(after_help = "Examples:
+  canopener test --bus socketcan:can0 --node 5 --eds device.eds
+  canopener test --bus socketcand://127.0.0.1:29536/can0 --node 0x20 --eds io.eds --format json -o report.json
+  canopener test --bus socketcan:can0 --node 5 --eds device.eds --only cia301.sdo --skip cia301.sdo.15
+  canopener test --bus socketcan:can0 --node 5 --eds device.eds --tag nmt --log logs/  # candump per test
+  canopener test --list --suite cia301                 # ids, titles, CiA/CCT references, preconditions
+Each test resets what it changed and leaves the device pre-operational; the run starts with NMT reset node.
+Exit status: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
+answer at all, 2 bad arguments, 3 unreadable EDS, 4 bus error, 130 interrupted (partial report written).")]
+    Test(TestArgs),
     /// Read and write objects of a device over SDO (expedited, segmented, block).
     #[command(subcommand)]
     Sdo(SdoCommand),

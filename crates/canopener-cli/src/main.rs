@@ -18,6 +18,7 @@ mod net;
 mod output;
 mod sim;
 mod stop;
+mod test;
 
 use std::process::ExitCode;
 
@@ -80,6 +81,7 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Net(NetCommand::Draw(args)) => net::draw::run(args),
         Command::Net(NetCommand::Monitor(args)) => net::monitor::run(args),
         Command::Sim(args) => sim::command::run(args),
+        Command::Test(args) => test::command::run(args),
         Command::Sdo(SdoCommand::Read(args)) => master::sdo::read(args),
         Command::Sdo(SdoCommand::Write(args)) => master::sdo::write(args),
         Command::Sdo(SdoCommand::Upload(args)) => master::sdo::upload(args),

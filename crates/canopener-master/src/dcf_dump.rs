@@ -573,8 +573,9 @@ fn cia306_date_time(now: SystemTime) -> (String, String) {
     )
 }
 
-/// The Gregorian date of a day counted from 1970-01-01 (Howard Hinnant's `civil_from_days`).
-fn civil_from_days(days: i64) -> (i64, u32, u32) {
+/// The Gregorian date (year, month, day) of a day counted from 1970-01-01 (Howard Hinnant's
+/// `civil_from_days`); reports that state a UTC date use it too.
+pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
     let z = days + 719_468;
     let era = z.div_euclid(146_097);
     let doe = z.rem_euclid(146_097);

@@ -61,6 +61,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8], backup: bool) -> Result<(), Write
     result
 }
 
+/// Creates `dir` and its missing parents (a directory of per-test logs); an existing directory is fine.
+pub fn create_dir_all(dir: &Path) -> Result<(), WriteError> {
+    fs::create_dir_all(dir).map_err(|source| WriteError {
+        action: "create the directory",
+        path: dir.to_owned(),
+        source,
+    })
+}
+
 /// Reads a whole file given as input (a firmware image to download, ...).
 pub fn read(path: &Path) -> io::Result<Vec<u8>> {
     fs::read(path)

@@ -7,6 +7,7 @@
 //!
 //! - [`cancel`]: a cancellation token that a front end sets (Ctrl-C, a web request going away) and every
 //!   long-running loop here polls.
+//! - [`clock`]: the calendar time a report states it was made at.
 //! - [`files`]: writing results without losing data (temporary file, rename, optional backup).
 //! - [`link`]: the drive loop that moves frames between a bus and any sans-IO
 //!   [`Core`](canopener_can::Core): [`link::BusLink`] on a transport and the wall clock,
@@ -36,6 +37,7 @@
 
 pub mod batch;
 pub mod cancel;
+pub mod clock;
 pub mod description;
 pub mod files;
 pub mod heartbeat_watch;

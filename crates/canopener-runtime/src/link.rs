@@ -40,6 +40,53 @@ pub enum LinkError {
     Tap(#[from] SendError),
 }
 
+/// Where the receive times of a link's frames come from, for reports that must say how far their
+/// timings can be trusted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimestampSource {
+    /// The kernel's receive time (SocketCAN).
+    Kernel,
+    /// The time a socketcand server stamped the frame with.
+    Hub,
+    /// The simulated bus's virtual time.
+    Virtual,
+    /// This process's clock when the frame was taken from the transport.
+    Host,
+}
+
+impl TimestampSource {
+    /// `kernel`, `hub`, `virtual` or `host`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TimestampSource::Kernel => "kernel",
+            TimestampSource::Hub => "hub",
+            TimestampSource::Virtual => "virtual",
+            TimestampSource::Host => "host",
+        }
+    }
+}
+
+/// How a link's receive times are taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Timestamps {
+    /// Who stamps the frames.
+    pub source: TimestampSource,
+    /// The smallest step the stamps can show.
+    pub resolution: Duration,
+}
+
+/// A frame as a link received it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stamped {
+    /// When the link took it, on [`Link::now`]'s clock (what the cores see).
+    pub at: Instant,
+    /// When the bus side stamped it (see [`Link::timestamps`]); equal to `at` where nothing else
+    /// stamps frames.
+    pub bus_time: Instant,
+    /// The frame.
+    pub frame: CanFrame,
+}
+
 /// One endpoint on a bus and the clock the cores run on.
 pub trait Link {
     /// The time given to the cores.
@@ -64,6 +111,24 @@ pub trait Link {
     fn idle_until(&mut self, until: Instant) -> Result<(), LinkError> {
         while self.recv_until(until)?.is_some() {}
         Ok(())
+    }
+
+    /// [`Link::recv_until`] with the time the bus side stamped the frame, for measurements and
+    /// telegram logs; a link whose transport stamps nothing gives its own receive time.
+    fn recv_stamped_until(&mut self, deadline: Instant) -> Result<Option<Stamped>, LinkError> {
+        Ok(self.recv_until(deadline)?.map(|(at, frame)| Stamped {
+            at,
+            bus_time: at,
+            frame,
+        }))
+    }
+
+    /// Who stamps the frames [`Link::recv_stamped_until`] returns, and how finely.
+    fn timestamps(&self) -> Timestamps {
+        Timestamps {
+            source: TimestampSource::Host,
+            resolution: Duration::from_micros(1),
+        }
     }
 }
 
@@ -90,6 +155,14 @@ impl<L: Link + ?Sized> Link for &mut L {
 
     fn idle_until(&mut self, until: Instant) -> Result<(), LinkError> {
         (**self).idle_until(until)
+    }
+
+    fn recv_stamped_until(&mut self, deadline: Instant) -> Result<Option<Stamped>, LinkError> {
+        (**self).recv_stamped_until(deadline)
+    }
+
+    fn timestamps(&self) -> Timestamps {
+        (**self).timestamps()
     }
 }
 
@@ -206,10 +279,14 @@ impl BusLink {
 
     /// One receive of at most `wait`. Overruns are logged and otherwise ignored: a lost frame shows up
     /// as a timeout or protocol error of the core that needed it.
-    fn recv_one(&mut self, wait: Duration) -> Result<Option<(Instant, CanFrame)>, LinkError> {
+    fn recv_one(&mut self, wait: Duration) -> Result<Option<Stamped>, LinkError> {
         match self.bus.recv(wait) {
             // The cores run on our clock: a hub's receive timestamp may come from another clock.
-            Ok(Some(received)) => Ok(Some((self.now(), received.frame))),
+            Ok(Some(received)) => Ok(Some(Stamped {
+                at: self.now(),
+                bus_time: received.timestamp,
+                frame: received.frame,
+            })),
             Ok(None) => Ok(None),
             Err(TransportError::Overrun { lost, .. }) => {
                 tracing::warn!("{lost} frames lost because canopener did not keep up with the bus");
@@ -230,6 +307,12 @@ impl Link for BusLink {
     }
 
     fn recv_until(&mut self, deadline: Instant) -> Result<Option<(Instant, CanFrame)>, LinkError> {
+        Ok(self
+            .recv_stamped_until(deadline)?
+            .map(|stamped| (stamped.at, stamped.frame)))
+    }
+
+    fn recv_stamped_until(&mut self, deadline: Instant) -> Result<Option<Stamped>, LinkError> {
         loop {
             let now = self.now();
             if now >= deadline || self.is_cancelled() {
@@ -239,6 +322,21 @@ impl Link for BusLink {
             if let Some(received) = self.recv_one(wait)? {
                 return Ok(Some(received));
             }
+        }
+    }
+
+    /// The transports document their stamps (`canopener_transport::Received`): the kernel's on
+    /// SocketCAN, the server's on socketcand, the wire's on a bit-accurate `virtual:` bus, the local
+    /// receive time otherwise; all on the Unix epoch in microseconds.
+    fn timestamps(&self) -> Timestamps {
+        let source = match self.bus.spec() {
+            BusSpec::SocketCan { .. } => TimestampSource::Kernel,
+            BusSpec::Socketcand { .. } => TimestampSource::Hub,
+            _ => TimestampSource::Host,
+        };
+        Timestamps {
+            source,
+            resolution: Duration::from_micros(1),
         }
     }
 

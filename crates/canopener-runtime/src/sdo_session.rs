@@ -107,6 +107,14 @@ impl<L: Link> SdoSession<L> {
         })
     }
 
+    /// The session with its client set up by `configure` (CRC offered in block transfers, block size,
+    /// protocol switch threshold, short frames), for callers that need a particular client; the
+    /// session's timeout stays.
+    pub fn configure(mut self, configure: impl FnOnce(SdoClient) -> SdoClient) -> SdoSession<L> {
+        self.client = configure(self.client.clone()).with_timeout(self.timeout);
+        self
+    }
+
     /// The server's node-ID.
     pub fn node(&self) -> u8 {
         self.node
@@ -115,6 +123,11 @@ impl<L: Link> SdoSession<L> {
     /// The SDO timeout.
     pub fn timeout(&self) -> Duration {
         self.timeout
+    }
+
+    /// The link, for looking at it between transfers.
+    pub fn link(&self) -> &L {
+        &self.link
     }
 
     /// The link, for other traffic between transfers.

@@ -9,7 +9,7 @@ use canopener_bus_engine::network::{Network, StationId, Timing};
 use canopener_can::{CanFrame, Core, Instant};
 
 use crate::cancel::Cancel;
-use crate::link::{Link, LinkError};
+use crate::link::{Link, LinkError, TimestampSource, Timestamps};
 
 /// One endpoint on a simulated bus of cores `N`, on virtual time.
 pub struct VirtualLink<N: Core> {
@@ -110,6 +110,14 @@ impl<N: Core> Link for VirtualLink<N> {
         }
         while self.network.take_received(self.tap).is_some() {}
         Ok(())
+    }
+
+    /// Virtual time is kept in nanoseconds.
+    fn timestamps(&self) -> Timestamps {
+        Timestamps {
+            source: TimestampSource::Virtual,
+            resolution: std::time::Duration::from_nanos(1),
+        }
     }
 
     fn describe(&self) -> String {

@@ -7,6 +7,7 @@
 // apply to them.
 #![allow(clippy::disallowed_methods, clippy::print_stdout, clippy::print_stderr)]
 
+mod conformance;
 mod master_cli;
 mod mbt_local_node;
 mod networkx;

@@ -1,0 +1,62 @@
+//! Command-line grammar of `canopener test`.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::{Args, ValueEnum};
+
+use crate::args::{BusArg, parse_duration, parse_node_id};
+
+/// How long the device may take to answer one SDO request unless `--timeout` says otherwise (CiA 301
+/// leaves it to the implementation).
+pub(crate) const DEFAULT_TIMEOUT: &str = "500ms";
+
+/// The report formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ReportFormat {
+    /// A CCT-like summary per group, then each failure with its analysis and a log excerpt.
+    Human,
+    /// The version 1 JSON report.
+    Json,
+    /// JUnit XML: one test case per test, the telegram log as system-out.
+    Junit,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct TestArgs {
+    #[command(flatten)]
+    pub(crate) bus: BusArg,
+    /// Node-ID of the device under test (1..127, decimal or 0x).
+    #[arg(long, value_parser = parse_node_id, value_name = "N", required_unless_present = "list")]
+    pub(crate) node: Option<u8>,
+    /// The device's EDS/DCF (or XDD/XDC): preconditions and expected values come from it.
+    #[arg(long, value_name = "FILE", required_unless_present = "list")]
+    pub(crate) eds: Option<PathBuf>,
+    /// Which suite: cia301 (the device test), eds (the EDS check only) or all.
+    #[arg(long, value_name = "SUITE", default_value = "all")]
+    pub(crate) suite: String,
+    /// Run only this test id, or every test under an id prefix (cia301.sdo); repeatable.
+    #[arg(long, value_name = "ID")]
+    pub(crate) only: Vec<String>,
+    /// Skip this test id or id prefix; repeatable.
+    #[arg(long, value_name = "ID")]
+    pub(crate) skip: Vec<String>,
+    /// Run only tests with this tag (sdo, nmt, heartbeat, writes, timing, ...); repeatable.
+    #[arg(long, value_name = "TAG")]
+    pub(crate) tag: Vec<String>,
+    /// Report format.
+    #[arg(long, value_enum, default_value_t = ReportFormat::Human)]
+    pub(crate) format: ReportFormat,
+    /// Write the report to this file instead of stdout.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    pub(crate) output: Option<PathBuf>,
+    /// Write each test's telegrams as a candump log DIR/ID.log (replay with `canopener bus replay`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) log: Option<PathBuf>,
+    /// How long to wait for each SDO answer (e.g. 500ms, 2s).
+    #[arg(long, default_value = DEFAULT_TIMEOUT, value_parser = parse_duration, value_name = "DURATION")]
+    pub(crate) timeout: Duration,
+    /// List the tests (ids, titles, CiA and CCT references, preconditions) instead of running them.
+    #[arg(long)]
+    pub(crate) list: bool,
+}

@@ -1,0 +1,356 @@
+//! `canopener test` end to end through the hub (issue 14): against `canopener sim` devices (clean, with a
+//! fault, absent, interrupted by Ctrl-C) and against python canopen's `LocalNode`, a device we did not
+//! write. Reports, exit codes and the per-test candump logs (which `bus decode` and `bus replay` accept)
+//! are checked from the outside, as a user sees them.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use canopener_testkit::corpus::{self, Kind};
+use canopener_testkit::fixture::{self, ScratchDir};
+use serde_json::Value;
+
+use crate::support::{HubProc, Proc, canopener, python, python_peer};
+
+/// A vendored EDS with node guarding, limits, EMCY and RPDOs: all but the long-entry tests apply.
+const SIM_EDS: &str = "ros-industrial__ros_canopen__ipa_canopen_test__config__PRL120.eds";
+/// How long one whole run may take on the wall clock before the test calls it hung.
+const RUN_LIMIT: Duration = Duration::from_secs(120);
+
+/// `canopener sim` on the hub, once it reports that it is on the bus.
+fn sim(hub: &HubProc, bus: &str, node: &str, extra: &[&str]) -> Proc {
+    let mut command = canopener();
+    command
+        .arg("sim")
+        .arg(corpus::eds(SIM_EDS))
+        .args(["--node-id", node, "--bus", &hub.spec(bus), "--format", "json"])
+        .args(extra)
+        .env_remove("CANOPENER_BUS");
+    let mut proc = Proc::spawn("canopener sim", command);
+    let started = proc.json(Duration::from_secs(30));
+    assert_eq!(started["event"], "started", "unexpected first event {started}");
+    proc
+}
+
+/// `canopener test ARGS` run to its end: exit code, stdout, stderr and wall time.
+fn run_test(args: &[&str]) -> (Option<i32>, String, String, Duration) {
+    let mut command = canopener();
+    command.arg("test").args(args).env_remove("CANOPENER_BUS");
+    let start = Instant::now();
+    let mut proc = Proc::spawn(&format!("canopener test {}", args.join(" ")), command);
+    let status = proc.wait(RUN_LIMIT);
+    let stdout = proc.remaining_lines().join("\n");
+    (status.code(), stdout, proc.stderr(), start.elapsed())
+}
+
+fn report(path: &Path) -> Value {
+    serde_json::from_str(&fixture::read_to_string(path).expect("report written")).expect("JSON report")
+}
+
+fn failed(report: &Value) -> Vec<String> {
+    report["tests"]
+        .as_array()
+        .expect("tests")
+        .iter()
+        .filter(|t| t["verdict"] == "fail")
+        .map(|t| t["id"].as_str().unwrap_or_default().to_owned())
+        .collect()
+}
+
+#[test]
+fn a_clean_simulated_device_passes_and_its_logs_decode_and_replay() {
+    let hub = HubProc::start();
+    let _device = sim(&hub, "can0", "5", &[]);
+    let dir = ScratchDir::new("conformance-clean");
+    let out = dir.join("report.json");
+    let logs = dir.join("logs");
+    let bus = hub.spec("can0");
+    let eds = corpus::eds(SIM_EDS);
+    let (code, _, stderr, took) = run_test(&[
+        "--bus",
+        &bus,
+        "--node",
+        "0x05",
+        "--eds",
+        eds.to_str().unwrap(),
+        "--format",
+        "json",
+        "-o",
+        out.to_str().unwrap(),
+        "--log",
+        logs.to_str().unwrap(),
+        // The simulated device runs on this (loaded, shared) host's scheduler, not on a real-time
+        // controller: its heartbeat and event timer intervals are judged on virtual time
+        // (tests/simulated.rs), not here.
+        "--skip",
+        "cia301.ec.1",
+        "--skip",
+        "cia301.pdo.6",
+    ]);
+    let report = report(&out);
+    let undecided: Vec<String> = report["tests"]
+        .as_array()
+        .expect("tests")
+        .iter()
+        .filter(|t| t["verdict"] == "fail" || t["verdict"] == "inconclusive")
+        .map(|t| format!("{} {}: {}\n{}", t["id"], t["verdict"], t["reason"], t["analysis"]))
+        .collect();
+    assert_eq!(code, Some(0), "stderr: {stderr}\n{}", undecided.join("\n"));
+    assert_eq!(report["version"], 1);
+    assert_eq!(report["bus"]["timestamps"], "hub");
+    assert_eq!(report["summary"]["fail"], 0, "{:?}", failed(&report));
+    assert_eq!(report["summary"]["inconclusive"], 0);
+    eprintln!(
+        "clean simulated device over the hub: {} tests in {:.1} s wall ({} s on the link's clock)",
+        report["tests"].as_array().map_or(0, Vec::len),
+        took.as_secs_f64(),
+        report["duration_s"]
+    );
+    // One candump log per test; every one decodes, and one replays onto the bus.
+    let files = fixture::list(&logs).expect("log dir");
+    assert_eq!(files.len(), report["tests"].as_array().map_or(0, Vec::len));
+    assert!(
+        !files.iter().any(|f| f.ends_with("cia301.ec.1.log")),
+        "--skip left a log"
+    );
+    for file in &files {
+        let output = canopener()
+            .args(["bus", "decode"])
+            .arg(file)
+            .output()
+            .expect("bus decode");
+        assert!(
+            output.status.success(),
+            "bus decode {}: {}",
+            file.display(),
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let text = String::from_utf8_lossy(&output.stdout);
+        // The EDS check talks to nobody: its log is empty.
+        let empty = file.ends_with("cia301.eds.1.log");
+        assert_eq!(text.contains("node 5"), !empty, "{}: {text}", file.display());
+    }
+    let replayed = canopener()
+        .args(["bus", "replay", "--no-timing", "--bus", &hub.spec("replay")])
+        .arg(logs.join("cia301.sdo.1.log"))
+        .env_remove("CANOPENER_BUS")
+        .output()
+        .expect("bus replay");
+    assert!(
+        replayed.status.success(),
+        "bus replay: {}",
+        String::from_utf8_lossy(&replayed.stderr)
+    );
+}
+
+#[test]
+fn a_fault_fails_with_its_evidence_and_exit_code_6() {
+    let hub = HubProc::start();
+    let _device = sim(&hub, "can0", "5", &["--fault", "limit-not-enforced"]);
+    let bus = hub.spec("can0");
+    let eds = corpus::eds(SIM_EDS);
+    let (code, stdout, stderr, _) = run_test(&[
+        "--bus",
+        &bus,
+        "--node",
+        "5",
+        "--eds",
+        eds.to_str().unwrap(),
+        "--only",
+        "cia301.sdo.9",
+    ]);
+    assert_eq!(code, Some(6), "stderr: {stderr}");
+    assert!(stdout.contains("SDO Test (1): 0 passed, 1 failed"), "{stdout}");
+    assert!(stdout.contains("FAIL cia301.sdo.9"), "{stdout}");
+    assert!(stdout.contains("Required: CiA 301 §7.2.4.3.17"), "{stdout}");
+    assert!(stdout.contains("0609 0031h"), "{stdout}");
+    assert!(
+        stdout.contains("Answer:   the transfer was confirmed"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn no_device_is_exit_7_and_an_unreadable_eds_exit_3() {
+    let hub = HubProc::start();
+    let bus = hub.spec("empty");
+    let eds = corpus::eds(SIM_EDS);
+    let (code, _, stderr, _) = run_test(&["--bus", &bus, "--node", "5", "--eds", eds.to_str().unwrap()]);
+    assert_eq!(code, Some(7), "stderr: {stderr}");
+    assert!(stderr.contains("node 5 did not answer"), "{stderr}");
+    let (code, _, stderr, _) = run_test(&["--bus", &bus, "--node", "5", "--eds", "/nonexistent/device.eds"]);
+    assert_eq!(code, Some(3), "stderr: {stderr}");
+    let (code, _, stderr, _) = run_test(&[
+        "--bus",
+        &bus,
+        "--node",
+        "5",
+        "--eds",
+        eds.to_str().unwrap(),
+        "--only",
+        "cia301.nope",
+    ]);
+    assert_eq!(code, Some(2), "stderr: {stderr}");
+    assert!(stderr.contains("--list"), "{stderr}");
+}
+
+#[test]
+fn ctrl_c_writes_the_partial_report_and_exits_130() {
+    let hub = HubProc::start();
+    let _device = sim(&hub, "can0", "5", &[]);
+    let dir = ScratchDir::new("conformance-interrupt");
+    let out = dir.join("partial.json");
+    let mut command = canopener();
+    command
+        .arg("test")
+        .args([
+            "--bus",
+            &hub.spec("can0"),
+            "--node",
+            "5",
+            "--format",
+            "json",
+            "-o",
+        ])
+        .arg(&out)
+        .arg("--eds")
+        .arg(corpus::eds(SIM_EDS))
+        .env_remove("CANOPENER_BUS");
+    let mut proc = Proc::spawn("canopener test (interrupted)", command);
+    // The preparation takes at least the boot-up; the whole run several seconds.
+    std::thread::sleep(Duration::from_secs(3));
+    proc.interrupt();
+    let status = proc.wait(Duration::from_secs(20));
+    assert_eq!(status.code(), Some(130), "stderr: {}", proc.stderr());
+    let report = report(&out);
+    assert_eq!(report["interrupted"], true);
+    let run = report["tests"].as_array().map_or(0, Vec::len);
+    assert!(
+        run > 0 && run < canopener_tests_total(),
+        "{run} tests in the partial report"
+    );
+}
+
+fn canopener_tests_total() -> usize {
+    let output = canopener()
+        .args(["test", "--list", "--format", "json"])
+        .output()
+        .expect("--list");
+    serde_json::from_slice::<Value>(&output.stdout)
+        .expect("list JSON")
+        .as_array()
+        .map_or(0, Vec::len)
+}
+
+/// python canopen 2.4.1's `LocalNode` (with the boot-up, resets and heartbeat tests/python/co_local_node.py
+/// adds) lacks what a certified device must have; the suite must name exactly those gaps, and nothing
+/// else, and run to its end.
+const LOCAL_NODE_GAPS: &[&str] = &[
+    // Its SDO server answers a sub-index a VAR does not have, and sub-indices beyond an array's.
+    "cia301.sdo.4",
+    "cia301.od.7",
+    // It answers a block upload (even one with block size 128) with a normal upload instead of
+    // refusing it with 0504 0001h.
+    "cia301.sdo.15",
+    "cia301.sdo.18",
+    // No PDO timing (event timer, synchronous transmission), no RTR on TPDOs, no checks of PDO
+    // COB-IDs, and no mapping procedure: entries are taken while the PDO is valid, beyond 64 bits,
+    // in the wrong direction and for objects that may not be mapped.
+    "cia301.pdo.6",
+    "cia301.pdo.7",
+    "cia301.pdo.3",
+    "cia301.pdo.4",
+    "cia301.pdo.5",
+    "cia301.pdo.9",
+    "cia301.pdo.10",
+    "cia301.pdo.11",
+    // Entries without a DefaultValue in the EDS are aborted with 060A 0023h.
+    "cia301.od.1",
+    // 1019h takes any value at any time, and 1005h bit 30 is accepted but no SYNC is produced.
+    "cia301.sync.2",
+    "cia301.sync.3",
+    "cia301.sync.4",
+    // No EMCY producer, no node guarding, and its SDO server runs in stopped.
+    "cia301.emcy.3",
+    "cia301.ec.4",
+    "cia301.nmt.4",
+];
+
+#[test]
+fn a_foreign_device_runs_to_the_end_and_names_its_real_gaps() {
+    let Some(python) = python() else { return };
+    let Some(eds) = corpus::extended_file(Kind::Eds, "jinr-greenlab__canopen__disk2__CANopen__eds__Test.eds")
+    else {
+        eprintln!("skipped: the extended corpus (with the LocalNode's EDS) is not here");
+        return;
+    };
+    let hub = HubProc::start();
+    let args = [
+        hub.addr.ip().to_string(),
+        hub.addr.port().to_string(),
+        "can0".to_owned(),
+        "34".to_owned(),
+        eds.display().to_string(),
+    ];
+    let mut peer = python_peer(&python, "co_local_node.py", &args);
+    let ready = peer.json(Duration::from_secs(30));
+    assert_eq!(
+        ready["ready"], true,
+        "the python LocalNode did not start: {ready}"
+    );
+    let dir = ScratchDir::new("conformance-foreign");
+    let out = dir.join("report.json");
+    let bus = hub.spec("can0");
+    let (code, _, stderr, took) = run_test(&[
+        "--bus",
+        &bus,
+        "--node",
+        "34",
+        "--eds",
+        eds.to_str().unwrap(),
+        "--format",
+        "json",
+        "-o",
+        out.to_str().unwrap(),
+        // A Python process on a loaded, shared host is no real-time device: its heartbeat jitter
+        // would measure the host, not python canopen.
+        "--skip",
+        "cia301.ec.1",
+    ]);
+    assert_eq!(code, Some(6), "stderr: {stderr}");
+    let report = report(&out);
+    assert_eq!(report["interrupted"], false);
+    // Without node guarding, life guarding cannot be judged (cia301.ec.4 fails for guarding itself).
+    let undecided: Vec<&str> = report["tests"]
+        .as_array()
+        .expect("tests")
+        .iter()
+        .filter(|t| t["verdict"] == "inconclusive")
+        .map(|t| t["id"].as_str().unwrap_or_default())
+        .collect();
+    assert_eq!(undecided, ["cia301.ec.7"]);
+    let mut expected: Vec<String> = LOCAL_NODE_GAPS.iter().map(|s| (*s).to_owned()).collect();
+    expected.sort();
+    let mut got = failed(&report);
+    got.sort();
+    assert_eq!(got, expected);
+    eprintln!(
+        "python LocalNode: {} tests in {:.1} s wall",
+        report["tests"].as_array().map_or(0, Vec::len),
+        took.as_secs_f64()
+    );
+}
+
+#[test]
+fn the_eds_suite_alone_needs_no_bus() {
+    let clean = corpus::eds("CANopenNode__CANopenDemo__demo__demoDevice.eds");
+    let (code, stdout, stderr, _) =
+        run_test(&["--node", "5", "--eds", clean.to_str().unwrap(), "--suite", "eds"]);
+    assert_eq!(code, Some(0), "stderr: {stderr}");
+    assert!(stdout.contains("EDS Test (1): 1 passed"), "{stdout}");
+    let flawed = corpus::eds("CANopenNode__CANopenNode__example__DS301_profile.eds");
+    let (code, stdout, stderr, _) =
+        run_test(&["--node", "5", "--eds", flawed.to_str().unwrap(), "--suite", "eds"]);
+    assert_eq!(code, Some(6), "stderr: {stderr}");
+    assert!(stdout.contains("C301 VendorNumber is empty"), "{stdout}");
+}

@@ -1,0 +1,280 @@
+//! NMT state and transition tests (CCT groups "State" and "Transition"): every transition of the
+//! CiA 301 state diagram (§7.3.2.2.1 figure "NMT state diagram of a CANopen device") and the services
+//! allowed in each state.
+
+use std::time::Duration;
+
+use canopener_wire::NmtCommand;
+
+use crate::catalogue::TestDef;
+use crate::cia301::helpers::{
+    back_to_pre_operational, observed_state, start_heartbeat, state_name, upload_text,
+};
+use crate::context::{Ctx, Reply};
+use crate::finding::{Evidence, Finding, Outcome};
+use crate::requirements as req;
+
+const PRE_OPERATIONAL: u8 = 0x7F;
+const OPERATIONAL: u8 = 0x05;
+const STOPPED: u8 = 0x04;
+
+/// How long a device may take from a reset to its boot-up message. CiA 301 sets no bound; the CCT
+/// waits a fixed time, canopener waits 2 s (documented in `docs/conformance.md`).
+pub const BOOT_UP_WAIT: Duration = Duration::from_secs(2);
+
+/// How long after a boot-up message a second one counts as a duplicate.
+const DUPLICATE_WAIT: Duration = Duration::from_millis(50);
+
+/// The NMT tests.
+pub fn tests() -> Vec<TestDef> {
+    vec![
+        TestDef {
+            id: "cia301.nmt.1",
+            suite: "cia301",
+            group: "nmt",
+            title: "Reset node and reset communication each end with one boot-up message (700h + node-ID, 00h)",
+            references: &[
+                req::BOOT_UP,
+                req::NMT_MODULE_CONTROL,
+                "CCT State 01",
+                "CCT State 02",
+                "CCT Transition 01",
+            ],
+            precondition: "always",
+            tags: &["nmt"],
+            run: boot_up,
+        },
+        TestDef {
+            id: "cia301.nmt.2",
+            suite: "cia301",
+            group: "nmt",
+            title: "Every transition between pre-operational, operational and stopped, addressed to the node",
+            references: &[
+                req::NMT_MODULE_CONTROL,
+                "CCT State 03",
+                "CCT State 04",
+                "CCT Transition 02",
+                "CCT Transition 03",
+                "CCT Transition 04",
+            ],
+            precondition: "a writable 1017h or node guarding, to observe the state",
+            tags: &["nmt", "heartbeat"],
+            run: transitions,
+        },
+        TestDef {
+            id: "cia301.nmt.3",
+            suite: "cia301",
+            group: "nmt",
+            title: "The same transitions addressed to all nodes (node-ID 0)",
+            references: &[req::NMT_MODULE_CONTROL],
+            precondition: "a writable 1017h or node guarding, to observe the state",
+            tags: &["nmt", "heartbeat"],
+            run: broadcast_transitions,
+        },
+        TestDef {
+            id: "cia301.nmt.4",
+            suite: "cia301",
+            group: "nmt",
+            title: "Stopped: SDO not served, error control still served",
+            references: &[req::NMT_STATES, "CCT State 04"],
+            precondition: "a writable 1017h or node guarding",
+            tags: &["nmt"],
+            run: stopped_services,
+        },
+    ]
+}
+
+fn boot_up(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let node = u16::from(ctx.node());
+    let boot = ctx.id(0x700 + node);
+    for (command, name) in [
+        (NmtCommand::ResetNode, "reset node"),
+        (NmtCommand::ResetCommunication, "reset communication"),
+    ] {
+        ctx.nmt(command, false)?;
+        let mut frames: Vec<_> = ctx
+            .wait_for(BOOT_UP_WAIT, |f| f.id() == boot && !f.is_remote())?
+            .into_iter()
+            .collect();
+        if !frames.is_empty() {
+            // A second boot-up would follow at once; anything later is the heartbeat's business.
+            frames.extend(ctx.listen(DUPLICATE_WAIT, |f| {
+                f.id() == boot && !f.is_remote() && f.data() == [0]
+            })?);
+        }
+        let boot_ups = frames.iter().filter(|l| l.frame.data() == [0]).count();
+        if boot_ups != 1 {
+            return Ok(Finding::fail(
+                format!("{boot_ups} boot-up messages after NMT {name}"),
+                Evidence {
+                    request: format!("NMT {name} to node {node}"),
+                    requirement: format!(
+                        "{}: after initialisation the device sends one boot-up message, 700h + node-ID with 00h",
+                        req::BOOT_UP
+                    ),
+                    answer: if frames.is_empty() {
+                        format!(
+                            "nothing on {:#X} within {} s",
+                            0x700 + node,
+                            BOOT_UP_WAIT.as_secs()
+                        )
+                    } else {
+                        format!(
+                            "{} frames on {:#X}, {boot_ups} of them boot-up",
+                            frames.len(),
+                            0x700 + node
+                        )
+                    },
+                    cause: "no boot-up (or on the wrong CAN-ID) after the reset".to_owned(),
+                },
+            ));
+        }
+    }
+    Ok(Finding::pass("one boot-up after each reset"))
+}
+
+/// Observes the state after each command of `steps`; the first wrong one fails.
+fn walk(ctx: &mut Ctx<'_, '_>, broadcast: bool) -> Outcome {
+    let heartbeat = start_heartbeat(ctx)?;
+    if !heartbeat && !ctx.model().has_guarding() {
+        return Ok(Finding::not_applicable(
+            "neither a writable 1017h nor node guarding to observe the state",
+        ));
+    }
+    let steps = [
+        (NmtCommand::StartRemoteNode, OPERATIONAL, "start remote node"),
+        (NmtCommand::StopRemoteNode, STOPPED, "stop remote node"),
+        (
+            NmtCommand::EnterPreOperational,
+            PRE_OPERATIONAL,
+            "enter pre-operational",
+        ),
+        (NmtCommand::StopRemoteNode, STOPPED, "stop remote node"),
+        (NmtCommand::StartRemoteNode, OPERATIONAL, "start remote node"),
+        (
+            NmtCommand::EnterPreOperational,
+            PRE_OPERATIONAL,
+            "enter pre-operational",
+        ),
+        (NmtCommand::StartRemoteNode, OPERATIONAL, "start remote node"),
+        (
+            NmtCommand::StartRemoteNode,
+            OPERATIONAL,
+            "start remote node (again)",
+        ),
+        (NmtCommand::StopRemoteNode, STOPPED, "stop remote node"),
+        (NmtCommand::StopRemoteNode, STOPPED, "stop remote node (again)"),
+        (
+            NmtCommand::EnterPreOperational,
+            PRE_OPERATIONAL,
+            "enter pre-operational",
+        ),
+        (
+            NmtCommand::EnterPreOperational,
+            PRE_OPERATIONAL,
+            "enter pre-operational (again)",
+        ),
+    ];
+    let target = if broadcast {
+        "all nodes (0)".to_owned()
+    } else {
+        format!("node {}", ctx.node())
+    };
+    let mut from = PRE_OPERATIONAL;
+    for (command, expected, name) in steps {
+        ctx.nmt(command, broadcast)?;
+        let state = observed_state(ctx, heartbeat)?;
+        if state != Some(expected) {
+            return Ok(Finding::fail(
+                format!(
+                    "after NMT {name} from {}: {}",
+                    state_name(from),
+                    state.map_or("no answer".to_owned(), state_name)
+                ),
+                Evidence {
+                    request: format!("NMT {name} to {target} in {}", state_name(from)),
+                    requirement: format!(
+                        "{}: the device goes to {}",
+                        req::NMT_MODULE_CONTROL,
+                        state_name(expected)
+                    ),
+                    answer: match state {
+                        Some(state) => format!(
+                            "{} reported {}",
+                            if heartbeat {
+                                "the heartbeat"
+                            } else {
+                                "the guarding answer"
+                            },
+                            state_name(state)
+                        ),
+                        None => "no heartbeat or guarding answer".to_owned(),
+                    },
+                    cause: if broadcast {
+                        "NMT commands to node-ID 0 are not applied".to_owned()
+                    } else {
+                        format!(
+                            "the command is ignored or the {} reports a wrong state",
+                            if heartbeat { "heartbeat" } else { "guarding answer" }
+                        )
+                    },
+                },
+            ));
+        }
+        from = expected;
+    }
+    Ok(Finding::pass(format!(
+        "12 commands to {target}, each state as required"
+    )))
+}
+
+fn transitions(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    walk(ctx, false)
+}
+
+fn broadcast_transitions(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    walk(ctx, true)
+}
+
+fn stopped_services(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let heartbeat = start_heartbeat(ctx)?;
+    if !heartbeat && !ctx.model().has_guarding() {
+        return Ok(Finding::not_applicable(
+            "neither a writable 1017h nor node guarding",
+        ));
+    }
+    ctx.nmt(NmtCommand::StopRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    let reply = ctx.read(0x1000, 0)?;
+    let state = observed_state(ctx, heartbeat)?;
+    back_to_pre_operational(ctx)?;
+    if !matches!(reply, Reply::Silent) {
+        return Ok(Finding::fail(
+            "an SDO request was answered in stopped",
+            Evidence {
+                request: format!("NMT stop, then {}", upload_text((0x1000, 0))),
+                requirement: format!(
+                    "{}: in stopped only NMT and error control are served, no SDO",
+                    req::NMT_STATES
+                ),
+                answer: reply.describe(),
+                cause: "the SDO server runs in every state, or NMT stop is ignored".to_owned(),
+            },
+        ));
+    }
+    Ok(match state {
+        Some(STOPPED) => Finding::pass("SDO silent, error control reports stopped"),
+        other => Finding::fail(
+            "error control in stopped",
+            Evidence {
+                request: "NMT stop, then wait for the heartbeat (or send a guarding request)".to_owned(),
+                requirement: format!(
+                    "{}: error control is served in stopped and reports 04h",
+                    req::NMT_STATES
+                ),
+                answer: other.map_or("no answer".to_owned(), state_name),
+                cause: "error control stops in stopped, or reports a wrong state".to_owned(),
+            },
+        ),
+    })
+}

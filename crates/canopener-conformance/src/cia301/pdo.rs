@@ -1,0 +1,389 @@
+//! PDO tests (CCT group "PDO" and "Testing other 10"): communication and mapping parameters, RTR,
+//! the mapping procedure and restricted CAN-IDs.
+
+use std::time::Duration;
+
+use canopener_wire::NmtCommand;
+
+use crate::catalogue::TestDef;
+use crate::cia301::helpers::{back_to_pre_operational, download_text, expect_refusal, u32_of, upload_text};
+use crate::context::{Ctx, Reply, hex};
+use crate::device_model::{PdoDirection, PdoModel};
+use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::requirements as req;
+
+/// The PDO tests.
+pub fn tests() -> Vec<TestDef> {
+    vec![
+        TestDef {
+            id: "cia301.pdo.1",
+            suite: "cia301",
+            group: "pdo",
+            title: "Every RPDO and TPDO communication parameter reads with a valid COB-ID and transmission type",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 01", "CCT PDO 02"],
+            precondition: "the EDS has PDOs",
+            tags: &["pdo"],
+            run: communication_parameters,
+        },
+        TestDef {
+            id: "cia301.pdo.2",
+            suite: "cia301",
+            group: "pdo",
+            title: "Every mapping entry of every PDO names an object the dictionary has",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 21"],
+            precondition: "the EDS has PDO mappings",
+            tags: &["pdo"],
+            run: default_mappings,
+        },
+        TestDef {
+            id: "cia301.pdo.3",
+            suite: "cia301",
+            group: "pdo",
+            title: "Operational: a TPDO that allows RTR answers a remote frame",
+            references: &[req::PDO, "CCT PDO 03", "CCT PDO 15"],
+            precondition: "a TPDO set up for RTR (type FCh/FDh, bit 30 = 0) or whose COB-ID and type are writable; a refusal to set one up is not_applicable (RTR is optional)",
+            tags: &["pdo", "nmt"],
+            run: tpdo_rtr,
+        },
+        TestDef {
+            id: "cia301.pdo.4",
+            suite: "cia301",
+            group: "pdo",
+            title: "A restricted CAN-ID (701h) is refused as a TPDO COB-ID",
+            references: &[req::RESTRICTED_IDS, "CCT Testing other 10"],
+            precondition: "a TPDO whose COB-ID the EDS makes writable",
+            tags: &["pdo", "writes"],
+            run: restricted_cob_id,
+        },
+        TestDef {
+            id: "cia301.pdo.5",
+            suite: "cia301",
+            group: "pdo",
+            title: "Mapping an object with PDOMapping=0 is refused during the mapping procedure",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 29", "CCT PDO 32"],
+            precondition: "a TPDO with a writable mapping and an object with PDOMapping=0 (1000h)",
+            tags: &["pdo", "writes"],
+            run: unmappable,
+        },
+    ]
+}
+
+fn all_pdos(ctx: &Ctx<'_, '_>) -> Vec<PdoModel> {
+    let mut all = ctx.model().pdos(PdoDirection::Receive);
+    all.extend(ctx.model().pdos(PdoDirection::Transmit));
+    all
+}
+
+fn communication_parameters(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let pdos = all_pdos(ctx);
+    if pdos.is_empty() {
+        return Ok(Finding::not_applicable("the EDS has no PDOs"));
+    }
+    for pdo in &pdos {
+        let cob = ctx.read(pdo.comm, 1)?;
+        let Some(cob_id) = u32_of(&cob) else {
+            return Ok(fail_param(pdo, 1, &cob, "a 4-byte COB-ID"));
+        };
+        if cob_id & 0x8000_0000 == 0 && restricted(cob_id & 0x7FF) {
+            return Ok(fail_param(
+                pdo,
+                1,
+                &cob,
+                "a valid COB-ID that is not a restricted CAN-ID (CiA 301 §7.3.5)",
+            ));
+        }
+        if ctx.model().entry(pdo.comm, 2).is_some() {
+            let kind = ctx.read(pdo.comm, 2)?;
+            let reserved = match &kind {
+                Reply::Done(d) if d.len() == 1 => (0xF1..=0xFB).contains(&d[0]),
+                _ => true,
+            };
+            if reserved {
+                return Ok(fail_param(
+                    pdo,
+                    2,
+                    &kind,
+                    "a 1-byte transmission type outside the reserved F1h–FBh",
+                ));
+            }
+        }
+    }
+    Ok(Finding::pass(format!("{} PDOs", pdos.len())))
+}
+
+fn fail_param(pdo: &PdoModel, sub: u8, reply: &Reply, required: &str) -> Finding {
+    Finding::fail(
+        format!(
+            "{}{} {:04X}h:{sub:02X}: {}",
+            pdo.direction.name(),
+            pdo.number,
+            pdo.comm,
+            reply.describe()
+        ),
+        Evidence {
+            request: upload_text((pdo.comm, sub)),
+            requirement: format!("{}: {required}", req::PDO_PARAMETERS),
+            answer: reply.describe(),
+            cause: "the PDO communication parameter is missing or holds a value CiA 301 does not allow"
+                .to_owned(),
+        },
+    )
+}
+
+/// CiA 301 §7.3.5: CAN-IDs no configurable object may use.
+pub fn restricted(id: u32) -> bool {
+    matches!(id, 0x000 | 0x001..=0x07F | 0x101..=0x180 | 0x581..=0x5FF | 0x601..=0x67F | 0x6E0..=0x6FF | 0x701..=0x77F | 0x780..=0x7FF)
+}
+
+fn default_mappings(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let pdos: Vec<PdoModel> = all_pdos(ctx)
+        .into_iter()
+        .filter(|p| p.mapping.is_some())
+        .collect();
+    if pdos.is_empty() {
+        return Ok(Finding::not_applicable("the EDS has no PDO mappings"));
+    }
+    let mut checked = 0;
+    for pdo in &pdos {
+        let Some(mapping) = pdo.mapping else { continue };
+        let Reply::Done(count) = ctx.read(mapping, 0)? else {
+            continue;
+        };
+        for sub in 1..=count.first().copied().unwrap_or(0) {
+            let entry = ctx.read(mapping, sub)?;
+            let Some(value) = u32_of(&entry) else {
+                return Ok(fail_param(pdo, sub, &entry, "a 4-byte mapping entry"));
+            };
+            let (index, target_sub) = ((value >> 16) as u16, (value >> 8) as u8);
+            // Dummy entries (0001h–0007h) map no object.
+            if index < 0x0008 {
+                continue;
+            }
+            checked += 1;
+            let reply = ctx.read(index, target_sub)?;
+            if matches!(reply, Reply::Refused(code) if code == canopener_wire::abort::OBJECT_DOES_NOT_EXIST || code == canopener_wire::abort::SUB_INDEX_DOES_NOT_EXIST)
+            {
+                return Ok(Finding::fail(
+                    format!(
+                        "{mapping:04X}h:{sub:02X} maps {index:04X}h:{target_sub:02X}, which does not exist"
+                    ),
+                    Evidence {
+                        request: format!(
+                            "{}, then {}",
+                            upload_text((mapping, sub)),
+                            upload_text((index, target_sub))
+                        ),
+                        requirement: format!(
+                            "{}: a mapping entry names an object of the dictionary",
+                            req::PDO_PARAMETERS
+                        ),
+                        answer: reply.describe(),
+                        cause: "the default mapping names an object the firmware does not have".to_owned(),
+                    },
+                ));
+            }
+        }
+    }
+    Ok(Finding::pass(format!("{checked} mapped objects exist")))
+}
+
+fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // A TPDO already set up for RTR-only transmission (FCh/FDh) with RTR allowed, else the first TPDO
+    // whose parameters the EDS makes writable, configured so.
+    let mut chosen = None;
+    for pdo in ctx.model().pdos(PdoDirection::Transmit) {
+        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+            continue;
+        };
+        let kind = match ctx.read(pdo.comm, 2)? {
+            Reply::Done(d) if d.len() == 1 => d[0],
+            _ => continue,
+        };
+        if cob & 0xC000_0000 == 0 && (kind == 0xFC || kind == 0xFD) {
+            chosen = Some((pdo.number, (cob & 0x7FF) as u16, kind));
+            break;
+        }
+    }
+    if chosen.is_none() {
+        let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
+            return Ok(Finding::not_applicable(
+                "no TPDO set up for RTR, and none whose COB-ID and transmission type are writable",
+            ));
+        };
+        // RTR-only transmission and RTR on PDOs are optional (CiA 301 §7.2.2.2.1).
+        if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![0xFD])], true)? {
+            return Ok(Finding::not_applicable(format!(
+                "TPDO{} cannot be set up for RTR: {refused}",
+                pdo.number
+            )));
+        }
+        chosen = Some((pdo.number, (cob & 0x7FF) as u16, 0xFD));
+    }
+    let Some((number, cob, kind)) = chosen else {
+        return Ok(Finding::inconclusive("no TPDO chosen"));
+    };
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    ctx.send_remote(cob, 0)?;
+    let id = ctx.id(cob);
+    let answer: Vec<_> = ctx
+        .wait_for(Duration::from_millis(100), |f| f.id() == id && !f.is_remote())?
+        .into_iter()
+        .collect();
+    back_to_pre_operational(ctx)?;
+    Ok(if answer.is_empty() {
+        Finding::fail(
+            format!("TPDO{number} ({cob:#X}, type {kind:02X}h) did not answer a remote frame"),
+            Evidence {
+                request: format!(
+                    "TPDO{number} with transmission type {kind:02X}h and RTR allowed; NMT start, then a remote frame on {cob:#X}"
+                ),
+                requirement: format!(
+                    "{}: a TPDO of type FCh/FDh whose COB-ID allows RTR (bit 30 = 0) is sent on request",
+                    req::PDO
+                ),
+                answer: "no TPDO within 100 ms".to_owned(),
+                cause: "remote requests on TPDOs are not served although 18xxh allows them".to_owned(),
+            },
+        )
+    } else {
+        Finding::pass(format!("TPDO{number} answered: {}", hex(answer[0].frame.data())))
+    })
+}
+
+/// The first TPDO whose communication parameter sub-indices `subs` the EDS makes writable, with a
+/// CAN-ID and at least one mapped object (a mapping of 0 entries disables a PDO, CiA 301
+/// §7.5.2.38), and its current COB-ID.
+pub fn configurable_tpdo(ctx: &mut Ctx<'_, '_>, subs: &[u8]) -> Result<Option<(PdoModel, u32)>, Stop> {
+    for pdo in ctx.model().pdos(PdoDirection::Transmit) {
+        if !subs
+            .iter()
+            .all(|sub| ctx.model().entry(pdo.comm, *sub).is_some_and(|e| e.writable()))
+        {
+            continue;
+        }
+        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+            continue;
+        };
+        let Some(mapping) = pdo.mapping else {
+            continue;
+        };
+        let mapped = matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0));
+        if mapped && cob & 0x7FF != 0 {
+            return Ok(Some((pdo, cob)));
+        }
+    }
+    Ok(None)
+}
+
+/// Configures a TPDO the way CiA 301 §7.5.2.37 allows: disabled, `settings` written (sub-index,
+/// value), enabled again with its CAN-ID (and RTR allowed when `rtr`). Every value is written back
+/// after the test. Returns the refusal that stopped it, if any.
+pub fn configure_tpdo(
+    ctx: &mut Ctx<'_, '_>,
+    pdo: &PdoModel,
+    cob: u32,
+    settings: &[(u8, Vec<u8>)],
+    rtr: bool,
+) -> Result<Option<String>, Stop> {
+    let enabled = if rtr { cob & 0x3FFF_FFFF } else { cob & 0x7FFF_FFFF };
+    let mut steps = vec![(1u8, (cob | 0x8000_0000).to_le_bytes().to_vec())];
+    steps.extend(settings.iter().cloned());
+    steps.push((1, enabled.to_le_bytes().to_vec()));
+    for (sub, data) in steps {
+        let reply = ctx.modify(pdo.comm, sub, data.clone())?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(Some(format!(
+                "{} got {}",
+                download_text((pdo.comm, sub), &data),
+                reply.describe()
+            )));
+        }
+    }
+    Ok(None)
+}
+
+/// The first TPDO whose COB-ID the EDS makes writable, with its current COB-ID.
+fn writable_tpdo(ctx: &mut Ctx<'_, '_>) -> Result<Option<(PdoModel, u32)>, Stop> {
+    for pdo in ctx.model().pdos(PdoDirection::Transmit) {
+        if !ctx.model().entry(pdo.comm, 1).is_some_and(|e| e.writable()) {
+            continue;
+        }
+        if let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) {
+            return Ok(Some((pdo, cob)));
+        }
+    }
+    Ok(None)
+}
+
+fn restricted_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((pdo, cob)) = writable_tpdo(ctx)? else {
+        return Ok(Finding::not_applicable("no TPDO with a writable COB-ID"));
+    };
+    // Disable first: CiA 301 §7.5.2.37 forbids changing the CAN-ID of a valid PDO.
+    let disabled = cob | 0x8000_0000;
+    let reply = ctx.modify(pdo.comm, 1, disabled.to_le_bytes().to_vec())?;
+    if !matches!(reply, Reply::Done(_)) {
+        return Ok(Finding::inconclusive(format!(
+            "disabling TPDO{} got {}",
+            pdo.number,
+            reply.describe()
+        )));
+    }
+    // Keep bit 30 as it was: only the CAN-ID is under test.
+    let value = (cob & 0x4000_0000) | 0x701;
+    let data = value.to_le_bytes().to_vec();
+    let reply = ctx.modify(pdo.comm, 1, data.clone())?;
+    Ok(expect_refusal(
+        &format!(
+            "{}, then {}",
+            download_text((pdo.comm, 1), &disabled.to_le_bytes()),
+            download_text((pdo.comm, 1), &data)
+        ),
+        &reply,
+        req::INVALID_VALUE,
+        req::RESTRICTED_IDS,
+        "the COB-ID is not checked against the restricted CAN-IDs",
+    ))
+}
+
+fn unmappable(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if ctx.model().entry(0x1000, 0).is_none_or(|e| e.pdo_mapping) {
+        return Ok(Finding::not_applicable("1000h is mappable in this EDS"));
+    }
+    let Some((pdo, cob)) = writable_tpdo(ctx)? else {
+        return Ok(Finding::not_applicable("no TPDO with a writable COB-ID"));
+    };
+    let writable = |m: u16, sub: u8| ctx.model().entry(m, sub).is_some_and(|e| e.writable());
+    let Some(mapping) = pdo.mapping.filter(|m| writable(*m, 0) && writable(*m, 1)) else {
+        return Ok(Finding::not_applicable("no TPDO with a writable mapping"));
+    };
+    // The mapping procedure (CiA 301 §7.5.2.38): disable the PDO, set 0 entries, write the entry.
+    let disabled = cob | 0x8000_0000;
+    for (index, sub, data) in [
+        (pdo.comm, 1u8, disabled.to_le_bytes().to_vec()),
+        (mapping, 0, vec![0]),
+    ] {
+        let reply = ctx.modify(index, sub, data.clone())?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(Finding::inconclusive(format!(
+                "{} got {}",
+                download_text((index, sub), &data),
+                reply.describe()
+            )));
+        }
+    }
+    let entry = 0x1000_0020u32.to_le_bytes().to_vec();
+    let reply = ctx.modify(mapping, 1, entry.clone())?;
+    Ok(expect_refusal(
+        &format!(
+            "mapping procedure on TPDO{}: {} (1000h:00, 32 bits; PDOMapping=0)",
+            pdo.number,
+            download_text((mapping, 1), &entry)
+        ),
+        &reply,
+        req::NOT_MAPPABLE,
+        req::PDO_PARAMETERS,
+        "the mapping entry is not checked against the object's PDO mapping attribute",
+    ))
+}

@@ -1,0 +1,326 @@
+//! The PDO mapping procedure (CCT "PDO 22–28, 30, 31"): a correct mapping written with the procedure
+//! CiA 301 §7.5.2.38 describes, and the refusals of a mapping written without it, too long, or in
+//! the wrong direction, with the abort codes the CCT accepts (reference §3.4).
+
+use crate::catalogue::TestDef;
+use crate::cia301::helpers::{download_text, expect_refusal, u32_of};
+use crate::context::{Ctx, Reply};
+use crate::device_model::{EntryModel, PdoDirection, PdoModel};
+use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::requirements as req;
+
+/// The mapping tests.
+pub fn tests() -> Vec<TestDef> {
+    vec![
+        TestDef {
+            id: "cia301.pdo.8",
+            suite: "cia301",
+            group: "pdo",
+            title: "A correct mapping written with the mapping procedure is accepted and reads back",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 22"],
+            precondition: "a TPDO with writable COB-ID and mapping and at least one mapped object",
+            tags: &["pdo", "writes"],
+            run: correct_mapping,
+        },
+        TestDef {
+            id: "cia301.pdo.9",
+            suite: "cia301",
+            group: "pdo",
+            title: "A mapping entry written while the PDO is valid and sub-index 0 is not 0 is refused",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 23", "CCT PDO 24"],
+            precondition: "a valid TPDO with a writable mapping and at least one mapped object",
+            tags: &["pdo", "writes"],
+            run: without_procedure,
+        },
+        TestDef {
+            id: "cia301.pdo.10",
+            suite: "cia301",
+            group: "pdo",
+            title: "A mapping longer than 64 bits is refused",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 25", "CCT PDO 26"],
+            precondition: "a TPDO with writable COB-ID and mapping, and a mappable object that fills 64 bits in fewer entries than the mapping has",
+            tags: &["pdo", "writes"],
+            run: too_long,
+        },
+        TestDef {
+            id: "cia301.pdo.11",
+            suite: "cia301",
+            group: "pdo",
+            title: "A read-only (process input) object is refused in an RPDO mapping",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 28", "CCT PDO 27"],
+            precondition: "an RPDO with writable COB-ID and mapping, and a mappable ro object",
+            tags: &["pdo", "writes"],
+            run: wrong_direction,
+        },
+    ]
+}
+
+/// A PDO whose COB-ID and mapping (sub-indices 0 and 1) the EDS makes writable, with its COB-ID
+/// and current mapping entries as read.
+struct Mappable {
+    pdo: PdoModel,
+    mapping: u16,
+    cob: u32,
+    entries: Vec<u32>,
+}
+
+fn mappable(ctx: &mut Ctx<'_, '_>, direction: PdoDirection) -> Result<Option<Mappable>, Stop> {
+    for pdo in ctx.model().pdos(direction) {
+        let Some(mapping) = pdo.mapping else { continue };
+        let writable = |index: u16, sub: u8| ctx.model().entry(index, sub).is_some_and(EntryModel::writable);
+        if !(writable(pdo.comm, 1) && writable(mapping, 0) && writable(mapping, 1)) {
+            continue;
+        }
+        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+            continue;
+        };
+        let Reply::Done(count) = ctx.read(mapping, 0)? else {
+            continue;
+        };
+        let mut entries = Vec::new();
+        for sub in 1..=count.first().copied().unwrap_or(0) {
+            match u32_of(&ctx.read(mapping, sub)?) {
+                Some(entry) => entries.push(entry),
+                None => break,
+            }
+        }
+        return Ok(Some(Mappable {
+            pdo,
+            mapping,
+            cob,
+            entries,
+        }));
+    }
+    Ok(None)
+}
+
+/// Disables the PDO and sets its mapping to 0 entries (CiA 301 §7.5.2.38 steps 1 and 2), every value
+/// written back after the test; the refusal that stopped it, if any.
+fn open_mapping(ctx: &mut Ctx<'_, '_>, m: &Mappable) -> Result<Option<String>, Stop> {
+    for (index, sub, data) in [
+        (m.pdo.comm, 1u8, (m.cob | 0x8000_0000).to_le_bytes().to_vec()),
+        (m.mapping, 0, vec![0]),
+    ] {
+        let reply = ctx.modify(index, sub, data.clone())?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(Some(format!(
+                "{} got {}",
+                download_text((index, sub), &data),
+                reply.describe()
+            )));
+        }
+    }
+    Ok(None)
+}
+
+fn correct_mapping(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(m) = mappable(ctx, PdoDirection::Transmit)?.filter(|m| !m.entries.is_empty()) else {
+        return Ok(Finding::not_applicable(
+            "no TPDO with a writable, non-empty mapping",
+        ));
+    };
+    if let Some(refused) = open_mapping(ctx, &m)? {
+        return Ok(Finding::inconclusive(format!(
+            "the mapping procedure could not start: {refused}"
+        )));
+    }
+    let mut steps = Vec::new();
+    for (i, entry) in m.entries.iter().enumerate() {
+        steps.push((m.mapping, i as u8 + 1, entry.to_le_bytes().to_vec()));
+    }
+    steps.push((m.mapping, 0, vec![m.entries.len() as u8]));
+    steps.push((m.pdo.comm, 1, m.cob.to_le_bytes().to_vec()));
+    let requests: Vec<String> = steps.iter().map(|(i, s, d)| download_text((*i, *s), d)).collect();
+    for (index, sub, data) in steps {
+        let reply = ctx.modify(index, sub, data.clone())?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(Finding::fail(
+                format!(
+                    "the mapping procedure on TPDO{} was refused at {}",
+                    m.pdo.number,
+                    download_text((index, sub), &data)
+                ),
+                Evidence {
+                    request: format!("disable, 0 entries, then {}", requests.join(", ")),
+                    requirement: format!(
+                        "{}: a correct mapping written with the mapping procedure is accepted",
+                        req::PDO_PARAMETERS
+                    ),
+                    answer: reply.describe(),
+                    cause: "the device refuses its own default mapping, or a step of the procedure"
+                        .to_owned(),
+                },
+            ));
+        }
+    }
+    for (i, entry) in m.entries.iter().enumerate() {
+        let back = ctx.read(m.mapping, i as u8 + 1)?;
+        if u32_of(&back) != Some(*entry) {
+            return Ok(Finding::fail(
+                format!(
+                    "{:04X}h:{:02X} reads {} after the mapping procedure",
+                    m.mapping,
+                    i + 1,
+                    back.describe()
+                ),
+                Evidence {
+                    request: requests.join(", "),
+                    requirement: format!(
+                        "{}: the mapping entries hold what was written",
+                        req::PDO_PARAMETERS
+                    ),
+                    answer: back.describe(),
+                    cause: "the mapping is confirmed but not stored".to_owned(),
+                },
+            ));
+        }
+    }
+    Ok(Finding::pass(format!(
+        "TPDO{}: {} entries mapped again and read back",
+        m.pdo.number,
+        m.entries.len()
+    )))
+}
+
+fn without_procedure(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(m) =
+        mappable(ctx, PdoDirection::Transmit)?.filter(|m| !m.entries.is_empty() && m.cob & 0x8000_0000 == 0)
+    else {
+        return Ok(Finding::not_applicable(
+            "no valid TPDO with a writable, non-empty mapping",
+        ));
+    };
+    let data = m.entries[0].to_le_bytes().to_vec();
+    let reply = ctx.modify(m.mapping, 1, data.clone())?;
+    Ok(expect_refusal(
+        &format!(
+            "{} while TPDO{} is valid with {} entries",
+            download_text((m.mapping, 1), &data),
+            m.pdo.number,
+            m.entries.len()
+        ),
+        &reply,
+        req::MAPPING_SEQUENCE,
+        req::PDO_PARAMETERS,
+        "the mapping can be changed without the procedure (PDO invalid, sub-index 0 = 0)",
+    ))
+}
+
+/// A mappable object for `direction` of 8, 16 or 32 bits (the longest first), as a mapping entry
+/// value, with its size in bits.
+fn mappable_object(ctx: &Ctx<'_, '_>, direction: PdoDirection) -> Option<(u32, u32)> {
+    let fits = |e: &&EntryModel| {
+        e.pdo_mapping
+            && match direction {
+                PdoDirection::Transmit => e.readable(),
+                PdoDirection::Receive => e.writable(),
+            }
+    };
+    [4usize, 2, 1].into_iter().find_map(|size| {
+        ctx.model()
+            .entries
+            .values()
+            .filter(fits)
+            .find(|e| e.size() == Some(size) && e.index >= 0x2000)
+            .map(|e| {
+                (
+                    (u32::from(e.index) << 16) | (u32::from(e.sub) << 8) | (size as u32 * 8),
+                    size as u32 * 8,
+                )
+            })
+    })
+}
+
+fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(m) = mappable(ctx, PdoDirection::Transmit)? else {
+        return Ok(Finding::not_applicable("no TPDO with a writable mapping"));
+    };
+    let Some((entry, bits)) = mappable_object(ctx, PdoDirection::Transmit) else {
+        return Ok(Finding::not_applicable(
+            "no mappable 8/16/32-bit object for a TPDO",
+        ));
+    };
+    let count = (64 / bits + 1) as u8;
+    let subs = ctx.model().objects.get(&m.mapping).map_or(0, |o| o.highest_sub());
+    if subs < count {
+        return Ok(Finding::not_applicable(format!(
+            "the mapping {:04X}h has {subs} entries, {count} of {bits} bits are needed to exceed 64",
+            m.mapping
+        )));
+    }
+    if let Some(refused) = open_mapping(ctx, &m)? {
+        return Ok(Finding::inconclusive(format!(
+            "the mapping procedure could not start: {refused}"
+        )));
+    }
+    let data = entry.to_le_bytes().to_vec();
+    let mut requests = Vec::new();
+    // The refusal may come at the entry that exceeds 64 bits or at sub-index 0.
+    let mut last = Reply::Done(Vec::new());
+    for sub in 1..=count {
+        requests.push(download_text((m.mapping, sub), &data));
+        last = ctx.modify(m.mapping, sub, data.clone())?;
+        if !matches!(last, Reply::Done(_)) {
+            break;
+        }
+    }
+    if matches!(last, Reply::Done(_)) {
+        requests.push(download_text((m.mapping, 0), &[count]));
+        last = ctx.modify(m.mapping, 0, vec![count])?;
+    }
+    Ok(expect_refusal(
+        &format!(
+            "mapping procedure on TPDO{}: {} ({} × {bits} bits = {} bits)",
+            m.pdo.number,
+            requests.join(", "),
+            count,
+            u32::from(count) * bits
+        ),
+        &last,
+        req::MAPPING_LENGTH,
+        req::PDO_PARAMETERS,
+        "the total length of the mapping is not checked against 64 bits",
+    ))
+}
+
+fn wrong_direction(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let input = ctx
+        .model()
+        .entries
+        .values()
+        .find(|e| {
+            e.pdo_mapping
+                && e.access == Some(canopener_eds::AccessType::Ro)
+                && matches!(e.size(), Some(1 | 2 | 4))
+        })
+        .map(|e| {
+            (
+                (u32::from(e.index) << 16) | (u32::from(e.sub) << 8) | (e.size().unwrap_or(1) as u32 * 8),
+                e.label(),
+            )
+        });
+    let Some((entry, label)) = input else {
+        return Ok(Finding::not_applicable("no mappable ro object"));
+    };
+    let Some(m) = mappable(ctx, PdoDirection::Receive)? else {
+        return Ok(Finding::not_applicable("no RPDO with a writable mapping"));
+    };
+    if let Some(refused) = open_mapping(ctx, &m)? {
+        return Ok(Finding::inconclusive(format!(
+            "the mapping procedure could not start: {refused}"
+        )));
+    }
+    let data = entry.to_le_bytes().to_vec();
+    let reply = ctx.modify(m.mapping, 1, data.clone())?;
+    Ok(expect_refusal(
+        &format!(
+            "mapping procedure on RPDO{}: {} ({label}, ro)",
+            m.pdo.number,
+            download_text((m.mapping, 1), &data)
+        ),
+        &reply,
+        req::NOT_MAPPABLE,
+        req::PDO_PARAMETERS,
+        "the direction of a mapped object (process input into a receive PDO) is not checked",
+    ))
+}

@@ -1,0 +1,733 @@
+//! SDO tests (CCT group "SDO"): expedited, segmented and block transfers, and the refusals CiA 301
+//! §7.2.4.3.17 requires with their abort codes.
+
+use canopener_master::sdo_client::{DownloadMode, UploadMode};
+use canopener_wire::abort;
+
+use crate::catalogue::TestDef;
+use crate::cia301::helpers::{
+    download_text, expect_refusal, refused_unexpectedly, upload_text, writable_of_size,
+};
+use crate::context::{Ctx, Reply, hex};
+use crate::device_model::{number_bytes, number_text, step_beyond};
+use crate::finding::{Evidence, Finding, Outcome};
+use crate::requirements::{self as req, code_meaning};
+
+/// The SDO tests.
+pub fn tests() -> Vec<TestDef> {
+    vec![
+        TestDef {
+            id: "cia301.sdo.1",
+            suite: "cia301",
+            group: "sdo",
+            title: "Read 1000h:00 (device type) with an expedited upload",
+            references: &[req::SDO_UPLOAD, "CCT SDO 01"],
+            precondition: "always (1000h is mandatory)",
+            tags: &["sdo"],
+            run: read_device_type,
+        },
+        TestDef {
+            id: "cia301.sdo.2",
+            suite: "cia301",
+            group: "sdo",
+            title: "Writing 1000h:00 (read-only) is refused",
+            references: &[req::SDO_ABORT, "CCT SDO 03"],
+            precondition: "1000h is not writable in the EDS",
+            tags: &["sdo"],
+            run: write_device_type,
+        },
+        TestDef {
+            id: "cia301.sdo.3",
+            suite: "cia301",
+            group: "sdo",
+            title: "Reading a write-only entry is refused",
+            references: &[req::SDO_ABORT, "CCT SDO 04"],
+            precondition: "the EDS has a wo entry",
+            tags: &["sdo"],
+            run: read_write_only,
+        },
+        TestDef {
+            id: "cia301.sdo.4",
+            suite: "cia301",
+            group: "sdo",
+            title: "Reading the absent sub-index 1000h:01 is refused",
+            references: &[req::SDO_ABORT, "CCT SDO 05"],
+            precondition: "always",
+            tags: &["sdo"],
+            run: read_absent_sub,
+        },
+        TestDef {
+            id: "cia301.sdo.5",
+            suite: "cia301",
+            group: "sdo",
+            title: "Reading an absent object is refused",
+            references: &[req::SDO_ABORT, "CCT SDO 06"],
+            precondition: "the EDS leaves an index of 1000h–1FFFh free",
+            tags: &["sdo"],
+            run: read_absent_object,
+        },
+        TestDef {
+            id: "cia301.sdo.6",
+            suite: "cia301",
+            group: "sdo",
+            title: "A request with an invalid command specifier is aborted",
+            references: &[req::SDO_ABORT, "CCT SDO 07"],
+            precondition: "always",
+            tags: &["sdo"],
+            run: bad_command,
+        },
+        TestDef {
+            id: "cia301.sdo.7",
+            suite: "cia301",
+            group: "sdo",
+            title: "Writing 4 bytes to an 8- or 16-bit entry is refused",
+            references: &[req::SDO_DOWNLOAD, req::SDO_ABORT, "CCT SDO 08"],
+            precondition: "the EDS has a writable UNSIGNED8/16 entry",
+            tags: &["sdo", "writes"],
+            run: too_long,
+        },
+        TestDef {
+            id: "cia301.sdo.8",
+            suite: "cia301",
+            group: "sdo",
+            title: "Writing 1 byte to a 16- or 32-bit entry is refused",
+            references: &[req::SDO_DOWNLOAD, req::SDO_ABORT, "CCT SDO 09"],
+            precondition: "the EDS has a writable 16/32-bit entry",
+            tags: &["sdo", "writes"],
+            run: too_short,
+        },
+        TestDef {
+            id: "cia301.sdo.9",
+            suite: "cia301",
+            group: "sdo",
+            title: "A value above HighLimit is refused",
+            references: &[req::SDO_ABORT, req::EDS_OBJECTS, "CCT SDO 10"],
+            precondition: "the EDS has a writable entry with a HighLimit below its type's maximum",
+            tags: &["sdo", "writes", "limits"],
+            run: above_high_limit,
+        },
+        TestDef {
+            id: "cia301.sdo.10",
+            suite: "cia301",
+            group: "sdo",
+            title: "A value below LowLimit is refused",
+            references: &[req::SDO_ABORT, req::EDS_OBJECTS, "CCT SDO 11"],
+            precondition: "the EDS has a writable entry with a LowLimit above its type's minimum",
+            tags: &["sdo", "writes", "limits"],
+            run: below_low_limit,
+        },
+        TestDef {
+            id: "cia301.sdo.11",
+            suite: "cia301",
+            group: "sdo",
+            title: "1200h:01/02 hold the default SDO COB-IDs 600h/580h + node-ID",
+            references: &[req::SDO_SERVER_PARAMETER, "CCT SDO 12"],
+            precondition: "the EDS has 1200h",
+            tags: &["sdo"],
+            run: server_parameter,
+        },
+        TestDef {
+            id: "cia301.sdo.12",
+            suite: "cia301",
+            group: "sdo",
+            title: "A value longer than 4 bytes reads segmented with the size the server indicated",
+            references: &[
+                req::SDO_UPLOAD,
+                req::SDO_UPLOAD_SEGMENT,
+                "CCT SDO 13",
+                "CCT SDO 16",
+                "CCT SDO 18",
+            ],
+            precondition: "the EDS has a readable entry longer than 4 bytes",
+            tags: &["sdo"],
+            run: segmented_read,
+        },
+        TestDef {
+            id: "cia301.sdo.13",
+            suite: "cia301",
+            group: "sdo",
+            title: "A segment request with the wrong toggle bit is aborted with 0503 0000h",
+            references: &[req::SDO_UPLOAD_SEGMENT, req::SDO_ABORT, "CCT SDO 17"],
+            precondition: "the EDS has a readable entry longer than 4 bytes",
+            tags: &["sdo"],
+            run: wrong_toggle,
+        },
+        TestDef {
+            id: "cia301.sdo.14",
+            suite: "cia301",
+            group: "sdo",
+            title: "An expedited upload indicates the entry's true size",
+            references: &[req::SDO_UPLOAD],
+            precondition: "the EDS has a readable 8- or 16-bit entry",
+            tags: &["sdo"],
+            run: expedited_size,
+        },
+        TestDef {
+            id: "cia301.sdo.15",
+            suite: "cia301",
+            group: "sdo",
+            title: "Block upload with CRC, or the refusal 0504 0001h of a device without block transfer",
+            references: &[req::SDO_BLOCK_UPLOAD, "CCT SDO 19", "CCT SDO 22", "CCT SDO 23"],
+            precondition: "block transfer is optional: a refusal with 0504 0001h is not_applicable",
+            tags: &["sdo", "block"],
+            run: block_upload,
+        },
+        TestDef {
+            id: "cia301.sdo.16",
+            suite: "cia301",
+            group: "sdo",
+            title: "Block download with CRC of 1017h (or 100Ch) reads back the value written",
+            references: &[
+                req::SDO_BLOCK_DOWNLOAD,
+                "CCT SDO 21",
+                "CCT SDO 25",
+                "CCT SDO 20",
+                "CCT SDO 24",
+            ],
+            precondition: "a writable 1017h or 100Ch; block transfer optional (0504 0001h → not_applicable)",
+            tags: &["sdo", "block", "writes"],
+            run: block_download,
+        },
+        TestDef {
+            id: "cia301.sdo.17",
+            suite: "cia301",
+            group: "sdo",
+            title: "Refusals carry CiA 301's specific abort code, not the general error",
+            references: &[req::SDO_ABORT],
+            precondition: "always",
+            tags: &["sdo"],
+            run: specific_abort_codes,
+        },
+        TestDef {
+            id: "cia301.sdo.18",
+            suite: "cia301",
+            group: "sdo",
+            title: "A block upload with block size 128 is aborted",
+            references: &[req::SDO_BLOCK_UPLOAD, req::SDO_ABORT, "CCT SDO 26"],
+            precondition: "always (a device without block transfer refuses with 0504 0001h, which is accepted)",
+            tags: &["sdo", "block"],
+            run: block_size_128,
+        },
+    ]
+}
+
+fn read_device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let reply = ctx.read(0x1000, 0)?;
+    let request = upload_text((0x1000, 0));
+    Ok(match &reply {
+        Reply::Done(data) if data.len() == 4 => match ctx
+            .model()
+            .entry(0x1000, 0)
+            .and_then(|e| e.default.clone())
+        {
+            Some(expected) if expected != *data => Finding::fail(
+                format!("1000h reads {}, the EDS says {}", hex(data), hex(&expected)),
+                Evidence {
+                    request,
+                    requirement: format!("{}: 1000h holds the device type the EDS states", req::EDS_OBJECTS),
+                    answer: reply.describe(),
+                    cause: "the EDS and the firmware disagree on the device type / profile".to_owned(),
+                },
+            ),
+            _ => Finding::pass(format!("device type {}", hex(data))),
+        },
+        Reply::Done(data) => Finding::fail(
+            format!("1000h gave {} bytes, not 4", data.len()),
+            Evidence {
+                request,
+                requirement: format!("{}: 1000h is UNSIGNED32 (4 bytes)", req::OBJECT_DICTIONARY),
+                answer: reply.describe(),
+                cause: "the size indicated in the upload response is wrong".to_owned(),
+            },
+        ),
+        other => refused_unexpectedly(
+            &request,
+            other,
+            req::SDO_UPLOAD,
+            "1000h is mandatory in every device",
+        ),
+    })
+}
+
+fn write_device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if ctx.model().entry(0x1000, 0).is_some_and(|e| e.writable()) {
+        return Ok(Finding::not_applicable("the EDS makes 1000h writable"));
+    }
+    let current = match ctx.read(0x1000, 0)? {
+        Reply::Done(data) => data,
+        other => {
+            return Ok(Finding::inconclusive(format!(
+                "1000h could not be read: {}",
+                other.describe()
+            )));
+        }
+    };
+    let reply = ctx.write(0x1000, 0, current.clone())?;
+    Ok(expect_refusal(
+        &download_text((0x1000, 0), &current),
+        &reply,
+        req::WRITE_READ_ONLY,
+        req::SDO_ABORT,
+        "the server does not check the access type before writing",
+    ))
+}
+
+fn read_write_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(entry) = ctx
+        .model()
+        .entries
+        .values()
+        .find(|e| e.access == Some(canopener_eds::AccessType::Wo))
+    else {
+        return Ok(Finding::not_applicable("the EDS has no write-only entry"));
+    };
+    let at = (entry.index, entry.sub);
+    let reply = ctx.read(at.0, at.1)?;
+    Ok(expect_refusal(
+        &upload_text(at),
+        &reply,
+        req::READ_WRITE_ONLY,
+        req::SDO_ABORT,
+        "the server does not check the access type before reading",
+    ))
+}
+
+fn read_absent_sub(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let reply = ctx.read(0x1000, 1)?;
+    Ok(expect_refusal(
+        &upload_text((0x1000, 1)),
+        &reply,
+        req::NO_SUB_INDEX,
+        req::SDO_ABORT,
+        "the server ignores the sub-index of a VAR",
+    ))
+}
+
+/// An index of the communication area the EDS does not describe, 1004h (the CCT's) when free.
+pub fn absent_index(ctx: &Ctx<'_, '_>) -> Option<u16> {
+    std::iter::once(0x1004)
+        .chain(0x1000..=0x1FFF)
+        .find(|index| !ctx.model().has(*index))
+}
+
+fn read_absent_object(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(index) = absent_index(ctx) else {
+        return Ok(Finding::not_applicable(
+            "the EDS describes every index of 1000h–1FFFh",
+        ));
+    };
+    let reply = ctx.read(index, 0)?;
+    Ok(expect_refusal(
+        &upload_text((index, 0)),
+        &reply,
+        req::NO_OBJECT,
+        req::SDO_ABORT,
+        "the object dictionary has an object the EDS does not describe, or the server answers for any index",
+    ))
+}
+
+fn bad_command(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // ccs 7 is not an SDO client command specifier (CiA 301 §7.2.4.3).
+    let request = [0xE0, 0x00, 0x10, 0x00, 0, 0, 0, 0];
+    let answer = ctx.raw_sdo(request)?;
+    let text = format!("SDO request {} (client command specifier 7)", hex(&request));
+    Ok(expect_refusal(
+        &text,
+        &Reply::of_raw(answer),
+        req::BAD_COMMAND,
+        req::SDO_ABORT,
+        "the server drops, misreads or wrongly aborts requests it does not know",
+    ))
+}
+
+fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(entry) = writable_of_size(ctx, &[1, 2]) else {
+        return Ok(Finding::not_applicable(
+            "the EDS has no writable 8- or 16-bit entry",
+        ));
+    };
+    let at = (entry.index, entry.sub);
+    let data = vec![0, 0, 0, 0];
+    let reply = ctx.modify(at.0, at.1, data.clone())?;
+    Ok(expect_refusal(
+        &format!("{} (4 bytes for {})", download_text(at, &data), entry.label()),
+        &reply,
+        req::TOO_LONG,
+        req::SDO_ABORT,
+        "the server does not compare the length of the data with the entry's type",
+    ))
+}
+
+fn too_short(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(entry) = writable_of_size(ctx, &[2, 4]) else {
+        return Ok(Finding::not_applicable(
+            "the EDS has no writable 16- or 32-bit entry",
+        ));
+    };
+    let at = (entry.index, entry.sub);
+    let data = vec![0];
+    let reply = ctx.modify(at.0, at.1, data.clone())?;
+    Ok(expect_refusal(
+        &format!("{} (1 byte for {})", download_text(at, &data), entry.label()),
+        &reply,
+        req::TOO_SHORT,
+        req::SDO_ABORT,
+        "the server does not compare the length of the data with the entry's type",
+    ))
+}
+
+fn above_high_limit(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    beyond_limit(ctx, true)
+}
+
+fn below_low_limit(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    beyond_limit(ctx, false)
+}
+
+/// Writes the value just beyond the first limit the EDS gives (HighLimit when `up`).
+pub fn beyond_limit(ctx: &mut Ctx<'_, '_>, up: bool) -> Outcome {
+    let found = ctx.model().entries.values().find_map(|e| {
+        let limit = if up { e.high } else { e.low }?;
+        let data_type = e.data_type?;
+        if !e.writable() || crate::cia301::helpers::is_pdo_or_special(e.index) {
+            return None;
+        }
+        let value = step_beyond(limit, up, data_type)?;
+        Some((e, limit, number_bytes(value, data_type)?, value))
+    });
+    let Some((entry, limit, data, value)) = found else {
+        return Ok(Finding::not_applicable(format!(
+            "the EDS gives no writable entry a {} its type can exceed",
+            if up { "HighLimit" } else { "LowLimit" }
+        )));
+    };
+    let at = (entry.index, entry.sub);
+    let label = entry.label();
+    let reply = ctx.modify(at.0, at.1, data.clone())?;
+    let (accepted, name) = if up {
+        (req::TOO_HIGH, "HighLimit")
+    } else {
+        (req::TOO_LOW, "LowLimit")
+    };
+    Ok(expect_refusal(
+        &format!(
+            "{} ({} {}, {name} {})",
+            download_text(at, &data),
+            label,
+            number_text(value),
+            number_text(limit)
+        ),
+        &reply,
+        accepted,
+        req::SDO_ABORT,
+        &format!("the server does not check the value against the {name} its EDS states"),
+    ))
+}
+
+fn server_parameter(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !ctx.model().has(0x1200) {
+        return Ok(Finding::not_applicable("the EDS has no 1200h"));
+    }
+    let node = u32::from(ctx.node());
+    for (sub, expected) in [(1u8, 0x600 + node), (2, 0x580 + node)] {
+        let reply = ctx.read(0x1200, sub)?;
+        let request = upload_text((0x1200, sub));
+        let got = match &reply {
+            Reply::Done(data) if data.len() == 4 => u32::from_le_bytes([data[0], data[1], data[2], data[3]]),
+            other => {
+                return Ok(refused_unexpectedly(
+                    &request,
+                    other,
+                    req::SDO_SERVER_PARAMETER,
+                    "1200h is described by the EDS",
+                ));
+            }
+        };
+        if got & 0x7FF != expected {
+            return Ok(Finding::fail(
+                format!("1200h:{sub:02X} is {got:#010X}, not {expected:#X}"),
+                Evidence {
+                    request,
+                    requirement: format!(
+                        "{}: the default SDO uses {expected:#X}",
+                        req::SDO_SERVER_PARAMETER
+                    ),
+                    answer: reply.describe(),
+                    cause: "1200h is not filled from the node-ID".to_owned(),
+                },
+            ));
+        }
+    }
+    Ok(Finding::pass(format!("600h/580h + {node}")))
+}
+
+/// A readable entry whose EDS default is longer than 4 bytes, preferring 1008h–100Ah.
+pub fn long_entry(ctx: &Ctx<'_, '_>) -> Option<(u16, u8)> {
+    let long = |e: &&crate::device_model::EntryModel| {
+        e.readable() && e.default.as_ref().is_some_and(|d| d.len() > 4) && e.size().is_none()
+    };
+    let model = ctx.model();
+    [0x1008u16, 0x1009, 0x100A]
+        .iter()
+        .filter_map(|i| model.entry(*i, 0))
+        .find(long)
+        .or_else(|| model.entries.values().find(long))
+        .map(|e| (e.index, e.sub))
+}
+
+fn segmented_read(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(at) = long_entry(ctx) else {
+        return Ok(Finding::not_applicable(
+            "the EDS has no readable entry longer than 4 bytes",
+        ));
+    };
+    let reply = ctx.read(at.0, at.1)?;
+    Ok(match reply {
+        Reply::Done(data) => Finding::pass(format!("{} bytes", data.len())),
+        other => refused_unexpectedly(
+            &upload_text(at),
+            &other,
+            req::SDO_UPLOAD_SEGMENT,
+            "segmented upload is broken",
+        ),
+    })
+}
+
+fn wrong_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(at) = long_entry(ctx) else {
+        return Ok(Finding::not_applicable(
+            "the EDS has no readable entry longer than 4 bytes",
+        ));
+    };
+    let [lo, hi] = at.0.to_le_bytes();
+    let initiate = [0x40, lo, hi, at.1, 0, 0, 0, 0];
+    let Some(first) = ctx.raw_sdo(initiate)? else {
+        return Ok(Finding::inconclusive(format!(
+            "{} got no answer",
+            upload_text(at)
+        )));
+    };
+    if first.first().is_none_or(|b| b & 0xE2 != 0x40) {
+        return Ok(Finding::inconclusive(format!(
+            "{} was not answered with a segmented initiate response: {}",
+            upload_text(at),
+            hex(&first)
+        )));
+    }
+    // The first segment request must have toggle 0; send toggle 1.
+    let segment = [0x70, 0, 0, 0, 0, 0, 0, 0];
+    let answer = ctx.raw_sdo(segment)?;
+    let text = format!(
+        "{}, then the segment request {} (toggle 1 where 0 is due)",
+        upload_text(at),
+        hex(&segment)
+    );
+    let reply = Reply::of_raw(answer);
+    let finding = expect_refusal(
+        &text,
+        &reply,
+        req::TOGGLE,
+        req::SDO_UPLOAD_SEGMENT,
+        "the server does not check the toggle bit of segment requests",
+    );
+    if !matches!(reply, Reply::Refused(_)) {
+        // End the transfer the server still thinks is running.
+        let [a, b, c, d] = abort::GENERAL_ERROR.to_le_bytes();
+        ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
+    }
+    Ok(finding)
+}
+
+fn expedited_size(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let model = ctx.model();
+    let Some(entry) = model
+        .entry(0x1001, 0)
+        .filter(|e| e.readable() && e.size() == Some(1))
+        .or_else(|| {
+            model
+                .entries
+                .values()
+                .find(|e| e.readable() && matches!(e.size(), Some(1 | 2)))
+        })
+    else {
+        return Ok(Finding::not_applicable(
+            "the EDS has no readable 8- or 16-bit entry",
+        ));
+    };
+    let at = (entry.index, entry.sub);
+    let size = entry.size().unwrap_or(1);
+    let [lo, hi] = at.0.to_le_bytes();
+    let Some(answer) = ctx.raw_sdo([0x40, lo, hi, at.1, 0, 0, 0, 0])? else {
+        return Ok(Finding::inconclusive(format!(
+            "{} got no answer",
+            upload_text(at)
+        )));
+    };
+    let command = answer.first().copied().unwrap_or(0);
+    if command & 0xE0 != 0x40 || command & 0x02 == 0 {
+        return Ok(Finding::inconclusive(format!(
+            "not an expedited upload response: {}",
+            hex(&answer)
+        )));
+    }
+    // Size indicated (s = 1): n = 4 - size. Size not indicated (s = 0) is allowed.
+    if command & 0x01 == 0 {
+        return Ok(Finding::pass("expedited without size indication (allowed)"));
+    }
+    let indicated = 4 - usize::from((command >> 2) & 0x03);
+    Ok(if indicated == size {
+        Finding::pass(format!("{indicated} bytes indicated"))
+    } else {
+        Finding::fail(
+            format!("the response indicates {indicated} bytes for a {size}-byte entry"),
+            Evidence {
+                request: upload_text(at),
+                requirement: format!("{}: n = 4 − the size of the data when s = 1", req::SDO_UPLOAD),
+                answer: format!("the frame {}", hex(&answer)),
+                cause: "the server fills n without regard to the entry's size".to_owned(),
+            },
+        )
+    })
+}
+
+fn block_upload(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let at = long_entry(ctx).unwrap_or((0x1000, 0));
+    let reply = ctx.read_with(at.0, at.1, UploadMode::Block)?;
+    let request = format!("SDO block upload {:04X}h:{:02X} with CRC", at.0, at.1);
+    Ok(match reply {
+        Reply::Done(data) => Finding::pass(format!("{} bytes, CRC correct", data.len())),
+        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) => {
+            Finding::not_applicable("the device has no block transfer (0504 0001h)")
+        }
+        other => Finding::fail(
+            format!("{request}: {}", other.describe()),
+            Evidence {
+                request,
+                requirement: format!(
+                    "{}: the server sends the value in sub-blocks with a correct CRC, or refuses block transfer with {}",
+                    req::SDO_BLOCK_UPLOAD,
+                    req::NO_BLOCK_TRANSFER.list()
+                ),
+                answer: other.describe(),
+                cause: "the block upload server is broken (CRC, sequence numbers, end frame), or a server without \
+                        block transfer answers instead of refusing with 0504 0001h"
+                    .to_owned(),
+            },
+        ),
+    })
+}
+
+fn block_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let model = ctx.model();
+    let at = [(0x1017u16, 0u8), (0x100C, 0)].into_iter().find(|(i, s)| {
+        model
+            .entry(*i, *s)
+            .is_some_and(|e| e.writable() && e.size() == Some(2))
+    });
+    let Some(at) = at else {
+        return Ok(Finding::not_applicable("the EDS has no writable 1017h or 100Ch"));
+    };
+    let value = 1234u16.to_le_bytes().to_vec();
+    let original = match ctx.read(at.0, at.1)? {
+        Reply::Done(data) => data,
+        other => {
+            return Ok(Finding::inconclusive(format!(
+                "{} failed: {}",
+                upload_text(at),
+                other.describe()
+            )));
+        }
+    };
+    let reply = ctx.write_with(at.0, at.1, value.clone(), DownloadMode::Block)?;
+    let request = format!(
+        "SDO block download {:04X}h:{:02X} = {} with CRC",
+        at.0,
+        at.1,
+        hex(&value)
+    );
+    let finding = match reply {
+        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) => {
+            return Ok(Finding::not_applicable(
+                "the device has no block transfer (0504 0001h)",
+            ));
+        }
+        Reply::Done(_) => match ctx.read(at.0, at.1)? {
+            Reply::Done(back) if back == value => Finding::pass("written by block download and read back"),
+            other => Finding::fail(
+                "the value written by block download does not read back",
+                Evidence {
+                    request: format!("{request}, then {}", upload_text(at)),
+                    requirement: format!(
+                        "{}: a confirmed download stores the value",
+                        req::SDO_BLOCK_DOWNLOAD
+                    ),
+                    answer: other.describe(),
+                    cause: "the block download server confirms without storing".to_owned(),
+                },
+            ),
+        },
+        other => refused_unexpectedly(
+            &request,
+            &other,
+            req::SDO_BLOCK_DOWNLOAD,
+            "the block download server is broken",
+        ),
+    };
+    // Written back here rather than by `modify`: the test must not depend on the write path under test.
+    ctx.write(at.0, at.1, original)?;
+    Ok(finding)
+}
+
+fn specific_abort_codes(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(index) = absent_index(ctx) else {
+        return Ok(Finding::not_applicable(
+            "the EDS describes every index of 1000h–1FFFh",
+        ));
+    };
+    let reply = ctx.read(index, 0)?;
+    Ok(match reply {
+        Reply::Refused(abort::OBJECT_DOES_NOT_EXIST) => Finding::pass("0602 0000h for an absent object"),
+        other => Finding::fail(
+            format!("an absent object gave {}, not 0602 0000h", other.describe()),
+            Evidence {
+                request: upload_text((index, 0)),
+                requirement: format!(
+                    "{}: the abort code names the reason; {} for an object that does not exist",
+                    req::SDO_ABORT,
+                    code_meaning(abort::OBJECT_DOES_NOT_EXIST)
+                ),
+                answer: other.describe(),
+                cause:
+                    "the server answers every refusal with one code (typically the general error 0800 0000h)"
+                        .to_owned(),
+            },
+        ),
+    })
+}
+
+fn block_size_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let at = long_entry(ctx).unwrap_or((0x1000, 0));
+    let [lo, hi] = at.0.to_le_bytes();
+    // Initiate block upload (ccs 5, CRC offered) with blksize 128: CiA 301 allows 1..127.
+    let request = [0xA4, lo, hi, at.1, 128, 0, 0, 0];
+    let answer = ctx.raw_sdo(request)?;
+    let text = format!(
+        "SDO block upload initiate {} of {:04X}h:{:02X} (block size 128)",
+        hex(&request),
+        at.0,
+        at.1
+    );
+    let reply = Reply::of_raw(answer);
+    if !matches!(reply, Reply::Refused(_)) {
+        // End whatever the server started.
+        let [a, b, c, d] = abort::INVALID_BLOCK_SIZE.to_le_bytes();
+        ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
+    }
+    Ok(expect_refusal(
+        &text,
+        &reply,
+        req::BLOCK_SIZE,
+        req::SDO_BLOCK_UPLOAD,
+        "the server does not check the client's block size (1..127)",
+    ))
+}

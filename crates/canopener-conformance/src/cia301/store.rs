@@ -1,0 +1,188 @@
+//! Store and restore parameters (CCT "Testing other 01–09"): the signatures of 1010h/1011h and what a
+//! save and a restore do across a reset (CiA 301 §7.5.2.13, §7.5.2.14).
+//!
+//! These tests write the device's non-volatile memory: the save test ends with a restore of the
+//! defaults ("load" to 1011h:01 and a reset node), so parameters a user had stored before are gone
+//! afterwards. `--skip cia301.other` leaves the memory alone.
+
+use crate::catalogue::TestDef;
+use crate::cia301::helpers::{download_text, expect_refusal, reset_node, upload_text};
+use crate::context::{Ctx, Reply, hex};
+use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::requirements as req;
+
+/// The signature that saves ("save", CiA 301 §7.5.2.13).
+pub const SAVE: &[u8] = b"save";
+/// The signature that restores the defaults ("load", CiA 301 §7.5.2.14).
+pub const LOAD: &[u8] = b"load";
+
+/// The store/restore tests.
+pub fn tests() -> Vec<TestDef> {
+    vec![
+        TestDef {
+            id: "cia301.other.1",
+            suite: "cia301",
+            group: "other",
+            title: "1010h:01 and 1011h:01 refuse a wrong signature",
+            references: &[req::STORE_RESTORE, "CCT Testing other 01", "CCT Testing other 03"],
+            precondition: "1010h:01 / 1011h:01 in the EDS and bit 0 set (the device saves on command)",
+            tags: &["store"],
+            run: wrong_signatures,
+        },
+        TestDef {
+            id: "cia301.other.2",
+            suite: "cia301",
+            group: "other",
+            title: "A saved 1017h survives a reset node; restoring the defaults brings its default back",
+            references: &[
+                req::STORE_RESTORE,
+                "CCT Testing other 02",
+                "CCT Testing other 04",
+                "CCT Testing other 09",
+            ],
+            precondition: "1010h:01 and 1011h:01 with bit 0 set, and a writable 1017h with a DefaultValue",
+            tags: &["store", "writes", "nmt"],
+            run: save_and_restore,
+        },
+    ]
+}
+
+/// Whether `index`:01 is described and reads with bit 0 set.
+fn on_command(ctx: &mut Ctx<'_, '_>, index: u16) -> Result<bool, Stop> {
+    if ctx.model().entry(index, 1).is_none() {
+        return Ok(false);
+    }
+    Ok(matches!(ctx.read(index, 1)?, Reply::Done(d) if d.first().is_some_and(|b| b & 1 == 1)))
+}
+
+fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let mut checked = Vec::new();
+    for (index, wrong, what) in [(0x1010u16, b"evas", "save"), (0x1011, b"daol", "load")] {
+        if !on_command(ctx, index)? {
+            continue;
+        }
+        let reply = ctx.write(index, 1, wrong.to_vec())?;
+        let finding = expect_refusal(
+            &format!(
+                "{} (\"{}\" in the wrong byte order)",
+                download_text((index, 1), wrong),
+                what
+            ),
+            &reply,
+            req::WRONG_SIGNATURE,
+            req::STORE_RESTORE,
+            "the signature is not checked",
+        );
+        if finding.verdict != crate::model::Verdict::Pass {
+            return Ok(finding);
+        }
+        checked.push(format!("{index:04X}h"));
+    }
+    Ok(if checked.is_empty() {
+        Finding::not_applicable("neither 1010h:01 nor 1011h:01 saves/restores on command")
+    } else {
+        Finding::pass(format!("wrong signatures refused by {}", checked.join(" and ")))
+    })
+}
+
+fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !on_command(ctx, 0x1010)? || !on_command(ctx, 0x1011)? {
+        return Ok(Finding::not_applicable(
+            "1010h:01 or 1011h:01 does not save/restore on command",
+        ));
+    }
+    let Some(default) = ctx
+        .model()
+        .entry(0x1017, 0)
+        .filter(|e| e.writable())
+        .and_then(|e| e.default.clone())
+    else {
+        return Ok(Finding::not_applicable("no writable 1017h with a DefaultValue"));
+    };
+    // A value other than the default, that any producer accepts.
+    let value = if default == 1234u16.to_le_bytes() {
+        4321u16
+    } else {
+        1234
+    }
+    .to_le_bytes()
+    .to_vec();
+    let steps = format!(
+        "{}, {}, NMT reset node, {}",
+        download_text((0x1017, 0), &value),
+        download_text((0x1010, 1), SAVE),
+        upload_text((0x1017, 0))
+    );
+    if !matches!(ctx.write(0x1017, 0, value.clone())?, Reply::Done(_)) {
+        return Ok(Finding::inconclusive("1017h did not accept a new value"));
+    }
+    let saved = ctx.write(0x1010, 1, SAVE.to_vec())?;
+    if !matches!(saved, Reply::Done(_)) {
+        restore_defaults(ctx)?;
+        return Ok(Finding::fail(
+            format!("\"save\" to 1010h:01 refused: {}", saved.describe()),
+            Evidence {
+                request: download_text((0x1010, 1), SAVE),
+                requirement: format!(
+                    "{}: with bit 0 set the device saves on the signature \"save\"",
+                    req::STORE_RESTORE
+                ),
+                answer: saved.describe(),
+                cause: "1010h:01 claims saving on command but refuses the signature".to_owned(),
+            },
+        ));
+    }
+    if !reset_node(ctx)? {
+        restore_defaults(ctx)?;
+        return Ok(Finding::inconclusive("no boot-up after the reset node"));
+    }
+    let after_save = ctx.read(0x1017, 0)?;
+    let kept = matches!(&after_save, Reply::Done(d) if *d == value);
+    let restored = restore_defaults(ctx)?;
+    if !kept {
+        return Ok(Finding::fail(
+            "the saved 1017h did not survive a reset node",
+            Evidence {
+                request: steps,
+                requirement: format!(
+                    "{}: saved parameters are applied at the next reset ({} expected)",
+                    req::STORE_RESTORE,
+                    hex(&value)
+                ),
+                answer: after_save.describe(),
+                cause: "\"save\" is confirmed but nothing is stored".to_owned(),
+            },
+        ));
+    }
+    Ok(match restored {
+        Some(Reply::Done(d)) if d == default => {
+            Finding::pass("saved across a reset, defaults back after \"load\"")
+        }
+        other => Finding::fail(
+            "after \"load\" to 1011h:01 and a reset, 1017h is not its default",
+            Evidence {
+                request: format!(
+                    "{}, NMT reset node, {}",
+                    download_text((0x1011, 1), LOAD),
+                    upload_text((0x1017, 0))
+                ),
+                requirement: format!(
+                    "{}: restored defaults ({}) apply at the next reset",
+                    req::STORE_RESTORE,
+                    hex(&default)
+                ),
+                answer: other.map_or("no boot-up after the reset".to_owned(), |r| r.describe()),
+                cause: "\"load\" is confirmed but the saved parameters stay".to_owned(),
+            },
+        ),
+    })
+}
+
+/// "load" to 1011h:01, reset node, and 1017h as it then reads (`None` without a boot-up).
+fn restore_defaults(ctx: &mut Ctx<'_, '_>) -> Result<Option<Reply>, Stop> {
+    ctx.write(0x1011, 1, LOAD.to_vec())?;
+    if !reset_node(ctx)? {
+        return Ok(None);
+    }
+    Ok(Some(ctx.read(0x1017, 0)?))
+}

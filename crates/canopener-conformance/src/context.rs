@@ -1,0 +1,372 @@
+//! What a test works with: SDO transfers, raw frames, NMT commands and listening on the bus, all
+//! through the recorded link, and the list of values to write back when the test ends.
+
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_master::nmt_master::NmtTarget;
+use canopener_master::sdo_client::{DownloadMode, SdoTransferError, UploadMode};
+use canopener_runtime::link::Link;
+use canopener_runtime::nmt_command;
+use canopener_runtime::sdo_session::{SdoError, SdoSession};
+use canopener_wire::{NmtCommand, NodeId};
+
+use crate::device_model::DeviceModel;
+use crate::finding::Stop;
+use crate::model::{Direction, Measurement};
+use crate::recorder::{Logged, Recorder};
+use crate::requirements::code_meaning;
+
+/// How a device answered an SDO request.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Reply {
+    /// The transfer completed: the value read (empty after a download).
+    Done(Vec<u8>),
+    /// The device aborted the transfer with this code.
+    Refused(u32),
+    /// The device did not answer in time.
+    Silent,
+    /// A raw request got this frame, which is no abort.
+    Frame(Vec<u8>),
+    /// The tester aborted: the device broke the protocol (the reason says how).
+    Broken {
+        /// The code the tester sent.
+        code: u32,
+        /// What was wrong.
+        reason: String,
+    },
+}
+
+impl Reply {
+    /// The answer as an analysis states it.
+    pub fn describe(&self) -> String {
+        match self {
+            Reply::Done(data) if data.is_empty() => "the transfer was confirmed".to_owned(),
+            Reply::Done(data) => format!("the value {}", hex(data)),
+            Reply::Refused(code) => format!("abort {}", code_meaning(*code)),
+            Reply::Silent => "no answer within the SDO timeout".to_owned(),
+            Reply::Frame(data) => format!("the frame {}", hex(data)),
+            Reply::Broken { code, reason } => {
+                format!(
+                    "a protocol error; the tester aborted with {}: {reason}",
+                    code_meaning(*code)
+                )
+            }
+        }
+    }
+}
+
+impl Reply {
+    /// The answer to a raw SDO request ([`Ctx::raw_sdo`]): an abort frame is a refusal with its code.
+    pub fn of_raw(answer: Option<Vec<u8>>) -> Reply {
+        match answer {
+            Some(data) if data.len() == 8 && data[0] == 0x80 => {
+                Reply::Refused(u32::from_le_bytes([data[4], data[5], data[6], data[7]]))
+            }
+            Some(data) => Reply::Frame(data),
+            None => Reply::Silent,
+        }
+    }
+}
+
+/// `00 1F 02`: bytes as the logs show them.
+pub fn hex(data: &[u8]) -> String {
+    if data.is_empty() {
+        return "(no bytes)".to_owned();
+    }
+    data.iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// One value to write back.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Restore {
+    index: u16,
+    sub: u8,
+    value: Vec<u8>,
+}
+
+/// The tester's side of one test (see the [module docs](self)).
+pub struct Ctx<'r, 'l> {
+    sdo: SdoSession<&'r mut Recorder<'l>>,
+    model: &'r DeviceModel,
+    eds_errors: Option<&'r [String]>,
+    restores: Vec<Restore>,
+    measurements: BTreeMap<String, Measurement>,
+}
+
+impl std::fmt::Debug for Ctx<'_, '_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Ctx")
+            .field("node", &self.sdo.node())
+            .field("restores", &self.restores)
+            .finish()
+    }
+}
+
+impl<'r, 'l> Ctx<'r, 'l> {
+    /// A test's context on the session `sdo` with the device described by `model`; `eds_errors` are
+    /// the errors canopener's EDS checks found in the file (`None` when it was not checked).
+    pub fn new(
+        sdo: SdoSession<&'r mut Recorder<'l>>,
+        model: &'r DeviceModel,
+        eds_errors: Option<&'r [String]>,
+    ) -> Ctx<'r, 'l> {
+        Ctx {
+            sdo,
+            model,
+            eds_errors,
+            restores: Vec::new(),
+            measurements: BTreeMap::new(),
+        }
+    }
+
+    /// What the EDS says.
+    pub fn model(&self) -> &'r DeviceModel {
+        self.model
+    }
+
+    /// The errors of canopener's EDS checks, when the file was checked.
+    pub fn eds_errors(&self) -> Option<&'r [String]> {
+        self.eds_errors
+    }
+
+    /// The node under test.
+    pub fn node(&self) -> u8 {
+        self.sdo.node()
+    }
+
+    /// The link's time.
+    pub fn now(&self) -> Instant {
+        self.link().now()
+    }
+
+    /// The SDO timeout.
+    pub fn timeout(&self) -> Duration {
+        self.sdo.timeout()
+    }
+
+    /// Reads `index`:`sub` with an initiate SDO upload.
+    pub fn read(&mut self, index: u16, sub: u8) -> Result<Reply, Stop> {
+        self.read_with(index, sub, UploadMode::Normal)
+    }
+
+    /// Reads `index`:`sub` in `mode`.
+    pub fn read_with(&mut self, index: u16, sub: u8, mode: UploadMode) -> Result<Reply, Stop> {
+        let result = self.sdo.upload(index, sub, mode, &mut |_| {});
+        reply(result.map(|t| t.data))
+    }
+
+    /// Writes `data` to `index`:`sub` without remembering the old value (for writes that must be
+    /// refused, or that [`Ctx::modify`] already covers).
+    pub fn write(&mut self, index: u16, sub: u8, data: Vec<u8>) -> Result<Reply, Stop> {
+        self.write_with(index, sub, data, DownloadMode::Auto)
+    }
+
+    /// Writes `data` to `index`:`sub` in `mode`.
+    pub fn write_with(
+        &mut self,
+        index: u16,
+        sub: u8,
+        data: Vec<u8>,
+        mode: DownloadMode,
+    ) -> Result<Reply, Stop> {
+        let result = self.sdo.download(index, sub, data, mode, &mut |_| {});
+        reply(result.map(|_| Vec::new()))
+    }
+
+    /// Reads `index`:`sub`, remembers its value to write back when the test ends, then writes
+    /// `data`; a confirmed write is undone when the test ends. A value that cannot be read is not
+    /// remembered (the write still goes out: the test then owns the consequence).
+    pub fn modify(&mut self, index: u16, sub: u8, data: Vec<u8>) -> Result<Reply, Stop> {
+        let old = self.read(index, sub)?;
+        let reply = self.write(index, sub, data)?;
+        // Only a confirmed write changed anything (a refused one is what many tests expect).
+        if let (Reply::Done(old), Reply::Done(_)) = (old, &reply) {
+            self.restores.push(Restore {
+                index,
+                sub,
+                value: old,
+            });
+        }
+        Ok(reply)
+    }
+
+    /// Writes back every value [`Ctx::modify`] changed, newest first (so a PDO's mapping is restored
+    /// before its COB-ID enables it again). Returns the entries that could not be written back.
+    pub fn restore(&mut self) -> Result<Vec<String>, Stop> {
+        let mut left = Vec::new();
+        while let Some(restore) = self.restores.pop() {
+            match self.write(restore.index, restore.sub, restore.value.clone())? {
+                Reply::Done(_) => {}
+                other => left.push(format!(
+                    "{:04X}h:{:02X} (should be {}; writing it back got {})",
+                    restore.index,
+                    restore.sub,
+                    hex(&restore.value),
+                    other.describe()
+                )),
+            }
+        }
+        Ok(left)
+    }
+
+    /// Sends a raw SDO request (8 bytes on 600h + node-ID) and waits for the next frame on
+    /// 580h + node-ID within the SDO timeout: for requests the SDO client would never make.
+    pub fn raw_sdo(&mut self, request: [u8; 8]) -> Result<Option<Vec<u8>>, Stop> {
+        let node = u16::from(self.node());
+        self.send(0x600 + node, &request)?;
+        let response = self.id(0x580 + node);
+        let deadline = self.now() + self.timeout();
+        let frames = self.listen_until(
+            deadline,
+            |frame| frame.id() == response && !frame.is_remote(),
+            true,
+        )?;
+        Ok(frames.first().map(|logged| logged.frame.data().to_vec()))
+    }
+
+    /// Sends a data frame on the standard CAN-ID `id`.
+    pub fn send(&mut self, id: u16, data: &[u8]) -> Result<(), Stop> {
+        let frame = CanFrame::new(self.id(id), data).map_err(|_| Stop::Cancelled)?;
+        self.send_frame(&frame)
+    }
+
+    /// Sends a remote frame on the standard CAN-ID `id` with `dlc`.
+    pub fn send_remote(&mut self, id: u16, dlc: u8) -> Result<(), Stop> {
+        let frame = CanFrame::remote(self.id(id), dlc).map_err(|_| Stop::Cancelled)?;
+        self.send_frame(&frame)
+    }
+
+    /// Sends an NMT command to the node under test, or to all nodes.
+    pub fn nmt(&mut self, command: NmtCommand, broadcast: bool) -> Result<(), Stop> {
+        let target = if broadcast {
+            NmtTarget::All
+        } else {
+            NmtTarget::Node(NodeId::new(self.node()).ok_or(Stop::Cancelled)?)
+        };
+        nmt_command::send(self.link_mut(), command, target)?;
+        self.check_cancel()
+    }
+
+    /// Every frame received within `duration` that `keep` accepts.
+    pub fn listen(
+        &mut self,
+        duration: Duration,
+        keep: impl Fn(&CanFrame) -> bool,
+    ) -> Result<Vec<Logged>, Stop> {
+        let deadline = self.now() + duration;
+        self.listen_until(deadline, keep, false)
+    }
+
+    /// The first frame within `duration` that `keep` accepts; returns as soon as it arrives.
+    pub fn wait_for(
+        &mut self,
+        duration: Duration,
+        keep: impl Fn(&CanFrame) -> bool,
+    ) -> Result<Option<Logged>, Stop> {
+        let deadline = self.now() + duration;
+        Ok(self.listen_until(deadline, keep, true)?.into_iter().next())
+    }
+
+    /// The frames received since the mark [`Ctx::mark`] returned.
+    pub fn received_since(&self, mark: usize) -> Vec<Logged> {
+        self.link()
+            .since(mark)
+            .iter()
+            .filter(|l| l.dir == Direction::Rx)
+            .copied()
+            .collect()
+    }
+
+    /// A mark in the telegram log.
+    pub fn mark(&self) -> usize {
+        self.link().mark()
+    }
+
+    /// Records a measurement under `name`.
+    pub fn measure(&mut self, name: &str, measurement: Measurement) {
+        self.measurements.insert(name.to_owned(), measurement);
+    }
+
+    /// The measurements taken.
+    pub fn take_measurements(&mut self) -> BTreeMap<String, Measurement> {
+        std::mem::take(&mut self.measurements)
+    }
+
+    /// The standard CAN-ID `raw` (callers pass 11-bit values).
+    pub fn id(&self, raw: u16) -> CanId {
+        CanId::Standard(StandardId::new(raw & 0x7FF).unwrap_or(StandardId::ZERO))
+    }
+
+    fn listen_until(
+        &mut self,
+        deadline: Instant,
+        keep: impl Fn(&CanFrame) -> bool,
+        first_only: bool,
+    ) -> Result<Vec<Logged>, Stop> {
+        let mut kept = Vec::new();
+        loop {
+            let link = self.link_mut();
+            let Some(stamped) = link.recv_stamped_until(deadline)? else {
+                break;
+            };
+            if keep(&stamped.frame) {
+                kept.push(Logged {
+                    at: stamped.bus_time,
+                    link_time: stamped.at,
+                    dir: Direction::Rx,
+                    frame: stamped.frame,
+                });
+                if first_only {
+                    break;
+                }
+            }
+        }
+        self.check_cancel()?;
+        Ok(kept)
+    }
+
+    fn send_frame(&mut self, frame: &CanFrame) -> Result<(), Stop> {
+        self.link_mut().send(frame)?;
+        self.check_cancel()
+    }
+
+    fn check_cancel(&self) -> Result<(), Stop> {
+        if self.link().is_cancelled() {
+            Err(Stop::Cancelled)
+        } else {
+            Ok(())
+        }
+    }
+
+    fn link(&self) -> &Recorder<'l> {
+        self.sdo.link()
+    }
+
+    fn link_mut(&mut self) -> &mut Recorder<'l> {
+        self.sdo.link_mut()
+    }
+}
+
+fn reply(result: Result<Vec<u8>, SdoError>) -> Result<Reply, Stop> {
+    match result {
+        Ok(data) => Ok(Reply::Done(data)),
+        Err(SdoError::Transfer(SdoTransferError::AbortedByServer { code })) => Ok(Reply::Refused(code)),
+        Err(SdoError::Transfer(SdoTransferError::TimedOut { .. })) => Ok(Reply::Silent),
+        Err(SdoError::Transfer(SdoTransferError::AbortedByClient { code, reason })) => {
+            Ok(Reply::Broken { code, reason })
+        }
+        Err(SdoError::Cancelled { .. }) => Err(Stop::Cancelled),
+        Err(SdoError::Link(error)) => Err(Stop::Link(error)),
+        // The tests only start transfers the client accepts; one it refuses is the tester's bug,
+        // reported as a broken exchange rather than a panic.
+        Err(SdoError::Start(error)) => Ok(Reply::Broken {
+            code: 0,
+            reason: error.to_string(),
+        }),
+    }
+}

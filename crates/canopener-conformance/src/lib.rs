@@ -1,0 +1,29 @@
+//! Conformance test suites for CANopen devices: point them at a device on any
+//! [`Link`](canopener_runtime::link::Link) (a real bus on the wall clock, or simulated devices on
+//! virtual time) with its EDS, and get a verdict per test with the evidence.
+//!
+//! - [`catalogue`]: every test with its stable id, title, CiA and CCT references and the precondition
+//!   it takes from the EDS; selection by suite, id and tag.
+//! - [`cia301`]: the CiA 301 device test (designed from CiA 301, covering the CCT's cases; see
+//!   `docs/conformance.md` for the mapping and what is not covered yet).
+//! - [`runner`]: runs a selection against one node, keeps each test's telegrams, restores what a test
+//!   changed and leaves the device in pre-operational between tests.
+//! - [`model`]: the report every suite fills (verdicts, telegrams, measurements with raw samples and
+//!   statistics); its JSON form is version 1 of the documented report.
+//! - [`render`]: the human summary, JUnit XML and candump telegram logs.
+//! - [`device_model`]: what the EDS says the device is; [`requirements`]: clauses and accepted abort
+//!   codes.
+//!
+//! Everything here is sans-IO apart from the link it is given: no clocks, no files.
+#![warn(missing_docs)]
+
+pub mod catalogue;
+pub mod cia301;
+pub mod context;
+pub mod device_model;
+pub mod finding;
+pub mod model;
+pub mod recorder;
+pub mod render;
+pub mod requirements;
+pub mod runner;

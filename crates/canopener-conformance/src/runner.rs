@@ -1,0 +1,284 @@
+//! Runs a selection of tests against one node and builds the [`Report`]: preparation (reset node,
+//! boot-up, identity), then each test with its own telegram log, its values written back and the
+//! device put into pre-operational afterwards.
+
+use std::time::Duration;
+
+use canopener_can::Instant;
+use canopener_runtime::link::Link;
+use canopener_runtime::sdo_session::SdoSession;
+use canopener_wire::{Decoder, NmtCommand};
+
+use crate::catalogue::TestDef;
+use crate::context::{Ctx, Reply};
+use crate::device_model::DeviceModel;
+use crate::finding::{Finding, Stop};
+use crate::model::{BusInfo, DeviceInfo, Identity, REPORT_VERSION, Report, Summary, Telegram, TestReport};
+use crate::recorder::{Logged, Recorder};
+
+/// What a run needs besides the link.
+#[derive(Debug, Clone)]
+pub struct RunSpec<'a> {
+    /// The node under test.
+    pub node: u8,
+    /// What the EDS says.
+    pub model: &'a DeviceModel,
+    /// The EDS as the user named it.
+    pub eds: String,
+    /// The bus as the user named it.
+    pub bus: String,
+    /// When the run started, RFC 3339 (the caller reads the clock).
+    pub started: String,
+    /// The SDO timeout.
+    pub sdo_timeout: Duration,
+    /// The errors of canopener's EDS checks on the file ([`crate::cia301::eds::errors`]); `None`
+    /// when the description was not an EDS/DCF.
+    pub eds_errors: Option<Vec<String>>,
+}
+
+/// How far a run got, for a progress bar.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress<'a> {
+    /// Tests finished.
+    pub done: usize,
+    /// Tests selected.
+    pub total: usize,
+    /// The test starting now (`None` when all are done).
+    pub current: Option<&'a TestDef>,
+}
+
+/// The run could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The node-ID or the timeout cannot make an SDO session.
+    #[error(transparent)]
+    Session(#[from] canopener_runtime::sdo_session::SessionError),
+}
+
+/// The result of [`run`]: the report and whether the device answered at all.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// The report (tests missing when interrupted).
+    pub report: Report,
+    /// The device did not answer the preparation's SDO read of 1000h: nothing was tested.
+    pub silent: bool,
+}
+
+/// Runs `tests` against `spec.node` on `link` (see the [module docs](self)).
+pub fn run(
+    link: &mut dyn Link,
+    spec: &RunSpec<'_>,
+    tests: &[TestDef],
+    mut on_progress: impl FnMut(Progress<'_>),
+) -> Result<Outcome, RunError> {
+    let timestamps = link.timestamps();
+    let mut recorder = Recorder::new(link);
+    let start = recorder.now();
+    let mut report = Report {
+        version: REPORT_VERSION,
+        device: DeviceInfo {
+            node: Some(spec.node),
+            eds: spec.eds.clone(),
+            identity: None,
+        },
+        bus: BusInfo {
+            spec: spec.bus.clone(),
+            timestamps: timestamps.source.as_str().to_owned(),
+            resolution_us: timestamps.resolution.as_secs_f64() * 1e6,
+        },
+        started: spec.started.clone(),
+        duration_s: 0.0,
+        interrupted: false,
+        preparation: Vec::new(),
+        left_modified: Vec::new(),
+        tests: Vec::new(),
+        summary: Summary::default(),
+    };
+    let mut decoder = Decoder::new();
+    // The EDS check alone needs no device: nothing to reset, nobody to ask.
+    let prepared = if tests.iter().all(|t| !t.needs_device()) {
+        report
+            .preparation
+            .push("no device needed: only the EDS check runs".to_owned());
+        Ok(true)
+    } else {
+        prepare(&mut recorder, spec, &mut report)?
+    };
+    recorder.clear();
+    let silent = matches!(prepared, Ok(false));
+    if let Err(Stop::Cancelled) | Err(Stop::Link(_)) = prepared {
+        report.interrupted = true;
+    }
+    if matches!(prepared, Ok(true)) {
+        for (done, test) in tests.iter().enumerate() {
+            on_progress(Progress {
+                done,
+                total: tests.len(),
+                current: Some(test),
+            });
+            let test_start = recorder.now();
+            let (finding, measurements, left, stopped) = run_one(&mut recorder, spec, test)?;
+            report.left_modified.extend(left);
+            let telegrams = telegrams(recorder.since(0), start, &mut decoder);
+            recorder.clear();
+            report.tests.push(TestReport {
+                id: test.id.to_owned(),
+                suite: test.suite.to_owned(),
+                group: test.group.to_owned(),
+                title: test.title.to_owned(),
+                references: test.references.iter().map(|r| (*r).to_owned()).collect(),
+                verdict: finding.verdict,
+                reason: finding.reason,
+                analysis: finding.analysis,
+                measurements,
+                duration_s: recorder.now().saturating_duration_since(test_start).as_secs_f64(),
+                telegrams,
+            });
+            if stopped {
+                report.interrupted = true;
+                break;
+            }
+        }
+        on_progress(Progress {
+            done: report.tests.len(),
+            total: tests.len(),
+            current: None,
+        });
+    }
+    report.duration_s = recorder.now().saturating_duration_since(start).as_secs_f64();
+    report.summary = Summary::of(&report.tests);
+    Ok(Outcome { report, silent })
+}
+
+/// Resets the node, waits for its boot-up and reads its identity; `Ok(false)` when it does not
+/// answer an SDO read of 1000h.
+fn prepare(
+    recorder: &mut Recorder<'_>,
+    spec: &RunSpec<'_>,
+    report: &mut Report,
+) -> Result<Result<bool, Stop>, RunError> {
+    let session = SdoSession::new(&mut *recorder, spec.node, spec.sdo_timeout)?;
+    let mut ctx = Ctx::new(session, spec.model, spec.eds_errors.as_deref());
+    let result = (|| -> Result<bool, Stop> {
+        ctx.nmt(NmtCommand::ResetNode, false)?;
+        let boot = ctx.id(0x700 + u16::from(spec.node));
+        let heard = ctx
+            .wait_for(crate::cia301::nmt::BOOT_UP_WAIT, |f| {
+                f.id() == boot && f.data() == [0]
+            })?
+            .is_some();
+        report.preparation.push(format!(
+            "NMT reset node {}: {}",
+            spec.node,
+            if heard {
+                "boot-up received"
+            } else {
+                "no boot-up within 2 s"
+            }
+        ));
+        let Reply::Done(_) = ctx.read(0x1000, 0)? else {
+            report
+                .preparation
+                .push("SDO upload 1000h:00: no answer".to_owned());
+            return Ok(false);
+        };
+        let mut field = |sub: u8| -> Result<Option<u32>, Stop> {
+            Ok(match ctx.read(0x1018, sub)? {
+                Reply::Done(d) if d.len() == 4 => Some(u32::from_le_bytes([d[0], d[1], d[2], d[3]])),
+                _ => None,
+            })
+        };
+        report.device.identity = Some(Identity {
+            vendor_id: field(1)?,
+            product_code: field(2)?,
+            revision: field(3)?,
+            serial: field(4)?,
+        });
+        Ok(true)
+    })();
+    Ok(result)
+}
+
+type OneResult = (
+    Finding,
+    std::collections::BTreeMap<String, crate::model::Measurement>,
+    Vec<String>,
+    bool,
+);
+
+fn run_one(recorder: &mut Recorder<'_>, spec: &RunSpec<'_>, test: &TestDef) -> Result<OneResult, RunError> {
+    let session = SdoSession::new(&mut *recorder, spec.node, spec.sdo_timeout)?;
+    let mut ctx = Ctx::new(session, spec.model, spec.eds_errors.as_deref());
+    let (finding, mut stopped) = match (test.run)(&mut ctx) {
+        Ok(finding) => (finding, false),
+        Err(Stop::Cancelled) => (
+            Finding::inconclusive("interrupted (Ctrl-C) before a verdict"),
+            true,
+        ),
+        Err(Stop::Link(error)) => (Finding::inconclusive(format!("the bus failed: {error}")), true),
+    };
+    let measurements = ctx.take_measurements();
+    if !test.needs_device() {
+        return Ok((finding, measurements, Vec::new(), stopped));
+    }
+    // Pre-operational first: a device left stopped would not serve the SDO writes that restore it.
+    let cleanup = (|| -> Result<Vec<String>, Stop> {
+        ctx.nmt(NmtCommand::EnterPreOperational, false)?;
+        ctx.listen(Duration::from_millis(10), |_| false)?;
+        ctx.restore()
+    })();
+    let left = match cleanup {
+        Ok(left) => left,
+        Err(_) => {
+            stopped = true;
+            vec![format!(
+                "{}: the values it changed could not be written back (interrupted)",
+                test.id
+            )]
+        }
+    };
+    Ok((finding, measurements, left, stopped))
+}
+
+fn telegrams(log: &[Logged], start: Instant, decoder: &mut Decoder) -> Vec<Telegram> {
+    log.iter()
+        .map(|logged| {
+            let frame = logged.frame;
+            Telegram {
+                t: logged.link_time.saturating_duration_since(start).as_secs_f64(),
+                dir: logged.dir,
+                id: id_text(frame.id()),
+                data: if frame.is_remote() {
+                    String::new()
+                } else {
+                    frame
+                        .data()
+                        .iter()
+                        .map(|b| format!("{b:02X}"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                },
+                remote: frame.is_remote(),
+                meaning: decoder.decode(&frame).to_string(),
+                at: logged.link_time,
+                frame,
+            }
+        })
+        .collect()
+}
+
+/// `0x605`, or eight digits for an extended CAN-ID.
+pub fn id_text(id: canopener_can::CanId) -> String {
+    if id.is_extended() {
+        format!("0x{:08X}", id.as_raw())
+    } else {
+        format!("0x{:03X}", id.as_raw())
+    }
+}
+
+impl Outcome {
+    /// Whether every applicable test passed.
+    pub fn passed(&self) -> bool {
+        !self.silent && self.report.summary.all_passed() && !self.report.interrupted
+    }
+}

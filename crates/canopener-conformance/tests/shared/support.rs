@@ -1,0 +1,72 @@
+//! Running the CiA 301 suite against simulated devices on virtual time, shared by the integration
+//! tests.
+
+use std::time::Duration;
+
+use canopener_conformance::catalogue::{Selection, catalogue};
+use canopener_conformance::device_model::DeviceModel;
+use canopener_conformance::model::Report;
+use canopener_conformance::runner::{self, RunSpec};
+use canopener_device::faults::Fault;
+use canopener_runtime::simulator::simulation::Simulation;
+
+/// The node every simulated device under test has.
+pub(crate) const NODE: u8 = 5;
+
+/// The start time the reports state (the only field that may differ between runs).
+pub(crate) const STARTED: &str = "2024-01-01T00:00:00Z";
+
+/// Runs the tests `only` selects (all when empty) against a simulated device from the vendored
+/// corpus EDS `name` with `faults`.
+pub(crate) fn run(name: &str, faults: &[Fault], only: &[&str]) -> Report {
+    run_at(name, NODE, faults, only)
+}
+
+/// [`run`] with the device on `node` (an EDS whose defaults are written for one node-ID).
+pub(crate) fn run_at(name: &str, node: u8, faults: &[Fault], only: &[&str]) -> Report {
+    run_cancelled_at(name, node, faults, only, None)
+}
+
+/// [`run_at`], cancelling the link (as Ctrl-C does) when the test `cancel_at` starts.
+pub(crate) fn run_cancelled_at(
+    name: &str,
+    node: u8,
+    faults: &[Fault],
+    only: &[&str],
+    cancel_at: Option<&str>,
+) -> Report {
+    let cancel = canopener_runtime::cancel::Cancel::new();
+    let path = canopener_testkit::corpus::eds(name);
+    let bytes = canopener_testkit::fixture::read(&path).expect("corpus file");
+    let loaded = canopener_eds::load(&bytes);
+    let eds_errors = Some(canopener_conformance::cia301::eds::errors(&loaded, Some(name)));
+    let eds = loaded.eds;
+    let model = DeviceModel::new(&eds, node);
+    let mut bus = Simulation::ideal()
+        .device(&eds, node)
+        .faults(faults.iter().copied())
+        .cancel(cancel.clone())
+        .start()
+        .expect("simulation");
+    let selection = Selection {
+        only: only.iter().map(|s| (*s).to_owned()).collect(),
+        ..Selection::default()
+    };
+    let tests = selection.pick(&catalogue()).expect("selection");
+    let spec = RunSpec {
+        node,
+        model: &model,
+        eds: name.to_owned(),
+        bus: "virtual (ideal)".to_owned(),
+        started: STARTED.to_owned(),
+        sdo_timeout: Duration::from_millis(500),
+        eds_errors,
+    };
+    runner::run(&mut bus, &spec, &tests, |progress| {
+        if progress.current.is_some_and(|t| Some(t.id) == cancel_at) {
+            cancel.cancel();
+        }
+    })
+    .expect("run")
+    .report
+}

@@ -1,0 +1,359 @@
+//! The CiA 301 suite against simulated devices on virtual time: clean devices pass, every fault the
+//! suite can see fails exactly the tests written down for it, runs are deterministic, failures carry
+//! their evidence, and telegram logs are valid candump.
+
+#[path = "shared/support.rs"]
+mod support;
+
+use canopener_can::candump::parse_log;
+use canopener_conformance::model::Verdict;
+use canopener_conformance::render::candump;
+use canopener_device::faults::Fault;
+
+/// Five vendored EDS files of four vendors that canopener's EDS checks find no error in. Every
+/// simulated device serves block transfers, so each of them also covers the block tests.
+const CLEAN: &[(&str, &str)] = &[
+    // CiA 401 (1000h = 000F0191h), no node guarding.
+    (
+        "CANopenNode__CANopenDemo__demo__demoDevice.eds",
+        "CANopenNode demo: CiA 401, no guarding",
+    ),
+    // CiA 402 drive, no node guarding.
+    (
+        "YamamotoSoya__maxon_epos4compact50-5can_ros2__maxon_epos4_ros2__config__bus_config_cia402_epos4_pos__maxon_epos4_0x1018.eds",
+        "maxon EPOS4: no guarding",
+    ),
+    // Node guarding.
+    (
+        "ros-industrial__ros_canopen__canopen_chain_node__test__eds__ISD860.eds",
+        "Technosoft ISD860: guarding",
+    ),
+    // Node guarding, limits, EMCY.
+    (
+        "ros-industrial__ros_canopen__ipa_canopen_test__config__PRL120.eds",
+        "SCHUNK PRL120: guarding, limits",
+    ),
+    // Node guarding; a second SCHUNK product (no fifth vendor's EDS in the vendored corpus is both
+    // free of EDS errors and self-consistent: Elmo's 1A00h maps zero entries, Delta's 6099h
+    // defaults lie below their LowLimit).
+    (
+        "ros-industrial__ros_canopen__ipa_canopen_test__config__Schunk_0_63.eds",
+        "SCHUNK 0-63: guarding",
+    ),
+];
+
+/// 16 RPDOs and 16 TPDOs; its EDS has errors (`FileVersion` and friends), which only
+/// `cia301.eds.1` may report.
+const MANY_PDOS: &str = "CANopenNode__CANopenSocket__canopend__objDict__CANopenSocket.eds";
+
+/// The ids of the failed tests.
+fn device_failures(report: &canopener_conformance::model::Report) -> Vec<String> {
+    report
+        .tests
+        .iter()
+        .filter(|t| t.verdict == Verdict::Fail)
+        .map(|t| t.id.clone())
+        .collect()
+}
+
+fn check_clean(report: &canopener_conformance::model::Report, what: &str, allowed: &[&str]) {
+    let undecided: Vec<_> = report
+        .tests
+        .iter()
+        .filter(|t| {
+            matches!(t.verdict, Verdict::Fail | Verdict::Inconclusive) && !allowed.contains(&t.id.as_str())
+        })
+        .map(|t| format!("{} {}: {}", t.id, t.verdict.as_str(), t.reason))
+        .collect();
+    assert!(undecided.is_empty(), "{what}: {undecided:#?}");
+    assert_eq!(
+        report.tests.len(),
+        canopener_conformance::catalogue::catalogue().len()
+    );
+    assert!(
+        report.duration_s < 10.0,
+        "{what}: {} virtual seconds",
+        report.duration_s
+    );
+    assert!(
+        report.left_modified.is_empty(),
+        "{what}: {:?}",
+        report.left_modified
+    );
+    assert!(
+        report.summary.pass >= 30,
+        "{what}: only {} passed",
+        report.summary.pass
+    );
+}
+
+#[test]
+fn clean_simulated_devices_pass_within_ten_virtual_seconds() {
+    for (name, what) in CLEAN {
+        let report = support::run(name, &[], &[]);
+        check_clean(&report, what, &[]);
+        // The figures docs/conformance.md and the closing note quote.
+        let not_applicable: Vec<String> = report
+            .tests
+            .iter()
+            .filter(|t| t.verdict == Verdict::NotApplicable)
+            .map(|t| format!("{} ({})", t.id, t.reason))
+            .collect();
+        eprintln!(
+            "{what}: {} passed, {} not applicable in {:.2} s virtual time: {}",
+            report.summary.pass,
+            report.summary.not_applicable,
+            report.duration_s,
+            not_applicable.join("; ")
+        );
+    }
+}
+
+#[test]
+fn a_device_with_many_pdos_fails_only_the_eds_check_of_its_file() {
+    let report = support::run(MANY_PDOS, &[], &[]);
+    check_clean(&report, "CANopenSocket: 16+16 PDOs", &["cia301.eds.1"]);
+    assert_eq!(device_failures(&report), ["cia301.eds.1"]);
+}
+
+/// The device the fault matrix runs on: it has node guarding, limits, an EMCY producer, RPDOs and
+/// writable TPDO parameters, so every test applies.
+const FAULT_DEVICE: &str = "ros-industrial__ros_canopen__ipa_canopen_test__config__PRL120.eds";
+
+/// The device the store/restore and SYNC producer faults run on: it saves on command and can produce
+/// SYNC.
+const STORE_DEVICE: &str = "CANopenNode__CANopenDemo__demo__demoDevice.eds";
+
+/// What each fault must fail (the matrix of `docs/conformance.md`).
+fn expected_failures(fault: Fault) -> &'static [&'static str] {
+    match fault {
+        Fault::NoBootUp | Fault::BootUpWrongId => &["cia301.nmt.1"],
+        // The state after a heartbeat or life guarding event is read from the heartbeat too.
+        Fault::HeartbeatStateWrong => &[
+            "cia301.ec.4",
+            "cia301.ec.6",
+            "cia301.ec.7",
+            "cia301.nmt.2",
+            "cia301.nmt.3",
+            "cia301.nmt.4",
+        ],
+        Fault::HeartbeatTooFast | Fault::HeartbeatJitter => &["cia301.ec.1"],
+        Fault::GuardingAndHeartbeat => &["cia301.ec.3"],
+        Fault::IgnoresNmtStop => &["cia301.nmt.2", "cia301.nmt.3", "cia301.nmt.4"],
+        Fault::NmtBroadcastIgnored => &["cia301.nmt.3"],
+        Fault::SdoToggleIgnored => &["cia301.sdo.13"],
+        Fault::SdoExpeditedSizeWrong => &[
+            "cia301.sdo.14",
+            "cia301.sdo.16",
+            "cia301.pdo.1",
+            "cia301.od.1",
+            "cia301.od.2",
+            "cia301.od.8",
+            "cia301.emcy.2",
+            "cia301.emcy.5",
+        ],
+        // 0800 0000h is in the accepted sets of most refusals (CCT), but not for an absent object
+        // (cia301.sdo.17) nor for mapping a non-mappable object (the CCT's PDO set, §3.4).
+        Fault::WrongAbortCode => &["cia301.sdo.17", "cia301.pdo.5", "cia301.pdo.11"],
+        Fault::SdoBadCommandSilent => &["cia301.sdo.6"],
+        Fault::BlockCrcWrong => &["cia301.sdo.15"],
+        Fault::LimitNotEnforced => &["cia301.sdo.9", "cia301.od.5"],
+        Fault::UnmappableAccepted => &["cia301.pdo.5", "cia301.pdo.11"],
+        Fault::PdoCobIdUnchecked => &["cia301.pdo.4"],
+        Fault::NoTpdoRtr => &["cia301.pdo.3"],
+        Fault::NoEmcy => &["cia301.emcy.3", "cia301.ec.6", "cia301.ec.7"],
+        Fault::EmcyNoErrorReset => &["cia301.emcy.4"],
+        // On STORE_DEVICE: the PRL120 has no store/restore and no SYNC producer.
+        Fault::StoreIgnored => &["cia301.other.2"],
+        Fault::SyncCounterMissing => &["cia301.sync.4"],
+        // CiA 305 (LSS), not CiA 301: part 2.
+        Fault::NoLss | Fault::LssStateNotChanged => &[],
+        // Not a CiA 301 violation (CiA 301 sets no SDO response time); handled below.
+        Fault::SdoSlow => &[],
+    }
+}
+
+#[test]
+fn every_fault_fails_exactly_its_tests() {
+    for device in [FAULT_DEVICE, STORE_DEVICE] {
+        let clean = support::run(device, &[], &[]);
+        assert!(
+            device_failures(&clean).is_empty(),
+            "{device}: {:?}",
+            device_failures(&clean)
+        );
+    }
+    let mut mismatches = Vec::new();
+    for fault in Fault::ALL {
+        if fault == Fault::SdoSlow {
+            continue;
+        }
+        let device = match fault {
+            Fault::StoreIgnored | Fault::SyncCounterMissing => STORE_DEVICE,
+            _ => FAULT_DEVICE,
+        };
+        let report = support::run(device, &[fault], &[]);
+        let mut expected: Vec<String> = expected_failures(fault).iter().map(|s| (*s).to_owned()).collect();
+        expected.sort();
+        let mut failed = device_failures(&report);
+        failed.sort();
+        if failed != expected {
+            mismatches.push(format!(
+                "{}: failed {failed:?}, expected {expected:?}",
+                fault.name()
+            ));
+        }
+    }
+    assert!(mismatches.is_empty(), "{mismatches:#?}");
+}
+
+#[test]
+fn a_device_slower_than_the_sdo_timeout_is_reported_silent() {
+    // CiA 301 sets no SDO response time: a device slower than the tester's timeout cannot be tested
+    // at that timeout; the CLI says so with exit code 7 and `--timeout` runs it.
+    let report = support::run(FAULT_DEVICE, &[Fault::SdoSlow], &[]);
+    assert!(report.tests.is_empty());
+    assert!(
+        report.preparation.iter().any(|p| p.contains("no answer")),
+        "{:?}",
+        report.preparation
+    );
+}
+
+#[test]
+fn the_same_run_twice_gives_the_same_report() {
+    let first = support::run(FAULT_DEVICE, &[Fault::LimitNotEnforced], &[]);
+    let second = support::run(FAULT_DEVICE, &[Fault::LimitNotEnforced], &[]);
+    assert_eq!(first.to_json(), second.to_json());
+    assert_eq!(
+        canopener_conformance::render::human::render(&first),
+        canopener_conformance::render::human::render(&second)
+    );
+}
+
+#[test]
+fn a_failure_names_request_requirement_with_clause_and_answer() {
+    let report = support::run(FAULT_DEVICE, &[Fault::LimitNotEnforced], &["cia301.sdo.9"]);
+    let test = &report.tests[0];
+    assert_eq!(test.verdict, Verdict::Fail);
+    let analysis = &test.analysis;
+    assert!(analysis.contains("Request:  SDO download "), "{analysis}");
+    assert!(analysis.contains("HighLimit"), "{analysis}");
+    assert!(analysis.contains("Required: CiA 301 §7.2.4.3.17"), "{analysis}");
+    assert!(analysis.contains("0609 0031h"), "{analysis}");
+    assert!(
+        analysis.contains("Answer:   the transfer was confirmed"),
+        "{analysis}"
+    );
+    assert!(analysis.contains("Cause:    "), "{analysis}");
+    // The telegrams show the write going through.
+    assert!(
+        test.telegrams.iter().any(|t| t.meaning.contains("download")),
+        "{:?}",
+        test.telegrams
+    );
+}
+
+#[test]
+fn telegram_logs_are_candump_that_parses_back_to_the_same_frames() {
+    let report = support::run(FAULT_DEVICE, &[], &["cia301.sdo", "cia301.nmt.1"]);
+    for test in &report.tests {
+        let log = candump::log(test);
+        let (records, errors) = parse_log(&log);
+        assert!(errors.is_empty(), "{}: {errors:?}", test.id);
+        assert_eq!(records.len(), test.telegrams.len(), "{}", test.id);
+        for ((_, record), telegram) in records.iter().zip(&test.telegrams) {
+            assert_eq!(
+                record.event,
+                canopener_can::candump::LogEvent::Frame(telegram.frame)
+            );
+        }
+    }
+}
+
+#[test]
+fn json_report_keeps_the_version_1_names() {
+    let report = support::run(FAULT_DEVICE, &[], &["cia301.sdo.1"]);
+    let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
+    assert_eq!(json["version"], 1);
+    assert_eq!(json["device"]["node"], 5);
+    assert!(json["device"]["identity"]["vendor_id"].is_number());
+    assert_eq!(json["bus"]["timestamps"], "virtual");
+    assert!(json["bus"]["resolution_us"].is_number());
+    assert_eq!(json["started"], support::STARTED);
+    let test = &json["tests"][0];
+    for field in [
+        "id",
+        "suite",
+        "title",
+        "references",
+        "verdict",
+        "reason",
+        "analysis",
+        "measurements",
+        "telegrams",
+    ] {
+        assert!(!test[field].is_null(), "missing {field}");
+    }
+    let telegram = &test["telegrams"][0];
+    for field in ["t", "dir", "id", "data", "meaning"] {
+        assert!(!telegram[field].is_null(), "missing telegrams.{field}");
+    }
+    assert_eq!(telegram["dir"], "tx");
+    assert_eq!(telegram["id"], "0x605");
+    assert_eq!(json["summary"]["pass"], 1);
+}
+
+#[test]
+fn junit_has_one_test_case_per_test_and_the_failure_with_its_analysis() {
+    let report = support::run(FAULT_DEVICE, &[Fault::LimitNotEnforced], &["cia301.sdo"]);
+    let xml = canopener_conformance::render::junit::render(&report);
+    let doc = roxmltree::Document::parse(&xml).expect("well-formed JUnit XML");
+    let cases: Vec<_> = doc.descendants().filter(|n| n.has_tag_name("testcase")).collect();
+    assert_eq!(cases.len(), report.tests.len());
+    let failures: Vec<_> = doc.descendants().filter(|n| n.has_tag_name("failure")).collect();
+    assert_eq!(failures.len(), 1);
+    assert!(
+        failures[0].text().is_some_and(|t| t.contains("0609 0031h")),
+        "{xml}"
+    );
+    let failed_case = failures[0].parent().expect("testcase");
+    assert!(
+        failed_case
+            .attribute("name")
+            .is_some_and(|n| n.starts_with("cia301.sdo.9 "))
+    );
+    let out = failed_case
+        .children()
+        .find(|n| n.has_tag_name("system-out"))
+        .and_then(|n| n.text());
+    assert!(
+        out.is_some_and(|t| t.contains("0x605")),
+        "the telegrams are the system-out"
+    );
+}
+
+#[test]
+fn a_cancelled_run_aborts_the_running_transfer_on_the_bus_and_keeps_what_ran() {
+    let report = support::run_cancelled_at(
+        FAULT_DEVICE,
+        support::NODE,
+        &[],
+        &["cia301.sdo"],
+        Some("cia301.sdo.3"),
+    );
+    assert!(report.interrupted);
+    let ids: Vec<&str> = report.tests.iter().map(|t| t.id.as_str()).collect();
+    assert_eq!(ids, ["cia301.sdo.1", "cia301.sdo.2", "cia301.sdo.3"]);
+    assert_eq!(report.tests[0].verdict, Verdict::Pass);
+    let stopped = &report.tests[2];
+    assert_eq!(stopped.verdict, Verdict::Inconclusive);
+    assert!(stopped.reason.contains("interrupted"), "{}", stopped.reason);
+    // The transfer that had started is ended with an abort 0800 0000h from the tester.
+    let abort = stopped
+        .telegrams
+        .iter()
+        .find(|t| t.id == "0x605" && t.data.starts_with("80 "))
+        .unwrap_or_else(|| panic!("no abort in {:#?}", stopped.telegrams));
+    assert!(abort.data.ends_with("00 00 00 08"), "{}", abort.data);
+}
