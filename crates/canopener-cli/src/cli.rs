@@ -8,6 +8,7 @@ use crate::eds::args::EdsCommand;
 use crate::master::args::{
     HeartbeatCommand, LssCommand, NmtArgs, NodeCommand, PdoCommand, SdoCommand, SyncArgs,
 };
+use crate::mbt::args::MbtCommand;
 use crate::net::args::NetCommand;
 use crate::sim::args::SimArgs;
 use crate::test::args::TestArgs;
@@ -124,6 +125,9 @@ Exit status: 0 sent (and confirmed with --confirm), 7 no confirmation, 2 bad arg
     /// Watch heartbeats: every node's NMT state and heartbeat timing.
     #[command(subcommand)]
     Heartbeat(HeartbeatCommand),
+    /// Model-based testing: check and explore behaviour models, test devices against them on the fly.
+    #[command(subcommand)]
+    Mbt(MbtCommand),
 }
 
 #[cfg(test)]

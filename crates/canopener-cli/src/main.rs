@@ -13,6 +13,7 @@ mod cli;
 mod eds;
 mod error;
 mod master;
+mod mbt;
 mod net;
 mod output;
 mod sim;
@@ -27,6 +28,7 @@ use crate::bus::args::BusCommand;
 use crate::cli::{Cli, Command};
 use crate::eds::args::{EdsCommand, EdsRulesCommand};
 use crate::master::args::{HeartbeatCommand, LssCommand, NodeCommand, PdoCommand, SdoCommand};
+use crate::mbt::args::MbtCommand;
 use crate::net::args::NetCommand;
 
 use crate::error::{CliError, exit_code};
@@ -95,6 +97,13 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Pdo(PdoCommand::Watch(args)) => master::pdo_watch::run(args),
         Command::Sync(args) => master::sync::run(args),
         Command::Heartbeat(HeartbeatCommand::Watch(args)) => master::heartbeat::watch(args),
+        Command::Mbt(MbtCommand::Models(args)) => mbt::inspect::models(args),
+        Command::Mbt(MbtCommand::Check(args)) => mbt::inspect::check(args),
+        Command::Mbt(MbtCommand::Explore(args)) => mbt::inspect::explore(args),
+        Command::Mbt(MbtCommand::Synth(args)) => mbt::inspect::synth(args),
+        Command::Mbt(MbtCommand::Run(args)) => mbt::run::run(args),
+        Command::Mbt(MbtCommand::Replay(args)) => mbt::run::replay(args),
+        Command::Mbt(MbtCommand::Shrink(args)) => mbt::run::shrink(args),
     }
 }
 

@@ -18,6 +18,7 @@ mod harness;
 mod master_pdo;
 mod master_sdo;
 mod master_services;
+mod mbt;
 mod net;
 mod net_browser;
 mod net_system;

@@ -181,14 +181,13 @@ fn two_network_systems_render_with_every_device_and_leave_screenshots() {
             "{name}: {result}"
         );
         assert_eq!(result["outside"], serde_json::json!([]), "{name}: {result}");
-        // For people: target/net-<name>.png. The paper's background is looked up beside the SVG.
+        // For people: net-<name>.png in cargo's scratch directory for integration tests (it exists
+        // wherever CARGO_TARGET_DIR points). The paper's background is looked up beside the SVG.
         let svg_path = test_data(name).with_extension("svg.tmp.svg");
-        let out = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../target")
-            .join(format!(
-                "net-{}.png",
-                name.replace('/', "-").replace(".graphml", "")
-            ));
+        let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+            "net-{}.png",
+            name.replace('/', "-").replace(".graphml", "")
+        ));
         std::fs::write(&svg_path, &svg).expect("svg");
         chromium_run(
             browser,

@@ -9,6 +9,7 @@
 
 mod conformance;
 mod master_cli;
+mod mbt_local_node;
 mod networkx;
 mod sim_master;
 mod support;

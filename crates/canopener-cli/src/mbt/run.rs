@@ -1,0 +1,257 @@
+//! `mbt run`, `mbt replay` and `mbt shrink`: the executor on a bus or a simulated device.
+
+use std::time::Duration;
+
+use canopener_can::Instant;
+use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::log::{self, RunHeader};
+use canopener_mbt::model::Model;
+use canopener_runtime::link::BusLink;
+use canopener_runtime::mbt_run;
+use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
+
+use crate::bus_open::open_bus;
+use crate::error::{CliError, CliResult, exit_code};
+use crate::mbt::args::{DeviceArgs, Format, ReplayArgs, RunArgs, ShrinkArgs, Strategy};
+use crate::mbt::load::{description, load, write};
+use crate::output::print_stdout;
+use crate::stop::StopFlag;
+
+/// The device's power-on traffic is over by then; the run starts with the model's own reset.
+const SIM_SETTLE: Instant = Instant::from_millis(100);
+
+pub(crate) fn run(args: RunArgs) -> CliResult {
+    let eds = description(args.model.eds.as_ref().or(args.device.sim.as_ref()))?;
+    let loaded = load(&args.model.models, args.model.node, eds.as_ref(), &args.model.set)?;
+    eprint!("{}", loaded.warnings);
+    let config = RunConfig {
+        seed: args.seed,
+        steps: args.steps,
+        tolerance_us: i64::try_from(args.tolerance.as_micros()).unwrap_or(i64::MAX),
+        strategy: match args.strategy {
+            Strategy::Uniform => canopener_mbt::executor::Strategy::Uniform,
+            Strategy::Coverage => canopener_mbt::executor::Strategy::Coverage,
+        },
+        purpose: find_purpose(&loaded.model, args.purpose.as_deref())?,
+        ..RunConfig::default()
+    };
+    let header = RunHeader::new(&args.model.models, &loaded.model.hash, args.model.node, &config);
+    let outcome = execute(&args.device, args.model.node, &loaded.model, config)?;
+    if let Some(path) = &args.log {
+        write(path, &log::write(&header, &outcome))?;
+    }
+    if let Some(path) = &args.coverage_dot {
+        write(
+            path,
+            &canopener_mbt::explore::coverage_dot(&loaded.model, &outcome.coverage.taken),
+        )?;
+    }
+    report(&header, &loaded.model, &outcome, args.format)
+}
+
+pub(crate) fn replay(args: ReplayArgs) -> CliResult {
+    let log = read_log(&args.log)?;
+    let eds = description(args.eds.as_ref().or(args.device.sim.as_ref()))?;
+    let loaded = load(&log.header.models, log.header.node, eds.as_ref(), &[])?;
+    warn_hash(&log.header, &loaded.model);
+    let mut config = log.header.config(Some(log.script.clone()));
+    config.purpose = find_purpose(&loaded.model, log.header.purpose.as_deref())?;
+    let outcome = execute(&args.device, log.header.node, &loaded.model, config)?;
+    report(&log.header, &loaded.model, &outcome, args.format)
+}
+
+pub(crate) fn shrink(args: ShrinkArgs) -> CliResult {
+    let log = read_log(&args.log)?;
+    let eds = description(args.eds.as_ref().or(args.device.sim.as_ref()))?;
+    let loaded = load(&log.header.models, log.header.node, eds.as_ref(), &[])?;
+    warn_hash(&log.header, &loaded.model);
+    let mut config = log.header.config(None);
+    config.purpose = find_purpose(&loaded.model, log.header.purpose.as_deref())?;
+    let node = log.header.node;
+    let limit = args.device.time_limit;
+    let shrunk = match &args.device.sim {
+        Some(file) => mbt_run::shrink(
+            &mut || simulated(file, &args.device, node),
+            &loaded.model,
+            &config,
+            &log.script,
+            limit,
+        )?,
+        None => mbt_run::shrink(
+            &mut || bus_link(&args.device),
+            &loaded.model,
+            &config,
+            &log.script,
+            limit,
+        )?,
+    };
+    let Some(shrunk) = shrunk else {
+        eprintln!(
+            "the log's {} inputs no longer make the device fail",
+            log.script.len()
+        );
+        return Err(CliError::Exit(exit_code::CHECK_FAILED));
+    };
+    if let Some(path) = &args.output {
+        write(path, &log::write(&log.header, &shrunk.outcome))?;
+    }
+    let mut text = format!(
+        "shrunk {} inputs to {} in {} runs; the short script still fails: {}\n",
+        shrunk.before.len(),
+        shrunk.after.len(),
+        shrunk.runs,
+        shrunk.outcome.reason
+    );
+    for input in &shrunk.after {
+        let at = input
+            .at_us
+            .map(|t| format!("{:>9.3}s ", t as f64 / 1e6))
+            .unwrap_or_default();
+        text.push_str(&format!("  {at}{}\n", input.label));
+    }
+    print_stdout(&text)
+}
+
+/// The purpose called `name` in the models.
+fn find_purpose(model: &Model, name: Option<&str>) -> CliResult<Option<canopener_mbt::purpose::Purpose>> {
+    let Some(name) = name else { return Ok(None) };
+    match model.purposes.iter().find(|p| p.name == name) {
+        Some(p) => Ok(Some(p.clone())),
+        None => {
+            let names: Vec<&str> = model.purposes.iter().map(|p| p.name.as_str()).collect();
+            Err(CliError::Usage(format!(
+                "the models have no purpose `{name}`; they have: {}",
+                if names.is_empty() {
+                    "none".to_owned()
+                } else {
+                    names.join(", ")
+                }
+            )))
+        }
+    }
+}
+
+fn read_log(path: &std::path::Path) -> CliResult<log::Log> {
+    let bytes = canopener_runtime::files::read(path).map_err(|e| CliError::read_file(path, e))?;
+    let text = String::from_utf8_lossy(&bytes);
+    log::read(&text)
+        .map_err(|e| CliError::InvalidInput(format!("{}:{}: {}", path.display(), e.line, e.message)))
+}
+
+fn warn_hash(header: &RunHeader, model: &Model) {
+    if header.model_hash != model.hash {
+        eprintln!(
+            "warning: the models changed since the log was written (model hash differs); the replay may diverge"
+        );
+    }
+}
+
+/// A fresh simulated device (one per run, so that every run starts from power-on).
+fn simulated(file: &std::path::Path, device: &DeviceArgs, node: u8) -> CliResult<SimulatedBus> {
+    let mut bus = Simulation::ideal()
+        .file(file)
+        .first_node_id(Some(node))
+        .faults(device.faults.iter().copied())
+        .start()?;
+    bus.run_until(SIM_SETTLE)?;
+    Ok(bus)
+}
+
+fn bus_link(device: &DeviceArgs) -> CliResult<BusLink> {
+    let bus = open_bus(device.bus.spec.as_deref(), "mbt")?;
+    Ok(BusLink::new(bus, StopFlag::install()?.token())?)
+}
+
+fn execute(device: &DeviceArgs, node: u8, model: &Model, config: RunConfig) -> CliResult<Outcome> {
+    let limit: Option<Duration> = device.time_limit;
+    Ok(match &device.sim {
+        Some(file) => mbt_run::run(&mut simulated(file, device, node)?, model, config, limit)?,
+        None => mbt_run::run(&mut bus_link(device)?, model, config, limit)?,
+    })
+}
+
+/// Prints the outcome and maps the verdict to the exit code: 0 pass, 6 fail or inconclusive, 7 a
+/// device that sent nothing the models know.
+fn report(header: &RunHeader, model: &Model, outcome: &Outcome, format: Format) -> CliResult {
+    let (space, _) = canopener_mbt::explore::explore(model, 100_000);
+    match format {
+        Format::Json => {
+            let trace: Vec<serde_json::Value> = outcome
+                .trace
+                .iter()
+                .map(|s| serde_json::json!({"t": s.t, "dir": s.dir, "label": s.label, "frame": s.frame}))
+                .collect();
+            let value = serde_json::json!({
+                "version": 1,
+                "models": header.models,
+                "model_hash": model.hash,
+                "seed": header.seed,
+                "steps": outcome.steps,
+                "verdict": outcome.verdict,
+                "reason": outcome.reason,
+                "trace": trace,
+                "allowed": outcome.allowed,
+                "inputs": outcome.inputs,
+                "purpose": outcome.purpose.as_ref().map(|(name, reached)| serde_json::json!({"name": name, "reached": reached})),
+                "coverage": {
+                    "purposes": outcome.purpose.as_ref().map(|(_, reached)| [usize::from(*reached), 1]),
+                    "states": [outcome.coverage.states_seen, space.lts.states],
+                    "transitions": outcome.coverage.transitions,
+                    "locations": outcome.coverage.locations,
+                },
+            });
+            print_stdout(&format!("{value}\n"))?;
+        }
+        Format::Human => {
+            let mut text = format!(
+                "{}: {} after {} steps ({} frames judged) - {}\n",
+                model.name(),
+                match outcome.verdict {
+                    Verdict::Pass => "PASS",
+                    Verdict::Fail => "FAIL",
+                    Verdict::Inconclusive => "INCONCLUSIVE",
+                },
+                outcome.steps,
+                outcome.outputs_seen,
+                outcome.reason
+            );
+            if outcome.verdict != Verdict::Pass {
+                text.push_str("last steps:\n");
+                let from = outcome.trace.len().saturating_sub(12);
+                for s in &outcome.trace[from..] {
+                    let frame = s
+                        .frame
+                        .as_ref()
+                        .map(|f| format!("  ({}#{})", f.id, f.data))
+                        .unwrap_or_default();
+                    text.push_str(&format!("  {:>9.3}s {}{frame}\n", s.t, s.label));
+                }
+            }
+            if !outcome.allowed.is_empty() {
+                text.push_str("the model allowed:\n");
+                for a in &outcome.allowed {
+                    text.push_str(&format!("  {a}\n"));
+                }
+            }
+            if let Some((name, reached)) = &outcome.purpose {
+                let state = if *reached { "reached" } else { "not reached" };
+                text.push_str(&format!("purpose {name}: {state}\n"));
+            }
+            text.push_str(&format!(
+                "coverage: {}/{} transitions, {}/{} locations, {} states seen of {}\n",
+                outcome.coverage.transitions[0],
+                outcome.coverage.transitions[1],
+                outcome.coverage.locations[0],
+                outcome.coverage.locations[1],
+                outcome.coverage.states_seen,
+                space.lts.states
+            ));
+            print_stdout(&text)?;
+        }
+    }
+    match outcome.verdict {
+        Verdict::Pass => Ok(()),
+        Verdict::Fail if outcome.outputs_seen == 0 => Err(CliError::Exit(exit_code::DEVICE)),
+        Verdict::Fail | Verdict::Inconclusive => Err(CliError::Exit(exit_code::CHECK_FAILED)),
+    }
+}

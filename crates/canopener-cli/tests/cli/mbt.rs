@@ -1,0 +1,152 @@
+//! `canopener mbt` as users run it: checks with file:line:column, runs on a simulated device with
+//! the documented exit codes and JSON, a log shrunk and replayed.
+
+use std::path::PathBuf;
+
+use super::{run, stderr, stdout, temp_dir};
+
+fn io_eds() -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../corpus/eds/CANopenNode__CANopenNode__example__IO.eds")
+        .to_string_lossy()
+        .into_owned()
+}
+
+#[test]
+fn a_model_with_errors_is_exit_3_with_its_places() {
+    let dir = temp_dir("mbt-check");
+    let file = dir.join("bad.mbt");
+    std::fs::write(
+        &file,
+        "model bad\noutput O = 0x181 (v: u8)\nprocess p {\n  location A\n  A -> A: out O(1)\n}\n",
+    )
+    .unwrap();
+    let output = run(&["mbt", "check", file.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("bad.mbt:5:3: error[M023]"),
+        "{}",
+        stderr(&output)
+    );
+    let shipped = run(&["mbt", "check", "nmt", "sdo", "--node", "0x05"]);
+    assert_eq!(shipped.status.code(), Some(0), "{}", stderr(&shipped));
+    let unknown = run(&["mbt", "check", "no-such-model"]);
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(stderr(&unknown).contains("neither a shipped model"));
+}
+
+#[test]
+fn runs_pass_fail_and_shrink_on_a_simulated_device() {
+    let eds = io_eds();
+    let pass = run(&[
+        "mbt", "run", "nmt", "--sim", &eds, "--node", "5", "--steps", "100", "--format", "json",
+    ]);
+    assert_eq!(pass.status.code(), Some(0), "{}", stderr(&pass));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&pass)).unwrap();
+    assert_eq!(json["version"], 1);
+    assert_eq!(json["verdict"], "pass");
+    assert_eq!(json["steps"], 100);
+    assert_eq!(json["models"][0], "nmt");
+    assert!(json["coverage"]["transitions"][0].as_u64().unwrap() > 5);
+
+    let dir = temp_dir("mbt-run");
+    let log = dir.join("fail.jsonl");
+    let fail = run(&[
+        "mbt",
+        "run",
+        "nmt",
+        "--sim",
+        &eds,
+        "--node",
+        "5",
+        "--fault",
+        "ignores-nmt-stop",
+        "--log",
+        log.to_str().unwrap(),
+    ]);
+    assert_eq!(fail.status.code(), Some(6), "{}", stderr(&fail));
+    assert!(
+        stdout(&fail).contains("FAIL") && stdout(&fail).contains("the model allowed:"),
+        "{}",
+        stdout(&fail)
+    );
+    let short = dir.join("short.jsonl");
+    let shrunk = run(&[
+        "mbt",
+        "shrink",
+        log.to_str().unwrap(),
+        "--sim",
+        &eds,
+        "--fault",
+        "ignores-nmt-stop",
+        "-o",
+        short.to_str().unwrap(),
+    ]);
+    assert_eq!(shrunk.status.code(), Some(0), "{}", stderr(&shrunk));
+    assert!(stdout(&shrunk).contains("?NMT !0x02"), "{}", stdout(&shrunk));
+    let replay = run(&[
+        "mbt",
+        "replay",
+        short.to_str().unwrap(),
+        "--sim",
+        &eds,
+        "--fault",
+        "ignores-nmt-stop",
+    ]);
+    assert_eq!(replay.status.code(), Some(6), "{}", stdout(&replay));
+    let clean = run(&["mbt", "replay", short.to_str().unwrap(), "--sim", &eds]);
+    assert_eq!(clean.status.code(), Some(0), "{}", stdout(&clean));
+
+    let silent = run(&[
+        "mbt", "run", "lss", "--sim", &eds, "--node", "5", "--fault", "no-lss",
+    ]);
+    assert_eq!(silent.status.code(), Some(7), "{}", stdout(&silent));
+}
+
+#[test]
+fn synth_writes_the_test_graph_of_a_purpose() {
+    let dir = temp_dir("mbt-synth");
+    let out = dir.join("ctg.aut");
+    let output = run(&[
+        "mbt",
+        "synth",
+        "nmt",
+        "--node",
+        "5",
+        "--purpose",
+        "stop_and_start",
+        "--aut",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.starts_with("des (0, ") && text.contains("PASS"), "{text}");
+    // The same kind of purpose from an .aut file in TGV's convention.
+    let purpose = dir.join("stop.aut");
+    std::fs::write(
+        &purpose,
+        "des (0, 4, 3)\n(0, \"?NMT !0x02 !_\", 1)\n(1, \"!EC !0x04\", 2)\n(1, *, 1)\n(2, ACCEPT, 2)\n",
+    )
+    .unwrap();
+    let from_aut = run(&[
+        "mbt",
+        "synth",
+        "nmt",
+        "--node",
+        "5",
+        "--purpose-aut",
+        purpose.to_str().unwrap(),
+    ]);
+    assert_eq!(from_aut.status.code(), Some(0), "{}", stderr(&from_aut));
+    assert!(stdout(&from_aut).contains("PASS"), "{}", stdout(&from_aut));
+    std::fs::write(&purpose, "des (0, 1, 2)\n(0, ACCEPT, 1)\n").unwrap();
+    let bad = run(&["mbt", "synth", "nmt", "--purpose-aut", purpose.to_str().unwrap()]);
+    assert_eq!(bad.status.code(), Some(3), "{}", stderr(&bad));
+    let missing = run(&["mbt", "synth", "nmt", "--purpose", "nope"]);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(
+        stderr(&missing).contains("stop_and_start"),
+        "{}",
+        stderr(&missing)
+    );
+}

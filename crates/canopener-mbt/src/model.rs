@@ -1,0 +1,265 @@
+//! A compiled model: the composition of one or more model files with every name resolved, every
+//! parameter evaluated and every check passed. This is what exploration, synthesis and the executor
+//! work on.
+//!
+//! The state of a model is one vector of integers: per process its location, then its variables.
+//! Clocks are not part of it: the untimed semantics ignores them and the timed tracker keeps their
+//! reset instants beside the vector.
+
+use canopener_eds::diag::Span;
+
+use crate::expr::CExpr;
+use crate::syntax::ast::Direction;
+
+/// A compiled model.
+#[derive(Debug, Clone)]
+pub struct Model {
+    /// The model files composed, in the order they were loaded (used models first).
+    pub files: Vec<ModelFile>,
+    /// The parameters with their values, by name (`NODEID` first).
+    pub params: Vec<(String, i64)>,
+    /// The gates.
+    pub gates: Vec<Gate>,
+    /// The clocks.
+    pub clocks: Vec<String>,
+    /// The processes.
+    pub processes: Vec<Process>,
+    /// Every transition of every process; processes refer to theirs by index.
+    pub transitions: Vec<Transition>,
+    /// The default quiescence bound, in microseconds.
+    pub quiescence_us: i64,
+    /// The stimuli that bring the device into the initial state, in order.
+    pub resets: Vec<crate::label::Label>,
+    /// The test purposes defined in the files.
+    pub purposes: Vec<crate::purpose::Purpose>,
+    /// The initial state vector.
+    pub initial: Vec<i64>,
+    /// SHA-256 of the composed sources and the parameter values, hex: the model hash of logs.
+    pub hash: String,
+}
+
+/// One model file of a composition.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ModelFile {
+    /// `model NAME`.
+    pub name: String,
+    /// `title`.
+    pub title: String,
+    /// `cite` lines.
+    pub cites: Vec<String>,
+    /// Where it came from: a shipped model's name or a path, for messages.
+    pub origin: String,
+}
+
+/// A gate: one kind of CAN frame.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Gate {
+    /// The name.
+    pub name: String,
+    /// Input (the tester sends) or output (the device sends).
+    pub direction: Direction,
+    /// The 11-bit CAN-ID.
+    pub cob_id: u16,
+    /// A remote frame.
+    pub remote: bool,
+    /// The fields in byte order.
+    pub fields: Vec<Field>,
+    /// Data length: the sum of the fields' sizes.
+    pub dlc: u8,
+}
+
+/// A field of a gate.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Field {
+    /// The name.
+    pub name: String,
+    /// Size in bytes (1..=8).
+    pub size: u8,
+    /// `bytes(N)`: only `_` matches it; its value is the bytes as a little-endian number.
+    pub opaque: bool,
+}
+
+/// A process: locations, variables and transitions.
+#[derive(Debug, Clone)]
+pub struct Process {
+    /// The name.
+    pub name: String,
+    /// The model file it comes from (index into [`Model::files`]).
+    pub file: usize,
+    /// Its locations; the first is the initial one.
+    pub locations: Vec<Location>,
+    /// The slot of the state vector holding the location number.
+    pub location_slot: usize,
+    /// Its variables.
+    pub vars: Vec<Var>,
+    /// Its transitions (indices into [`Model::transitions`]).
+    pub transitions: Vec<usize>,
+}
+
+/// A location.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Location {
+    /// The name.
+    pub name: String,
+    /// Its own quiescence bound in microseconds, if any.
+    pub quiescence_us: Option<i64>,
+}
+
+/// A variable.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Var {
+    /// The name.
+    pub name: String,
+    /// Its slot in the state vector.
+    pub slot: usize,
+    /// Smallest value.
+    pub lo: i64,
+    /// Largest value.
+    pub hi: i64,
+    /// A boolean (printed as true/false).
+    pub boolean: bool,
+}
+
+/// What a transition does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Kind {
+    /// The tester sends.
+    Input,
+    /// The device must send within the window.
+    Output,
+    /// The device may send within the window.
+    MaybeOutput,
+    /// The device changes state without a frame: at once, or within its window.
+    Internal,
+}
+
+impl Kind {
+    /// Whether the device sends a frame.
+    pub fn is_output(self) -> bool {
+        matches!(self, Kind::Output | Kind::MaybeOutput)
+    }
+}
+
+/// What a field of a transition's label may be.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum CPattern {
+    /// Any value.
+    Any,
+    /// Exactly this value.
+    Value(CExpr),
+    /// One of these values.
+    Set(Vec<CExpr>),
+    /// A value in this inclusive range.
+    Range(CExpr, CExpr),
+}
+
+/// A transition.
+#[derive(Debug, Clone)]
+pub struct Transition {
+    /// Its index in [`Model::transitions`].
+    pub id: usize,
+    /// The process it belongs to.
+    pub process: usize,
+    /// Source locations; empty means every location.
+    pub from: Vec<i64>,
+    /// Target location; `None` stays.
+    pub to: Option<i64>,
+    /// What it does.
+    pub kind: Kind,
+    /// The gate, for inputs and outputs.
+    pub gate: Option<usize>,
+    /// One pattern per field of the gate.
+    pub patterns: Vec<CPattern>,
+    /// The guard (reads the label's fields for inputs).
+    pub guard: Option<CExpr>,
+    /// Assignments, evaluated on the state before the transition: slot, value, domain.
+    pub updates: Vec<(usize, CExpr, i64, i64)>,
+    /// Clocks reset to the instant of the transition.
+    pub resets: Vec<usize>,
+    /// The time window: earliest, latest, clock.
+    pub window: Option<(CExpr, CExpr, usize)>,
+    /// Requirement tags.
+    pub tags: Vec<String>,
+    /// Where it is written (in its file).
+    pub span: Span,
+}
+
+impl Model {
+    /// The composed name: the model names joined with `+`.
+    pub fn name(&self) -> String {
+        self.files
+            .iter()
+            .map(|f| f.name.as_str())
+            .collect::<Vec<_>>()
+            .join("+")
+    }
+
+    /// The gate called `name`.
+    pub fn gate(&self, name: &str) -> Option<usize> {
+        self.gates.iter().position(|g| g.name == name)
+    }
+
+    /// A parameter's value.
+    pub fn param(&self, name: &str) -> Option<i64> {
+        self.params.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+    }
+
+    /// The node-ID the model is instantiated for.
+    pub fn node_id(&self) -> u8 {
+        self.param("NODEID")
+            .and_then(|v| u8::try_from(v).ok())
+            .unwrap_or(0)
+    }
+
+    /// How many locations all processes have together.
+    pub fn location_count(&self) -> usize {
+        self.processes.iter().map(|p| p.locations.len()).sum()
+    }
+
+    /// `process.location` for the location number `loc` of process `p`.
+    pub fn location_name(&self, p: usize, loc: i64) -> String {
+        let process = &self.processes[p];
+        let name = usize::try_from(loc)
+            .ok()
+            .and_then(|l| process.locations.get(l))
+            .map_or("?", |l| l.name.as_str());
+        format!("{}.{name}", process.name)
+    }
+
+    /// A state vector in words: `nmt@PreOperational hb@Running period=100`.
+    pub fn describe_state(&self, state: &[i64]) -> String {
+        let mut parts = Vec::new();
+        for process in &self.processes {
+            let loc = state[process.location_slot];
+            let name = usize::try_from(loc)
+                .ok()
+                .and_then(|l| process.locations.get(l))
+                .map_or("?", |l| l.name.as_str());
+            parts.push(format!("{}@{name}", process.name));
+            for var in &process.vars {
+                let value = state[var.slot];
+                if var.boolean {
+                    parts.push(format!("{}.{}={}", process.name, var.name, value != 0));
+                } else {
+                    parts.push(format!("{}.{}={value}", process.name, var.name));
+                }
+            }
+        }
+        parts.join(" ")
+    }
+
+    /// The quiescence bound of a state: the largest bound of its processes' locations (a location
+    /// without its own has the model's).
+    pub fn quiescence_of(&self, state: &[i64]) -> i64 {
+        self.processes
+            .iter()
+            .map(|p| {
+                usize::try_from(state[p.location_slot])
+                    .ok()
+                    .and_then(|loc| p.locations.get(loc)?.quiescence_us)
+                    .unwrap_or(self.quiescence_us)
+            })
+            .max()
+            .unwrap_or(self.quiescence_us)
+    }
+}

@@ -1,0 +1,84 @@
+//! The models shipped with canopener (`models/*.mbt` in this crate), by name.
+
+/// A shipped model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shipped {
+    /// The name to give on the command line (`nmt`).
+    pub name: &'static str,
+    /// What it covers, in one line.
+    pub covers: &'static str,
+    /// The model text.
+    pub text: &'static str,
+}
+
+/// Every shipped model.
+pub const MODELS: &[Shipped] = &[
+    Shipped {
+        name: "nmt",
+        covers: "NMT slave: boot-up, every module-control transition (own node-ID and broadcast), heartbeat producer with period and state byte (CiA 301 §7.3.2, §7.2.8.3)",
+        text: include_str!("../models/nmt.mbt"),
+    },
+    Shipped {
+        name: "sdo",
+        covers: "SDO server, expedited: upload sizes of 1000h/1001h/1018h, aborts for an absent object and sub-index, a read-only write and an unknown command, silence in Stopped (CiA 301 §7.2.4.3); uses nmt",
+        text: include_str!("../models/sdo.mbt"),
+    },
+    Shipped {
+        name: "sync",
+        covers: "SYNC producer configured over SDO: period 1006h and counter 1019h on every SYNC, including a missing counter byte (CiA 301 §7.2.5)",
+        text: include_str!("../models/sync.mbt"),
+    },
+    Shipped {
+        name: "lss",
+        covers: "LSS slave: waiting/configuration, switch state global and selective, inquire identity and node-ID (CiA 305)",
+        text: include_str!("../models/lss.mbt"),
+    },
+    Shipped {
+        name: "emcy",
+        covers: "EMCY producer: heartbeat-consumer event 8130h with error register 11h after 1016h's time, and the error reset 0000h when heartbeats resume (CiA 301 §7.2.7)",
+        text: include_str!("../models/emcy.mbt"),
+    },
+    Shipped {
+        name: "energybus-ems",
+        covers: "DRAFT: EnergyBus EMS virtual device FSA (CiA 454) from public material only: control word 6001h transitions, status word 6002h state, automatic steps; no device to test it on here",
+        text: include_str!("../models/energybus-ems.mbt"),
+    },
+];
+
+/// The text of the shipped model `name`.
+pub fn text(name: &str) -> Option<&'static str> {
+    MODELS.iter().find(|m| m.name == name).map(|m| m.text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::compile::{Options, Source, compile};
+    use crate::explore::explore;
+
+    /// Every shipped model compiles without a diagnostic, with and without a description's
+    /// values, and its state space is finite and free of evaluation errors.
+    #[test]
+    fn every_shipped_model_checks_and_explores() {
+        for m in MODELS {
+            let sources = [Source {
+                origin: m.name.into(),
+                text: m.text.into(),
+            }];
+            let (model, report) = compile(
+                &sources,
+                &Options {
+                    node_id: 5,
+                    ..Options::default()
+                },
+                &|n| text(n).map(str::to_owned),
+            );
+            let diagnostics: Vec<_> = report.iter().flat_map(|r| &r.diagnostics).collect();
+            assert!(diagnostics.is_empty(), "{}: {diagnostics:#?}", m.name);
+            let model = model.unwrap();
+            assert!(!model.files[0].cites.is_empty(), "{} cites no clause", m.name);
+            let (space, d) = explore(&model, 100_000);
+            assert!(d.is_empty() && !space.truncated, "{}: {d:?}", m.name);
+        }
+    }
+}

@@ -1,0 +1,263 @@
+//! Model-based tests end to end: the shipped models against simulated devices on virtual time,
+//! clean (never a failure) and with the faults each model is meant to catch (always a failure).
+
+use std::time::Duration;
+
+use canopener_can::Instant;
+use canopener_device::faults::Fault;
+use canopener_eds::model::Eds;
+use canopener_mbt::compile::{Options, Source, compile};
+use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::model::Model;
+use canopener_mbt::shipped;
+use canopener_runtime::mbt_run::{run, shrink};
+use canopener_runtime::simulator::simulation::Simulation;
+use canopener_testkit::corpus;
+
+/// CANopenNode's example I/O device: heartbeat every 1000 ms (1017h), the CiA 301 objects.
+const IO: &str = "CANopenNode__CANopenNode__example__IO.eds";
+const NODE: u8 = 5;
+
+fn eds() -> Eds {
+    canopener_eds::load(&std::fs::read(corpus::eds(IO)).expect("EDS file")).eds
+}
+
+fn model(names: &[&str], eds: &Eds) -> Model {
+    let sources: Vec<Source> = names
+        .iter()
+        .map(|n| Source {
+            origin: (*n).into(),
+            text: shipped::text(n).expect("shipped model").into(),
+        })
+        .collect();
+    let options = Options {
+        node_id: NODE,
+        eds: Some(eds),
+        set: Vec::new(),
+    };
+    let (model, report) = compile(&sources, &options, &|n| shipped::text(n).map(str::to_owned));
+    model.unwrap_or_else(|| panic!("{report:#?}"))
+}
+
+fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+    let mut bus = Simulation::ideal()
+        .device(eds, NODE)
+        .faults(faults.iter().copied())
+        .start()
+        .expect("simulation");
+    // The device's power-on boot-up is history when the tester starts with its own reset.
+    bus.run_until(Instant::from_millis(100)).expect("virtual time");
+    let config = RunConfig {
+        seed,
+        steps,
+        ..RunConfig::default()
+    };
+    run(&mut bus, model, config, Some(Duration::from_secs(3600))).expect("link")
+}
+
+fn show(o: &Outcome) -> String {
+    let tail: Vec<String> = o
+        .trace
+        .iter()
+        .rev()
+        .take(8)
+        .rev()
+        .map(|s| format!("{:.3} {:?} {}", s.t, s.dir, s.label))
+        .collect();
+    format!(
+        "{:?}: {}\n  {}\n  allowed: {:?}",
+        o.verdict,
+        o.reason,
+        tail.join("\n  "),
+        o.allowed
+    )
+}
+
+#[test]
+fn clean_devices_pass_every_shipped_model() {
+    let eds = eds();
+    for names in [
+        &["nmt"][..],
+        &["sdo"][..],
+        &["sync"][..],
+        &["lss"][..],
+        &["emcy"][..],
+    ] {
+        let model = model(names, &eds);
+        for seed in 1..=3 {
+            let outcome = test(&model, &eds, &[], seed, 150);
+            assert_eq!(
+                outcome.verdict,
+                Verdict::Pass,
+                "{names:?} seed {seed}: {}",
+                show(&outcome)
+            );
+            assert_eq!(outcome.steps, 150);
+            assert!(outcome.coverage.transitions[0] > 5, "{:?}", outcome.coverage);
+            eprintln!(
+                "{names:?} seed {seed}: {:?} {:?}",
+                outcome.coverage.transitions, outcome.coverage.locations
+            );
+            if names == ["sync"] {
+                assert!(
+                    outcome
+                        .trace
+                        .iter()
+                        .filter(|s| s.label.starts_with("!SYNC !0x05"))
+                        .count()
+                        > 5,
+                    "{}",
+                    show(&outcome)
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn protocol_faults_are_caught() {
+    let eds = eds();
+    let cases: &[(&[&str], Fault)] = &[
+        (&["nmt"], Fault::NoBootUp),
+        (&["nmt"], Fault::BootUpWrongId),
+        (&["nmt"], Fault::HeartbeatStateWrong),
+        (&["nmt"], Fault::HeartbeatTooFast),
+        (&["nmt"], Fault::HeartbeatJitter),
+        (&["nmt"], Fault::IgnoresNmtStop),
+        (&["nmt"], Fault::NmtBroadcastIgnored),
+        (&["nmt"], Fault::GuardingAndHeartbeat),
+        (&["sdo"], Fault::SdoSlow),
+        (&["sdo"], Fault::SdoExpeditedSizeWrong),
+        (&["sdo"], Fault::WrongAbortCode),
+        (&["sdo"], Fault::SdoBadCommandSilent),
+        (&["sync"], Fault::SyncCounterMissing),
+        (&["lss"], Fault::LssStateNotChanged),
+        (&["lss"], Fault::NoLss),
+        (&["emcy"], Fault::NoEmcy),
+        (&["emcy"], Fault::EmcyNoErrorReset),
+    ];
+    for (names, fault) in cases {
+        let model = model(names, &eds);
+        let outcome = test(&model, &eds, &[*fault], 1, 400);
+        assert_eq!(
+            outcome.verdict,
+            Verdict::Fail,
+            "{fault} on {names:?}: {}",
+            show(&outcome)
+        );
+        assert!(
+            !outcome.allowed.is_empty() || outcome.reason.contains("unexpected"),
+            "{}",
+            show(&outcome)
+        );
+    }
+}
+
+#[test]
+fn failing_runs_shrink_to_one_minimal_scripts() {
+    let eds = eds();
+    for (names, fault) in [
+        (&["nmt"][..], Fault::IgnoresNmtStop),
+        (&["sdo"][..], Fault::WrongAbortCode),
+        (&["lss"][..], Fault::LssStateNotChanged),
+    ] {
+        let model = model(names, &eds);
+        let failing = test(&model, &eds, &[fault], 3, 400);
+        assert_eq!(failing.verdict, Verdict::Fail, "{}", show(&failing));
+        let config = RunConfig {
+            seed: 3,
+            steps: 400,
+            ..RunConfig::default()
+        };
+        let mut new_bus = || {
+            let mut bus = Simulation::ideal()
+                .device(&eds, NODE)
+                .fault(fault)
+                .start()
+                .expect("simulation");
+            bus.run_until(Instant::from_millis(100))?;
+            Ok::<_, canopener_runtime::link::LinkError>(bus)
+        };
+        let shrunk = shrink(&mut new_bus, &model, &config, &failing.script(), None)
+            .unwrap()
+            .expect("still fails");
+        assert_eq!(shrunk.outcome.verdict, Verdict::Fail);
+        assert!(shrunk.after.len() <= failing.inputs.len());
+        assert!(
+            !shrunk.after.is_empty(),
+            "{fault}: a fault this needs a stimulus for"
+        );
+        // 1-minimal: leaving out any one input makes the run pass.
+        for i in 0..shrunk.after.len() {
+            let mut fewer = shrunk.after.clone();
+            fewer.remove(i);
+            let outcome = run(
+                &mut new_bus().unwrap(),
+                &model,
+                RunConfig {
+                    script: Some(fewer),
+                    ..config.clone()
+                },
+                None,
+            )
+            .unwrap();
+            assert_ne!(
+                outcome.verdict,
+                Verdict::Fail,
+                "{fault}: input {i} of {:?} is not needed",
+                shrunk.after
+            );
+        }
+        eprintln!(
+            "{fault}: {} inputs -> {} ({:?}) in {} runs",
+            failing.inputs.len(),
+            shrunk.after.len(),
+            shrunk.after,
+            shrunk.runs
+        );
+    }
+}
+
+#[test]
+fn a_purpose_guides_the_run_and_ends_it_when_reached() {
+    let eds = eds();
+    let model = model(&["nmt"], &eds);
+    let purpose = model
+        .purposes
+        .iter()
+        .find(|p| p.name == "stop_and_start")
+        .expect("shipped purpose")
+        .clone();
+    for seed in 1..=5 {
+        let mut bus = Simulation::ideal()
+            .device(&eds, NODE)
+            .start()
+            .expect("simulation");
+        bus.run_until(Instant::from_millis(100)).expect("virtual time");
+        let config = RunConfig {
+            seed,
+            steps: 400,
+            purpose: Some(purpose.clone()),
+            ..RunConfig::default()
+        };
+        let outcome = run(&mut bus, &model, config, None).expect("link");
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+        assert_eq!(outcome.purpose, Some(("stop_and_start".to_owned(), true)));
+        // Guided: a stop and a start are all the inputs it takes.
+        assert!(outcome.inputs.len() <= 4, "seed {seed}: {:?}", outcome.inputs);
+    }
+    let mut bus = Simulation::ideal()
+        .device(&eds, NODE)
+        .fault(Fault::IgnoresNmtStop)
+        .start()
+        .expect("simulation");
+    bus.run_until(Instant::from_millis(100)).expect("virtual time");
+    let config = RunConfig {
+        steps: 400,
+        purpose: Some(purpose),
+        ..RunConfig::default()
+    };
+    let outcome = run(&mut bus, &model, config, None).expect("link");
+    assert_eq!(outcome.verdict, Verdict::Fail, "{}", show(&outcome));
+    assert_eq!(outcome.purpose, Some(("stop_and_start".to_owned(), false)));
+}
