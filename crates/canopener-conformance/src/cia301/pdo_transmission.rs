@@ -8,8 +8,8 @@ use canopener_wire::NmtCommand;
 use crate::catalogue::TestDef;
 use crate::cia301::helpers::{back_to_pre_operational, intervals_text, measure_intervals};
 use crate::cia301::pdo::{configurable_tpdo, configure_tpdo};
-use crate::context::Ctx;
-use crate::finding::{Evidence, Finding, Outcome};
+use crate::context::{Ctx, Reply};
+use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::requirements as req;
 
 /// The event timer the test sets, in ms.
@@ -52,6 +52,49 @@ pub fn tests() -> Vec<TestDef> {
             precondition: "a TPDO with writable COB-ID and transmission type and mapped data; a refusal is not_applicable",
             tags: &["pdo", "sync", "writes", "nmt"],
             run: synchronous,
+        },
+        TestDef {
+            id: "cia301.pdo.12",
+            suite: "cia301",
+            group: "pdo",
+            title: "Event-driven TPDO (type FFh): TPDOs follow the event timer but never within the inhibit time",
+            references: &[
+                req::PDO,
+                req::PDO_PARAMETERS,
+                "CCT PDO 04",
+                "CCT PDO 10",
+                "CCT PDO 16",
+            ],
+            precondition: "a TPDO with writable COB-ID, transmission type, inhibit time and event timer and mapped data; a refusal is not_applicable",
+            tags: &["pdo", "timing", "writes", "nmt"],
+            run: inhibit_time,
+        },
+        TestDef {
+            id: "cia301.pdo.13",
+            suite: "cia301",
+            group: "pdo",
+            title: "Synchronous acyclic (type 0): a TPDO only right after a SYNC, at most one per SYNC",
+            references: &[req::PDO, req::SYNC, "CCT PDO 07", "CCT PDO 13", "CCT PDO 19"],
+            precondition: "a TPDO with writable COB-ID and transmission type and mapped data; a refusal is not_applicable",
+            tags: &["pdo", "sync", "writes", "nmt"],
+            run: synchronous_acyclic,
+        },
+        TestDef {
+            id: "cia301.pdo.14",
+            suite: "cia301",
+            group: "pdo",
+            title: "SYNC start value: a cyclic TPDO starts at the SYNC whose counter equals 18xxh:06",
+            references: &[
+                req::PDO,
+                req::PDO_PARAMETERS,
+                req::SYNC_OBJECTS,
+                "CCT PDO 08",
+                "CCT PDO 14",
+                "CCT PDO 20",
+            ],
+            precondition: "a TPDO with writable COB-ID, transmission type and SYNC start value and mapped data, a writable 1019h, the device not a SYNC producer; a refusal is not_applicable",
+            tags: &["pdo", "sync", "writes", "nmt"],
+            run: sync_start_value,
         },
     ]
 }
@@ -134,25 +177,12 @@ fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
             pdo.number
         )));
     }
-    let sync = match crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?) {
-        Some(cob) => (cob & 0x7FF) as u16,
-        None => 0x80,
-    };
-    let id = ctx.id((cob & 0x7FF) as u16);
+    let sync = sync_id(ctx)?;
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
-    // After each SYNC: did a TPDO follow before the next one?
-    let mut after_sync = Vec::new();
-    for _ in 0..TEST_SYNCS {
-        ctx.send(sync, &[])?;
-        let frames = ctx.listen(SYNC_SPACING, |f| f.id() == id && !f.is_remote())?;
-        after_sync.push(frames.len());
-    }
+    let after_sync = tpdos_after_syncs(ctx, sync, cob, &[None; TEST_SYNCS])?;
     back_to_pre_operational(ctx)?;
-    let pattern: String = after_sync
-        .iter()
-        .map(|n| if *n > 0 { 'T' } else { '.' })
-        .collect();
+    let pattern = sync_pattern(&after_sync);
     let sent: Vec<usize> = after_sync
         .iter()
         .enumerate()
@@ -186,4 +216,276 @@ fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
             )
         },
     )
+}
+
+/// The inhibit time `cia301.pdo.12` sets, in 100 µs: 30 ms.
+pub const TEST_INHIBIT_100US: u16 = 300;
+/// The event timer `cia301.pdo.12` sets, shorter than the inhibit time, in ms.
+pub const TEST_SHORT_EVENT_TIMER_MS: u16 = 10;
+/// How long `cia301.pdo.12` watches the TPDOs.
+pub const WATCH: Duration = Duration::from_millis(300);
+/// How long `cia301.pdo.13` watches without SYNC.
+pub const UNSYNCED_WATCH: Duration = Duration::from_millis(200);
+/// SYNCs `cia301.pdo.13` sends.
+pub const ACYCLIC_SYNCS: usize = 6;
+/// The counter overflow value (1019h) `cia301.pdo.14` sets.
+pub const TEST_OVERFLOW: u8 = 10;
+/// The SYNC start value (18xxh:06) `cia301.pdo.14` sets.
+pub const TEST_START_VALUE: u8 = 5;
+/// The cyclic transmission type `cia301.pdo.14` sets: every 2nd SYNC.
+pub const TEST_START_EVERY: u8 = 2;
+
+fn inhibit_time(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 3, 5])? else {
+        return Ok(Finding::not_applicable(
+            "no TPDO with writable COB-ID, transmission type, inhibit time and event timer",
+        ));
+    };
+    let settings = [
+        (2u8, vec![0xFF]),
+        (3, TEST_INHIBIT_100US.to_le_bytes().to_vec()),
+        (5, TEST_SHORT_EVENT_TIMER_MS.to_le_bytes().to_vec()),
+    ];
+    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} cannot use an inhibit time with an event timer: {refused}",
+            pdo.number
+        )));
+    }
+    let id = ctx.id((cob & 0x7FF) as u16);
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    let frames = ctx.listen(WATCH, |f| f.id() == id && !f.is_remote())?;
+    back_to_pre_operational(ctx)?;
+    let intervals = measure_intervals(ctx, "inhibited_interval", &frames);
+    let inhibit_ms = f64::from(TEST_INHIBIT_100US) / 10.0;
+    let request = format!(
+        "TPDO{} ({:#X}) with type FFh, inhibit time {inhibit_ms} ms, event timer {TEST_SHORT_EVENT_TIMER_MS} ms; NMT start, {} ms",
+        pdo.number,
+        cob & 0x7FF,
+        WATCH.as_millis()
+    );
+    let requirement = format!(
+        "{}: an event-driven TPDO is sent when its event timer elapses, and never twice within the inhibit time 18xxh:03 (canopener allows {:.0} % for time stamps)",
+        req::PDO_PARAMETERS,
+        EVENT_TIMER_TOLERANCE * 100.0
+    );
+    // The event timer elapses every 10 ms: a TPDO is due at least at the end of every inhibit time
+    // plus one timer period, so fewer than a third of the inhibit periods means the timer is ignored.
+    let least =
+        (WATCH.as_secs_f64() * 1000.0 / (inhibit_ms + f64::from(TEST_SHORT_EVENT_TIMER_MS))) as usize / 2;
+    let early = intervals
+        .iter()
+        .copied()
+        .find(|i| *i < inhibit_ms * (1.0 - EVENT_TIMER_TOLERANCE));
+    Ok(if let Some(early) = early {
+        Finding::fail(
+            format!("two TPDOs {early:.1} ms apart with an inhibit time of {inhibit_ms} ms"),
+            Evidence {
+                request,
+                requirement,
+                answer: format!("intervals {}", intervals_text(&intervals)),
+                cause: "the inhibit time 18xxh:03 is not applied".to_owned(),
+            },
+        )
+    } else if frames.len() < least {
+        Finding::fail(
+            format!(
+                "{} TPDOs in {} ms with a {TEST_SHORT_EVENT_TIMER_MS} ms event timer (at least {least} expected)",
+                frames.len(),
+                WATCH.as_millis()
+            ),
+            Evidence {
+                request,
+                requirement,
+                answer: format!("{} TPDOs", frames.len()),
+                cause: "an event inhibited by the inhibit time is dropped instead of deferred, or the event timer is not applied".to_owned(),
+            },
+        )
+    } else {
+        Finding::pass(format!(
+            "{} TPDOs, none closer than the {inhibit_ms} ms inhibit time",
+            frames.len()
+        ))
+    })
+}
+
+fn synchronous_acyclic(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
+        return Ok(Finding::not_applicable(
+            "no TPDO with writable COB-ID and transmission type",
+        ));
+    };
+    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![0])], false)? {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} cannot be synchronous acyclic: {refused}",
+            pdo.number
+        )));
+    }
+    let sync = sync_id(ctx)?;
+    let id = ctx.id((cob & 0x7FF) as u16);
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    // Without SYNC a synchronous TPDO has no occasion to go out, whatever its events.
+    let unsynced = ctx.listen(UNSYNCED_WATCH, |f| f.id() == id && !f.is_remote())?;
+    let after_sync = tpdos_after_syncs(ctx, sync, cob, &[None; ACYCLIC_SYNCS])?;
+    back_to_pre_operational(ctx)?;
+    let pattern = sync_pattern(&after_sync);
+    let request = format!(
+        "TPDO{} ({:#X}) with transmission type 0; NMT start, {} ms without SYNC, then {ACYCLIC_SYNCS} SYNCs on {sync:#X}, {} ms apart",
+        pdo.number,
+        cob & 0x7FF,
+        UNSYNCED_WATCH.as_millis(),
+        SYNC_SPACING.as_millis()
+    );
+    let requirement = format!(
+        "{}: a TPDO of type 0 is sent after a SYNC when an event occurred, so never without SYNC and at most once per SYNC",
+        req::PDO
+    );
+    Ok(if !unsynced.is_empty() {
+        Finding::fail(
+            format!("{} TPDOs while no SYNC was sent", unsynced.len()),
+            Evidence {
+                request,
+                requirement,
+                answer: format!(
+                    "{} TPDOs in {} ms without SYNC",
+                    unsynced.len(),
+                    UNSYNCED_WATCH.as_millis()
+                ),
+                cause: "type 0 is treated as event-driven".to_owned(),
+            },
+        )
+    } else if after_sync.iter().any(|n| *n > 1) {
+        Finding::fail(
+            format!("more than one TPDO after a SYNC: {pattern}"),
+            Evidence {
+                request,
+                requirement,
+                answer: format!("TPDOs per SYNC {after_sync:?}"),
+                cause: "events are sent as they occur instead of once at the next SYNC".to_owned(),
+            },
+        )
+    } else {
+        // Whether an event occurs is up to the application: no TPDO at all is allowed.
+        Finding::pass(format!(
+            "none without SYNC; after the SYNCs {pattern} (T: a TPDO followed; the application decides the events)"
+        ))
+    })
+}
+
+fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !ctx.model().entry(0x1019, 0).is_some_and(|e| e.writable()) {
+        return Ok(Finding::not_applicable("no writable 1019h"));
+    }
+    if crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
+        return Ok(Finding::not_applicable(
+            "the device produces SYNC (1005h bit 30): the tester cannot send the counter",
+        ));
+    }
+    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 6])? else {
+        return Ok(Finding::not_applicable(
+            "no TPDO with writable COB-ID, transmission type and SYNC start value",
+        ));
+    };
+    let overflow = ctx.modify(0x1019, 0, vec![TEST_OVERFLOW])?;
+    if !matches!(overflow, Reply::Done(_)) {
+        return Ok(Finding::not_applicable(format!(
+            "1019h does not take {TEST_OVERFLOW}: {}",
+            overflow.describe()
+        )));
+    }
+    let settings = [(2u8, vec![TEST_START_EVERY]), (6, vec![TEST_START_VALUE])];
+    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} cannot use a SYNC start value: {refused}",
+            pdo.number
+        )));
+    }
+    let sync = sync_id(ctx)?;
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    // The counter runs 1..=overflow and wraps to 1 (CiA 301 §7.2.5).
+    let counters: Vec<Option<u8>> = (0..TEST_SYNCS)
+        .map(|i| Some((i % usize::from(TEST_OVERFLOW)) as u8 + 1))
+        .collect();
+    let after_sync = tpdos_after_syncs(ctx, sync, cob, &counters)?;
+    back_to_pre_operational(ctx)?;
+    let pattern = sync_pattern(&after_sync);
+    // CiA 301 §7.5.2.35: the SYNC whose counter equals the start value "shall be regarded as the
+    // first received SYNC". Stacks read that two ways for n > 1: CANopenNode transmits at that SYNC,
+    // others count it as the first of n. Both are accepted; counting from the first SYNC sent
+    // (ignoring the start value) puts the first TPDO before it and fails.
+    let every = usize::from(TEST_START_EVERY);
+    let expect_from = |first: usize| -> String {
+        (0..TEST_SYNCS)
+            .map(|i| {
+                if i >= first && (i - first).is_multiple_of(every) {
+                    'T'
+                } else {
+                    '.'
+                }
+            })
+            .collect()
+    };
+    let at_start = expect_from(usize::from(TEST_START_VALUE) - 1);
+    let counted = expect_from(usize::from(TEST_START_VALUE) - 1 + every - 1);
+    let expected = format!("{at_start} or {counted}");
+    Ok(if pattern == at_start || pattern == counted {
+        Finding::pass(format!(
+            "TPDOs after the SYNCs {pattern} (counters 1..{TEST_OVERFLOW})"
+        ))
+    } else {
+        Finding::fail(
+            format!("TPDOs after the SYNCs {pattern}, expected {expected} (T: a TPDO followed)"),
+            Evidence {
+                request: format!(
+                    "1019h = {TEST_OVERFLOW}; TPDO{} ({:#X}) with type {TEST_START_EVERY} and SYNC start value {TEST_START_VALUE}; NMT start, {TEST_SYNCS} SYNCs with counters 1..{TEST_OVERFLOW} on {sync:#X}",
+                    pdo.number,
+                    cob & 0x7FF
+                ),
+                requirement: format!(
+                    "{}: the SYNC whose counter equals the SYNC start value is the first SYNC the TPDO counts; then every {TEST_START_EVERY}nd SYNC",
+                    req::PDO_PARAMETERS
+                ),
+                answer: format!("{pattern} ({} TPDOs)", after_sync.iter().sum::<usize>()),
+                cause: "the SYNC start value 18xxh:06 is ignored, or the SYNC counter is not read".to_owned(),
+            },
+        )
+    })
+}
+
+/// The SYNC CAN-ID from 1005h (80h when it cannot be read).
+fn sync_id(ctx: &mut Ctx<'_, '_>) -> Result<u16, Stop> {
+    Ok(match crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?) {
+        Some(cob) => (cob & 0x7FF) as u16,
+        None => 0x80,
+    })
+}
+
+/// Sends one SYNC per entry of `counters` (with the counter byte when `Some`), [`SYNC_SPACING`]
+/// apart, and counts the TPDOs on `cob` that followed each before the next.
+fn tpdos_after_syncs(
+    ctx: &mut Ctx<'_, '_>,
+    sync: u16,
+    cob: u32,
+    counters: &[Option<u8>],
+) -> Result<Vec<usize>, Stop> {
+    let id = ctx.id((cob & 0x7FF) as u16);
+    let mut after_sync = Vec::new();
+    for counter in counters {
+        match counter {
+            Some(counter) => ctx.send(sync, &[*counter])?,
+            None => ctx.send(sync, &[])?,
+        }
+        let frames = ctx.listen(SYNC_SPACING, |f| f.id() == id && !f.is_remote())?;
+        after_sync.push(frames.len());
+    }
+    Ok(after_sync)
+}
+
+/// `..T..T`: `T` where a TPDO followed the SYNC.
+fn sync_pattern(after_sync: &[usize]) -> String {
+    after_sync
+        .iter()
+        .map(|n| if *n > 0 { 'T' } else { '.' })
+        .collect()
 }

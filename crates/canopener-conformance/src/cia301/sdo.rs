@@ -10,7 +10,7 @@ use crate::cia301::helpers::{
 };
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{number_bytes, number_text, step_beyond};
-use crate::finding::{Evidence, Finding, Outcome};
+use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::requirements::{self as req, code_meaning};
 
 /// The SDO tests.
@@ -207,6 +207,16 @@ pub fn tests() -> Vec<TestDef> {
             precondition: "always (a device without block transfer refuses with 0504 0001h, which is accepted)",
             tags: &["sdo", "block"],
             run: block_size_128,
+        },
+        TestDef {
+            id: "cia301.sdo.19",
+            suite: "cia301",
+            group: "sdo",
+            title: "A segmented download of 100Ch and 1017h is confirmed and reads back",
+            references: &[req::SDO_DOWNLOAD_SEGMENT, "CCT SDO 14", "CCT SDO 15"],
+            precondition: "a writable 2-byte 100Ch (guarding) or 1017h (heartbeat) in the EDS",
+            tags: &["sdo", "writes"],
+            run: segmented_download,
         },
     ]
 }
@@ -628,54 +638,110 @@ fn block_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
         return Ok(Finding::not_applicable("the EDS has no writable 1017h or 100Ch"));
     };
     let value = 1234u16.to_le_bytes().to_vec();
+    Ok(
+        match download_and_read_back(
+            ctx,
+            at,
+            value,
+            DownloadMode::Block,
+            "block",
+            req::SDO_BLOCK_DOWNLOAD,
+        )? {
+            Err(Reply::Refused(abort::COMMAND_SPECIFIER_INVALID)) => {
+                Finding::not_applicable("the device has no block transfer (0504 0001h)")
+            }
+            Err(other) => Finding::inconclusive(format!("{} failed: {}", upload_text(at), other.describe())),
+            Ok(finding) => finding,
+        },
+    )
+}
+
+fn segmented_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let model = ctx.model();
+    let targets: Vec<(u16, u8)> = [(0x100Cu16, 0u8), (0x1017, 0)]
+        .into_iter()
+        .filter(|(i, s)| {
+            model
+                .entry(*i, *s)
+                .is_some_and(|e| e.writable() && e.size() == Some(2))
+        })
+        .collect();
+    if targets.is_empty() {
+        return Ok(Finding::not_applicable("the EDS has no writable 100Ch or 1017h"));
+    }
+    let mut done = Vec::new();
+    for at in targets {
+        let value = 1234u16.to_le_bytes().to_vec();
+        match download_and_read_back(
+            ctx,
+            at,
+            value,
+            DownloadMode::Segmented,
+            "segmented",
+            req::SDO_DOWNLOAD_SEGMENT,
+        )? {
+            Err(other) => {
+                return Ok(Finding::inconclusive(format!(
+                    "{} failed: {}",
+                    upload_text(at),
+                    other.describe()
+                )));
+            }
+            Ok(finding) if finding.verdict != crate::model::Verdict::Pass => return Ok(finding),
+            Ok(_) => done.push(format!("{:04X}h", at.0)),
+        }
+    }
+    Ok(Finding::pass(format!(
+        "{} written by segmented download and read back",
+        done.join(" and ")
+    )))
+}
+
+/// Writes `value` to `at` in `mode` (`what` names it), reads it back and writes the original value
+/// back with an ordinary download (the test must not depend on the write path under test). `Err`
+/// holds the answer to the first read when the entry cannot be read, or the refusal of the
+/// download when it is one the caller decides about (0504 0001h).
+fn download_and_read_back(
+    ctx: &mut Ctx<'_, '_>,
+    at: (u16, u8),
+    value: Vec<u8>,
+    mode: DownloadMode,
+    what: &str,
+    clause: &str,
+) -> Result<Result<Finding, Reply>, Stop> {
     let original = match ctx.read(at.0, at.1)? {
         Reply::Done(data) => data,
-        other => {
-            return Ok(Finding::inconclusive(format!(
-                "{} failed: {}",
-                upload_text(at),
-                other.describe()
-            )));
-        }
+        other => return Ok(Err(other)),
     };
-    let reply = ctx.write_with(at.0, at.1, value.clone(), DownloadMode::Block)?;
-    let request = format!(
-        "SDO block download {:04X}h:{:02X} = {} with CRC",
-        at.0,
-        at.1,
-        hex(&value)
-    );
+    let reply = ctx.write_with(at.0, at.1, value.clone(), mode)?;
+    let request = format!("SDO {what} download {:04X}h:{:02X} = {}", at.0, at.1, hex(&value));
     let finding = match reply {
-        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) => {
-            return Ok(Finding::not_applicable(
-                "the device has no block transfer (0504 0001h)",
-            ));
+        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) if mode == DownloadMode::Block => {
+            return Ok(Err(reply));
         }
         Reply::Done(_) => match ctx.read(at.0, at.1)? {
-            Reply::Done(back) if back == value => Finding::pass("written by block download and read back"),
+            Reply::Done(back) if back == value => {
+                Finding::pass(format!("written by {what} download and read back"))
+            }
             other => Finding::fail(
-                "the value written by block download does not read back",
+                format!("the value written by {what} download does not read back"),
                 Evidence {
                     request: format!("{request}, then {}", upload_text(at)),
-                    requirement: format!(
-                        "{}: a confirmed download stores the value",
-                        req::SDO_BLOCK_DOWNLOAD
-                    ),
+                    requirement: format!("{clause}: a confirmed download stores the value"),
                     answer: other.describe(),
-                    cause: "the block download server confirms without storing".to_owned(),
+                    cause: format!("the {what} download server confirms without storing"),
                 },
             ),
         },
         other => refused_unexpectedly(
             &request,
             &other,
-            req::SDO_BLOCK_DOWNLOAD,
-            "the block download server is broken",
+            clause,
+            &format!("the {what} download server is broken"),
         ),
     };
-    // Written back here rather than by `modify`: the test must not depend on the write path under test.
     ctx.write(at.0, at.1, original)?;
-    Ok(finding)
+    Ok(Ok(finding))
 }
 
 fn specific_abort_codes(ctx: &mut Ctx<'_, '_>) -> Outcome {
