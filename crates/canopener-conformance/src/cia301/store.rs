@@ -23,9 +23,17 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.other.1",
             suite: "cia301",
             group: "other",
-            title: "1010h:01 and 1011h:01 refuse a wrong signature",
-            references: &[req::STORE_RESTORE, "CCT Testing other 01", "CCT Testing other 03"],
-            precondition: "1010h:01 / 1011h:01 in the EDS and bit 0 set (the device saves on command)",
+            title: "Every sub-index of 1010h and 1011h that saves/restores on command refuses \"wron\" and the reversed signature",
+            references: &[
+                req::STORE_RESTORE,
+                "CCT Testing other 01",
+                "CCT Testing other 03",
+                "CCT Testing other 05",
+                "CCT Testing other 06",
+                "CCT Testing other 07",
+                "CCT Testing other 08",
+            ],
+            precondition: "a sub-index of 1010h / 1011h in the EDS that reads with bit 0 set (the device saves/restores on command)",
             tags: &["store"],
             run: wrong_signatures,
         },
@@ -49,39 +57,53 @@ pub fn tests() -> Vec<TestDef> {
 
 /// Whether `index`:01 is described and reads with bit 0 set.
 fn on_command(ctx: &mut Ctx<'_, '_>, index: u16) -> Result<bool, Stop> {
-    if ctx.model().entry(index, 1).is_none() {
+    on_command_at(ctx, index, 1)
+}
+
+/// Whether `index`:`sub` is described and reads with bit 0 set (the device saves/restores that
+/// group of parameters on command).
+fn on_command_at(ctx: &mut Ctx<'_, '_>, index: u16, sub: u8) -> Result<bool, Stop> {
+    if ctx.model().entry(index, sub).is_none() {
         return Ok(false);
     }
-    Ok(matches!(ctx.read(index, 1)?, Reply::Done(d) if d.first().is_some_and(|b| b & 1 == 1)))
+    Ok(matches!(ctx.read(index, sub)?, Reply::Done(d) if d.first().is_some_and(|b| b & 1 == 1)))
 }
 
 fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let mut checked = Vec::new();
-    for (index, wrong, what) in [(0x1010u16, b"evas", "save"), (0x1011, b"daol", "load")] {
-        if !on_command(ctx, index)? {
-            continue;
+    // "wron" (CCT Testing other 07) and the right word in the wrong byte order (a device comparing
+    // the signature as a big-endian number takes it).
+    let cases: [(u16, &str, [&[u8]; 2]); 2] = [
+        (0x1010, "save", [b"wron", b"evas"]),
+        (0x1011, "load", [b"wron", b"daol"]),
+    ];
+    for (index, what, wrongs) in cases {
+        // Sub-index 1 is all parameters, 2 communication, 3 application, 4..7Fh manufacturer
+        // groups (CiA 301 §7.5.2.13/14).
+        for sub in 1..=0x7Fu8 {
+            if !on_command_at(ctx, index, sub)? {
+                continue;
+            }
+            for wrong in wrongs {
+                let reply = ctx.write(index, sub, wrong.to_vec())?;
+                let finding = expect_refusal(
+                    &format!("{} (not \"{what}\")", download_text((index, sub), wrong),),
+                    &reply,
+                    req::WRONG_SIGNATURE,
+                    req::STORE_RESTORE,
+                    "the signature is not checked, or compared in the wrong byte order",
+                );
+                if finding.verdict != crate::model::Verdict::Pass {
+                    return Ok(finding);
+                }
+            }
+            checked.push(format!("{index:04X}h:{sub:02X}"));
         }
-        let reply = ctx.write(index, 1, wrong.to_vec())?;
-        let finding = expect_refusal(
-            &format!(
-                "{} (\"{}\" in the wrong byte order)",
-                download_text((index, 1), wrong),
-                what
-            ),
-            &reply,
-            req::WRONG_SIGNATURE,
-            req::STORE_RESTORE,
-            "the signature is not checked",
-        );
-        if finding.verdict != crate::model::Verdict::Pass {
-            return Ok(finding);
-        }
-        checked.push(format!("{index:04X}h"));
     }
     Ok(if checked.is_empty() {
-        Finding::not_applicable("neither 1010h:01 nor 1011h:01 saves/restores on command")
+        Finding::not_applicable("no sub-index of 1010h or 1011h saves/restores on command")
     } else {
-        Finding::pass(format!("wrong signatures refused by {}", checked.join(" and ")))
+        Finding::pass(format!("wrong signatures refused by {}", checked.join(", ")))
     })
 }
 
