@@ -256,24 +256,34 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
 /// §7.5.2.38), and its current COB-ID.
 pub fn configurable_tpdo(ctx: &mut Ctx<'_, '_>, subs: &[u8]) -> Result<Option<(PdoModel, u32)>, Stop> {
     for pdo in ctx.model().pdos(PdoDirection::Transmit) {
-        if !subs
-            .iter()
-            .all(|sub| ctx.model().entry(pdo.comm, *sub).is_some_and(|e| e.writable()))
-        {
-            continue;
-        }
-        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
-            continue;
-        };
-        let Some(mapping) = pdo.mapping else {
-            continue;
-        };
-        let mapped = matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0));
-        if mapped && cob & 0x7FF != 0 {
-            return Ok(Some((pdo, cob)));
+        if let Some(found) = configurable_tpdo_at(ctx, &pdo, subs)? {
+            return Ok(Some(found));
         }
     }
     Ok(None)
+}
+
+/// `pdo` with its current COB-ID if the EDS makes `subs` of its communication parameter writable,
+/// it maps data and has a CAN-ID.
+pub fn configurable_tpdo_at(
+    ctx: &mut Ctx<'_, '_>,
+    pdo: &PdoModel,
+    subs: &[u8],
+) -> Result<Option<(PdoModel, u32)>, Stop> {
+    if !subs
+        .iter()
+        .all(|sub| ctx.model().entry(pdo.comm, *sub).is_some_and(|e| e.writable()))
+    {
+        return Ok(None);
+    }
+    let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+        return Ok(None);
+    };
+    let Some(mapping) = pdo.mapping else {
+        return Ok(None);
+    };
+    let mapped = matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0));
+    Ok((mapped && cob & 0x7FF != 0).then(|| (pdo.clone(), cob)))
 }
 
 /// Configures a TPDO the way CiA 301 §7.5.2.37 allows: disabled, `settings` written (sub-index,

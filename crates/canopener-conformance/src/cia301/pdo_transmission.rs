@@ -96,6 +96,22 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["pdo", "sync", "writes", "nmt"],
             run: sync_start_value,
         },
+        TestDef {
+            id: "cia301.sync.5",
+            suite: "cia301",
+            group: "sync",
+            title: "SYNC consumer (1005h bit 30 clear, 1006h = 0): every TPDO set to type 1 follows every SYNC once",
+            references: &[
+                req::SYNC,
+                req::SYNC_OBJECTS,
+                req::PDO,
+                "CCT Synchronization 03",
+                "CCT Synchronization 04",
+            ],
+            precondition: "TPDOs with writable COB-ID and transmission type and mapped data (up to 8 are counted); 1005h/1006h are written only where the EDS makes them writable",
+            tags: &["sync", "pdo", "writes", "nmt"],
+            run: sync_consumer,
+        },
     ]
 }
 
@@ -469,17 +485,33 @@ fn tpdos_after_syncs(
     cob: u32,
     counters: &[Option<u8>],
 ) -> Result<Vec<usize>, Stop> {
-    let id = ctx.id((cob & 0x7FF) as u16);
-    let mut after_sync = Vec::new();
+    let per_sync = tpdo_counts_after_syncs(ctx, sync, &[(cob & 0x7FF) as u16], counters)?;
+    Ok(per_sync.into_iter().map(|counts| counts[0]).collect())
+}
+
+/// [`tpdos_after_syncs`] for several TPDOs: per SYNC, the number of frames on each of `ids`.
+fn tpdo_counts_after_syncs(
+    ctx: &mut Ctx<'_, '_>,
+    sync: u16,
+    ids: &[u16],
+    counters: &[Option<u8>],
+) -> Result<Vec<Vec<usize>>, Stop> {
+    let wanted: Vec<_> = ids.iter().map(|id| ctx.id(*id)).collect();
+    let mut per_sync = Vec::new();
     for counter in counters {
         match counter {
             Some(counter) => ctx.send(sync, &[*counter])?,
             None => ctx.send(sync, &[])?,
         }
-        let frames = ctx.listen(SYNC_SPACING, |f| f.id() == id && !f.is_remote())?;
-        after_sync.push(frames.len());
+        let frames = ctx.listen(SYNC_SPACING, |f| wanted.contains(&f.id()) && !f.is_remote())?;
+        per_sync.push(
+            wanted
+                .iter()
+                .map(|id| frames.iter().filter(|l| l.frame.id() == *id).count())
+                .collect(),
+        );
     }
-    Ok(after_sync)
+    Ok(per_sync)
 }
 
 /// `..T..T`: `T` where a TPDO followed the SYNC.
@@ -488,4 +520,102 @@ fn sync_pattern(after_sync: &[usize]) -> String {
         .iter()
         .map(|n| if *n > 0 { 'T' } else { '.' })
         .collect()
+}
+
+/// The most TPDOs `cia301.sync.5` counts (each costs a handful of SDO transfers).
+pub const MAX_COUNTED_TPDOS: usize = 8;
+/// SYNCs `cia301.sync.5` sends.
+pub const CONSUMER_SYNCS: usize = 5;
+
+fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let writable = |ctx: &Ctx<'_, '_>, index: u16| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
+    // Make the device a SYNC consumer where the EDS allows it (CCT Synchronization 04).
+    let mut setup = Vec::new();
+    if writable(ctx, 0x1005) {
+        let cob = crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).unwrap_or(0x80) & !0x4000_0000;
+        setup.push((0x1005u16, cob.to_le_bytes().to_vec()));
+    }
+    if writable(ctx, 0x1006) {
+        setup.push((0x1006, vec![0; 4]));
+    }
+    for (index, data) in setup {
+        let reply = ctx.modify(index, 0, data.clone())?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(crate::cia301::helpers::refused_unexpectedly(
+                &crate::cia301::helpers::download_text((index, 0), &data),
+                &reply,
+                req::SYNC_OBJECTS,
+                "the device refuses to be a SYNC consumer",
+            ));
+        }
+    }
+    if crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
+        return Ok(Finding::not_applicable(
+            "the device produces SYNC (1005h bit 30) and 1005h is not writable",
+        ));
+    }
+    let mut ids: Vec<u16> = Vec::new();
+    let mut names = Vec::new();
+    for pdo in ctx.model().pdos(crate::device_model::PdoDirection::Transmit) {
+        if ids.len() == MAX_COUNTED_TPDOS {
+            break;
+        }
+        let Some((pdo, cob)) = crate::cia301::pdo::configurable_tpdo_at(ctx, &pdo, &[1, 2])? else {
+            continue;
+        };
+        let id = (cob & 0x7FF) as u16;
+        if ids.contains(&id) {
+            continue;
+        }
+        if configure_tpdo(ctx, &pdo, cob, &[(2, vec![1])], false)?.is_none() {
+            ids.push(id);
+            names.push(format!("TPDO{} ({id:#X})", pdo.number));
+        }
+    }
+    if ids.is_empty() {
+        return Ok(Finding::not_applicable(
+            "no TPDO with writable COB-ID and transmission type takes type 1",
+        ));
+    }
+    let counter = match ctx.read(0x1019, 0)? {
+        Reply::Done(d) => d.first().copied().filter(|c| *c > 1),
+        _ => None,
+    };
+    let counters: Vec<Option<u8>> = (0..CONSUMER_SYNCS)
+        .map(|i| counter.map(|overflow| (i % usize::from(overflow)) as u8 + 1))
+        .collect();
+    let sync = sync_id(ctx)?;
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    let per_sync = tpdo_counts_after_syncs(ctx, sync, &ids, &counters)?;
+    back_to_pre_operational(ctx)?;
+    let wrong: Vec<String> = names
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| per_sync.iter().any(|counts| counts[*i] != 1))
+        .map(|(i, name)| {
+            let counts: Vec<usize> = per_sync.iter().map(|c| c[i]).collect();
+            format!("{name}: {counts:?}")
+        })
+        .collect();
+    Ok(if wrong.is_empty() {
+        Finding::pass(format!(
+            "{} followed each of {CONSUMER_SYNCS} SYNCs once",
+            names.join(", ")
+        ))
+    } else {
+        Finding::fail(
+            format!("not one TPDO per SYNC: {}", wrong.join("; ")),
+            Evidence {
+                request: format!(
+                    "{} with transmission type 1; NMT start, {CONSUMER_SYNCS} SYNCs on {sync:#X}, {} ms apart",
+                    names.join(", "),
+                    SYNC_SPACING.as_millis()
+                ),
+                requirement: format!("{}: a TPDO of type 1 is sent after every SYNC", req::PDO),
+                answer: format!("TPDOs per SYNC: {}", wrong.join("; ")),
+                cause: "the SYNC consumer misses SYNCs, or a TPDO is not served on every SYNC".to_owned(),
+            },
+        )
+    })
 }

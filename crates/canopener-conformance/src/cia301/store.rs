@@ -52,6 +52,21 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["store", "writes", "nmt"],
             run: save_and_restore,
         },
+        TestDef {
+            id: "cia301.other.3",
+            suite: "cia301",
+            group: "other",
+            title: "Saved SYNC settings (1019h, 1007h) survive a reset node; restoring the defaults brings them back",
+            references: &[
+                req::STORE_RESTORE,
+                req::SYNC_OBJECTS,
+                "CCT Synchronization 08",
+                "CCT Synchronization 10",
+            ],
+            precondition: "1010h:01 and 1011h:01 with bit 0 set, and a writable 1019h (while 1006h = 0) or 1007h with a DefaultValue",
+            tags: &["store", "sync", "writes", "nmt"],
+            run: save_sync_settings,
+        },
     ]
 }
 
@@ -108,39 +123,96 @@ fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(target) = stored_target(
+        ctx,
+        0x1017,
+        1234u16.to_le_bytes().to_vec(),
+        4321u16.to_le_bytes().to_vec(),
+    ) else {
+        return Ok(Finding::not_applicable("no writable 1017h with a DefaultValue"));
+    };
+    survives_reset(ctx, &[target])
+}
+
+fn save_sync_settings(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // 1019h may only change while 1006h is 0 (CiA 301 §7.5.2.22): the test leaves 1006h alone.
+    let running = !matches!(ctx.read(0x1006, 0)?, Reply::Done(d) if d.iter().all(|b| *b == 0));
+    let mut targets = Vec::new();
+    if !running && let Some(target) = stored_target(ctx, 0x1019, vec![5], vec![10]) {
+        targets.push(target);
+    }
+    if let Some(target) = stored_target(
+        ctx,
+        0x1007,
+        1000u32.to_le_bytes().to_vec(),
+        2000u32.to_le_bytes().to_vec(),
+    ) {
+        targets.push(target);
+    }
+    if targets.is_empty() {
+        return Ok(Finding::not_applicable(
+            "no writable 1019h (with 1006h = 0) or 1007h with a DefaultValue",
+        ));
+    }
+    survives_reset(ctx, &targets)
+}
+
+/// A value to save: `index`:00, its DefaultValue and a value other than the default (`value`, or
+/// `other` when the default is `value`); `None` unless the EDS makes it writable with a default.
+fn stored_target(ctx: &Ctx<'_, '_>, index: u16, value: Vec<u8>, other: Vec<u8>) -> Option<Stored> {
+    let default = ctx
+        .model()
+        .entry(index, 0)
+        .filter(|e| e.writable() && e.size() == Some(value.len()))
+        .and_then(|e| e.default.clone())?;
+    let value = if default == value { other } else { value };
+    Some(Stored {
+        index,
+        default,
+        value,
+    })
+}
+
+/// An entry the save tests change, save and restore.
+struct Stored {
+    index: u16,
+    default: Vec<u8>,
+    value: Vec<u8>,
+}
+
+/// Writes every target's value, saves all parameters ("save" to 1010h:01), resets the node and
+/// expects the values back; then restores the defaults ("load" to 1011h:01), resets the node and
+/// expects the defaults.
+fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored]) -> Outcome {
     if !on_command(ctx, 0x1010)? || !on_command(ctx, 0x1011)? {
         return Ok(Finding::not_applicable(
             "1010h:01 or 1011h:01 does not save/restore on command",
         ));
     }
-    let Some(default) = ctx
-        .model()
-        .entry(0x1017, 0)
-        .filter(|e| e.writable())
-        .and_then(|e| e.default.clone())
-    else {
-        return Ok(Finding::not_applicable("no writable 1017h with a DefaultValue"));
-    };
-    // A value other than the default, that any producer accepts.
-    let value = if default == 1234u16.to_le_bytes() {
-        4321u16
-    } else {
-        1234
-    }
-    .to_le_bytes()
-    .to_vec();
+    let written: Vec<String> = targets
+        .iter()
+        .map(|t| download_text((t.index, 0), &t.value))
+        .collect();
+    let read: Vec<String> = targets.iter().map(|t| upload_text((t.index, 0))).collect();
     let steps = format!(
         "{}, {}, NMT reset node, {}",
-        download_text((0x1017, 0), &value),
+        written.join(", "),
         download_text((0x1010, 1), SAVE),
-        upload_text((0x1017, 0))
+        read.join(", ")
     );
-    if !matches!(ctx.write(0x1017, 0, value.clone())?, Reply::Done(_)) {
-        return Ok(Finding::inconclusive("1017h did not accept a new value"));
+    for target in targets {
+        if !matches!(ctx.write(target.index, 0, target.value.clone())?, Reply::Done(_)) {
+            // The verdict is already decided; the restore only puts the device back.
+            let _ = restore_defaults(ctx, targets)?;
+            return Ok(Finding::inconclusive(format!(
+                "{:04X}h did not accept a new value",
+                target.index
+            )));
+        }
     }
     let saved = ctx.write(0x1010, 1, SAVE.to_vec())?;
     if !matches!(saved, Reply::Done(_)) {
-        restore_defaults(ctx)?;
+        let _ = restore_defaults(ctx, targets)?;
         return Ok(Finding::fail(
             format!("\"save\" to 1010h:01 refused: {}", saved.describe()),
             Evidence {
@@ -155,43 +227,54 @@ fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ));
     }
     if !reset_node(ctx)? {
-        restore_defaults(ctx)?;
+        let _ = restore_defaults(ctx, targets)?;
         return Ok(Finding::inconclusive("no boot-up after the reset node"));
     }
-    let after_save = ctx.read(0x1017, 0)?;
-    let kept = matches!(&after_save, Reply::Done(d) if *d == value);
-    let restored = restore_defaults(ctx)?;
-    if !kept {
+    let mut lost = None;
+    for target in targets {
+        let after = ctx.read(target.index, 0)?;
+        if !matches!(&after, Reply::Done(d) if *d == target.value) {
+            lost = Some((target, after));
+            break;
+        }
+    }
+    let restored = restore_defaults(ctx, targets)?;
+    if let Some((target, after)) = lost {
         return Ok(Finding::fail(
-            "the saved 1017h did not survive a reset node",
+            format!("the saved {:04X}h did not survive a reset node", target.index),
             Evidence {
                 request: steps,
                 requirement: format!(
                     "{}: saved parameters are applied at the next reset ({} expected)",
                     req::STORE_RESTORE,
-                    hex(&value)
+                    hex(&target.value)
                 ),
-                answer: after_save.describe(),
+                answer: after.describe(),
                 cause: "\"save\" is confirmed but nothing is stored".to_owned(),
             },
         ));
     }
+    let names: Vec<String> = targets.iter().map(|t| format!("{:04X}h", t.index)).collect();
     Ok(match restored {
-        Some(Reply::Done(d)) if d == default => {
-            Finding::pass("saved across a reset, defaults back after \"load\"")
-        }
-        other => Finding::fail(
-            "after \"load\" to 1011h:01 and a reset, 1017h is not its default",
+        Ok(()) => Finding::pass(format!(
+            "{} saved across a reset, defaults back after \"load\"",
+            names.join(" and ")
+        )),
+        Err((target, other)) => Finding::fail(
+            format!(
+                "after \"load\" to 1011h:01 and a reset, {:04X}h is not its default",
+                target.index
+            ),
             Evidence {
                 request: format!(
                     "{}, NMT reset node, {}",
                     download_text((0x1011, 1), LOAD),
-                    upload_text((0x1017, 0))
+                    upload_text((target.index, 0))
                 ),
                 requirement: format!(
                     "{}: restored defaults ({}) apply at the next reset",
                     req::STORE_RESTORE,
-                    hex(&default)
+                    hex(&target.default)
                 ),
                 answer: other.map_or("no boot-up after the reset".to_owned(), |r| r.describe()),
                 cause: "\"load\" is confirmed but the saved parameters stay".to_owned(),
@@ -200,11 +283,21 @@ fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
     })
 }
 
-/// "load" to 1011h:01, reset node, and 1017h as it then reads (`None` without a boot-up).
-fn restore_defaults(ctx: &mut Ctx<'_, '_>) -> Result<Option<Reply>, Stop> {
+/// "load" to 1011h:01, reset node, and the first target that then does not read its default, with
+/// what it read (`None` without a boot-up).
+fn restore_defaults<'t>(
+    ctx: &mut Ctx<'_, '_>,
+    targets: &'t [Stored],
+) -> Result<Result<(), (&'t Stored, Option<Reply>)>, Stop> {
     ctx.write(0x1011, 1, LOAD.to_vec())?;
     if !reset_node(ctx)? {
-        return Ok(None);
+        return Ok(targets.first().map_or(Ok(()), |t| Err((t, None))));
     }
-    Ok(Some(ctx.read(0x1017, 0)?))
+    for target in targets {
+        let reply = ctx.read(target.index, 0)?;
+        if !matches!(&reply, Reply::Done(d) if *d == target.default) {
+            return Ok(Err((target, Some(reply))));
+        }
+    }
+    Ok(Ok(()))
 }
