@@ -146,7 +146,7 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         ],
         Fault::HeartbeatTooFast | Fault::HeartbeatJitter => &["cia301.ec.1"],
         Fault::GuardingAndHeartbeat => &["cia301.ec.3"],
-        Fault::IgnoresNmtStop => &["cia301.nmt.2", "cia301.nmt.3", "cia301.nmt.4"],
+        Fault::IgnoresNmtStop => &["cia301.pdo.15", "cia301.nmt.2", "cia301.nmt.3", "cia301.nmt.4"],
         Fault::NmtBroadcastIgnored => &["cia301.nmt.3"],
         Fault::SdoToggleIgnored => &["cia301.sdo.13"],
         Fault::SdoExpeditedSizeWrong => &[
