@@ -365,3 +365,12 @@ fn a_cancelled_run_aborts_the_running_transfer_on_the_bus_and_keeps_what_ran() {
         .unwrap_or_else(|| panic!("no abort in {:#?}", stopped.telegrams));
     assert!(abort.data.ends_with("00 00 00 08"), "{}", abort.data);
 }
+
+#[test]
+fn a_write_only_object_in_a_tpdo_mapping_fails_only_on_a_device_that_accepts_it() {
+    // The Technosoft ISD860's EDS has mappable wo objects; the fault matrix device has none.
+    const WO_DEVICE: &str = "ros-industrial__ros_canopen__canopen_chain_node__test__eds__ISD860.eds";
+    let verdict = |faults: &[Fault]| support::run(WO_DEVICE, faults, &["cia301.pdo.17"]).tests[0].verdict;
+    assert_eq!(verdict(&[]), Verdict::Pass);
+    assert_eq!(verdict(&[Fault::UnmappableAccepted]), Verdict::Fail);
+}
