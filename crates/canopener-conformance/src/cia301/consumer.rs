@@ -185,7 +185,8 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
         "{}, NMT start, heartbeats of node {producer} every {TESTER_PERIOD_MS} ms",
         download_text((0x1016, 1), &consumer)
     );
-    let while_alive = produce(ctx, producer, 6, emcy)?;
+    // 400 ms of heartbeats: longer than the consumer time, so an early timeout shows.
+    let while_alive = produce(ctx, producer, 4, emcy)?;
     if let Some(alarm) = while_alive.iter().find(|d| d.starts_with(&[0x30, 0x81])) {
         return Ok(Finding::fail(
             "EMCY 8130h while the consumed heartbeat came in time",

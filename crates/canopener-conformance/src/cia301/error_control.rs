@@ -140,6 +140,22 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["guarding"],
             run: guarding_toggle,
         },
+        TestDef {
+            id: "cia301.ec.8",
+            suite: "cia301",
+            group: "ec",
+            title: "Heartbeats follow 1017h with guarding off and with guard time and life time factor set",
+            references: &[
+                req::HEARTBEAT,
+                req::GUARDING,
+                "CCT Heartbeat versus guarding 01",
+                "CCT Heartbeat versus guarding 04",
+                "CCT Heartbeat versus guarding 06",
+            ],
+            precondition: "a writable 1017h; the guarding phases where 100Ch (and 100Dh) are writable",
+            tags: &["heartbeat", "guarding", "writes"],
+            run: heartbeat_over_guarding,
+        },
     ]
 }
 
@@ -406,10 +422,10 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ));
     }
     let id = ctx.id(0x700 + u16::from(ctx.node()));
-    // One period to settle, then ten.
+    // One period to settle, then seven.
     ctx.listen(Duration::from_millis(u64::from(TIMING_HEARTBEAT_MS)), |_| false)?;
     let frames = ctx.listen(
-        Duration::from_millis(u64::from(TIMING_HEARTBEAT_MS) * 21 / 2),
+        Duration::from_millis(u64::from(TIMING_HEARTBEAT_MS) * 15 / 2),
         |f| f.id() == id && !f.is_remote(),
     )?;
     let period = f64::from(TIMING_HEARTBEAT_MS);
@@ -420,9 +436,9 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .copied()
         .max_by(|a, b| (a - period).abs().total_cmp(&(b - period).abs()));
     Ok(match worst {
-        _ if frames.len() < 9 => Finding::fail(
+        _ if frames.len() < 7 => Finding::fail(
             format!(
-                "{} heartbeats in 10.5 periods of {TIMING_HEARTBEAT_MS} ms",
+                "{} heartbeats in 7.5 periods of {TIMING_HEARTBEAT_MS} ms",
                 frames.len()
             ),
             Evidence {
@@ -431,7 +447,7 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 answer: format!(
                     "{} heartbeats in {} ms",
                     frames.len(),
-                    u64::from(TIMING_HEARTBEAT_MS) * 21 / 2
+                    u64::from(TIMING_HEARTBEAT_MS) * 15 / 2
                 ),
                 cause: "the producer does not run at the configured period".to_owned(),
             },
@@ -603,4 +619,99 @@ fn guarding_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         )
     })
+}
+
+/// The heartbeat period `cia301.ec.8` sets, in ms.
+pub const PRECEDENCE_HEARTBEAT_MS: u16 = 50;
+/// How long `cia301.ec.8` counts heartbeats in each phase: four periods.
+pub const PRECEDENCE_WATCH: Duration = Duration::from_millis(200);
+
+/// SDO writes of one phase: (index, value of sub-index 0).
+type Writes = Vec<(u16, Vec<u8>)>;
+
+fn heartbeat_over_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // The objects hold their CiA 301 types (CCT Heartbeat versus guarding 01).
+    for (index, size) in [(0x1017u16, 2usize), (0x100C, 2), (0x100D, 1)] {
+        if ctx.model().entry(index, 0).is_none() {
+            continue;
+        }
+        let reply = ctx.read(index, 0)?;
+        if !matches!(&reply, Reply::Done(d) if d.len() == size) {
+            return Ok(refused_unexpectedly(
+                &upload_text((index, 0)),
+                &reply,
+                req::HEARTBEAT,
+                &format!("{index:04X}h does not read as {size} byte(s)"),
+            ));
+        }
+    }
+    let writable = |ctx: &Ctx<'_, '_>, index: u16| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
+    if !writable(ctx, 0x1017) {
+        return Ok(Finding::not_applicable("1017h is not writable"));
+    }
+    let mut phases: Vec<(&str, Writes)> = Vec::new();
+    if writable(ctx, 0x100C) {
+        phases.push(("guard time 100Ch = 0 (guarding off)", vec![(0x100C, vec![0, 0])]));
+        if writable(ctx, 0x100D) {
+            phases.push((
+                "guard time 100Ch = 50 ms and life time factor 100Dh = 2 (guarding configured)",
+                vec![(0x100C, 50u16.to_le_bytes().to_vec()), (0x100D, vec![2])],
+            ));
+        }
+    } else {
+        phases.push(("guarding parameters as they are", Vec::new()));
+    }
+    let period = PRECEDENCE_HEARTBEAT_MS.to_le_bytes().to_vec();
+    let heartbeat = ctx.modify(0x1017, 0, period.clone())?;
+    if !matches!(heartbeat, Reply::Done(_)) {
+        return Ok(refused_unexpectedly(
+            &download_text((0x1017, 0), &period),
+            &heartbeat,
+            req::HEARTBEAT,
+            "1017h does not take a producer time",
+        ));
+    }
+    // One period for the producer restarted by the write.
+    ctx.listen(Duration::from_millis(u64::from(PRECEDENCE_HEARTBEAT_MS)), |_| {
+        false
+    })?;
+    let id = ctx.id(0x700 + u16::from(ctx.node()));
+    let least = (PRECEDENCE_WATCH.as_millis() / u128::from(PRECEDENCE_HEARTBEAT_MS)) as usize - 1;
+    let mut seen = Vec::new();
+    for (what, writes) in phases {
+        for (index, data) in writes {
+            let reply = ctx.modify(index, 0, data.clone())?;
+            if !matches!(reply, Reply::Done(_)) {
+                return Ok(Finding::inconclusive(format!(
+                    "{} got {}",
+                    download_text((index, 0), &data),
+                    reply.describe()
+                )));
+            }
+        }
+        let frames = ctx.listen(PRECEDENCE_WATCH, |f| f.id() == id && !f.is_remote())?;
+        if frames.len() < least {
+            return Ok(Finding::fail(
+                format!(
+                    "{} heartbeats in {} ms with {what}",
+                    frames.len(),
+                    PRECEDENCE_WATCH.as_millis()
+                ),
+                Evidence {
+                    request: format!(
+                        "1017h = {PRECEDENCE_HEARTBEAT_MS} ms, {what}; {} ms of listening",
+                        PRECEDENCE_WATCH.as_millis()
+                    ),
+                    requirement: format!(
+                        "{}: with a producer heartbeat time set the device produces heartbeats, whatever the guarding parameters (at least {least} here)",
+                        req::HEARTBEAT
+                    ),
+                    answer: format!("{} heartbeats", frames.len()),
+                    cause: "the guarding parameters switch the heartbeat producer off".to_owned(),
+                },
+            ));
+        }
+        seen.push(format!("{} with {what}", frames.len()));
+    }
+    Ok(Finding::pass(format!("heartbeats: {}", seen.join("; "))))
 }

@@ -241,7 +241,7 @@ pub const TEST_SHORT_EVENT_TIMER_MS: u16 = 10;
 /// How long `cia301.pdo.12` watches the TPDOs.
 pub const WATCH: Duration = Duration::from_millis(300);
 /// How long `cia301.pdo.13` watches without SYNC.
-pub const UNSYNCED_WATCH: Duration = Duration::from_millis(200);
+pub const UNSYNCED_WATCH: Duration = Duration::from_millis(100);
 /// SYNCs `cia301.pdo.13` sends.
 pub const ACYCLIC_SYNCS: usize = 6;
 /// The counter overflow value (1019h) `cia301.pdo.14` sets.
