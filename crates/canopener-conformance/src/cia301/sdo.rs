@@ -218,6 +218,21 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["sdo", "writes"],
             run: segmented_download,
         },
+        TestDef {
+            id: "cia301.sdo.20",
+            suite: "cia301",
+            group: "sdo",
+            title: "1201h–12FFh (further SDO servers, SDO clients) read with their types and hold their defaults after a reset communication",
+            references: &[
+                req::SDO_SERVER_PARAMETER,
+                req::SDO_CLIENT_PARAMETER,
+                "CCT SDO 28",
+                "CCT SDO 29",
+            ],
+            precondition: "the EDS has one of 1201h–12FFh; the reset communication part changes a writable node-ID (sub-index 3) or valid COB-ID first",
+            tags: &["sdo", "writes", "nmt"],
+            run: further_sdo_channels,
+        },
     ]
 }
 
@@ -796,4 +811,100 @@ fn block_size_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
         req::SDO_BLOCK_UPLOAD,
         "the server does not check the client's block size (1..127)",
     ))
+}
+
+fn further_sdo_channels(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let entries: Vec<_> = ctx
+        .model()
+        .entries
+        .values()
+        .filter(|e| (0x1201..=0x12FF).contains(&e.index) && e.readable())
+        .cloned()
+        .collect();
+    if entries.is_empty() {
+        return Ok(Finding::not_applicable("the EDS has none of 1201h–12FFh"));
+    }
+    let clause = |index: u16| {
+        if index < 0x1280 {
+            req::SDO_SERVER_PARAMETER
+        } else {
+            req::SDO_CLIENT_PARAMETER
+        }
+    };
+    // CCT SDO 28: every entry reads with its type's size.
+    let mut current = Vec::new();
+    for e in &entries {
+        let reply = ctx.read(e.index, e.sub)?;
+        match (&reply, e.size()) {
+            (Reply::Done(d), Some(size)) if d.len() != size => {
+                return Ok(Finding::fail(
+                    format!("{} reads as {} bytes, its type has {size}", e.label(), d.len()),
+                    Evidence {
+                        request: upload_text((e.index, e.sub)),
+                        requirement: format!("{}: the entry has the type CiA 301 gives it", clause(e.index)),
+                        answer: reply.describe(),
+                        cause: "the SDO channel parameter has the wrong type".to_owned(),
+                    },
+                ));
+            }
+            (Reply::Done(d), _) => current.push((e, d.clone())),
+            _ => {
+                return Ok(refused_unexpectedly(
+                    &upload_text((e.index, e.sub)),
+                    &reply,
+                    clause(e.index),
+                    "a readable SDO channel parameter cannot be read",
+                ));
+            }
+        }
+    }
+    // CCT SDO 29: change one value, reset communication, and every default is back. A node-ID
+    // (sub-index 3) or a valid COB-ID (made invalid) can always change (CiA 301 §7.5.2.33/34).
+    let change = current.iter().find_map(|(e, d)| {
+        if !e.writable() {
+            return None;
+        }
+        match (e.sub, d.as_slice()) {
+            (3, [node]) => Some((e.index, e.sub, vec![if *node == 1 { 2 } else { 1 }])),
+            (1 | 2, [a, b, c, d]) if d & 0x80 == 0 => Some((e.index, e.sub, vec![*a, *b, *c, d | 0x80])),
+            _ => None,
+        }
+    });
+    let mut changed = None;
+    if let Some((index, sub, value)) = change
+        && matches!(ctx.modify(index, sub, value.clone())?, Reply::Done(_))
+    {
+        changed = Some(download_text((index, sub), &value));
+    }
+    if !crate::cia301::helpers::reset_communication(ctx)? {
+        return Ok(Finding::inconclusive("no boot-up after the reset communication"));
+    }
+    for e in &entries {
+        let Some(default) = &e.default else { continue };
+        let reply = ctx.read(e.index, e.sub)?;
+        if !matches!(&reply, Reply::Done(d) if d == default) {
+            return Ok(Finding::fail(
+                format!("{} is not its default after a reset communication", e.label()),
+                Evidence {
+                    request: format!(
+                        "{}NMT reset communication, {}",
+                        changed.as_ref().map_or(String::new(), |c| format!("{c}, ")),
+                        upload_text((e.index, e.sub))
+                    ),
+                    requirement: format!(
+                        "{}: reset communication sets the communication parameters to their power-on values ({} by the EDS)",
+                        req::NMT_MODULE_CONTROL,
+                        hex(default)
+                    ),
+                    answer: reply.describe(),
+                    cause: "the SDO channel parameters are not reset with the communication area".to_owned(),
+                },
+            ));
+        }
+    }
+    Ok(Finding::pass(format!(
+        "{} entries read with their types; defaults back after a reset communication{}",
+        entries.len(),
+        changed.map_or(String::new(), |c| format!(" (after {c})"))
+    )))
 }
