@@ -122,7 +122,11 @@ fn a_device_with_many_pdos_fails_only_the_eds_check_of_its_file() {
     check_clean(&report, "CANopenSocket: 16+16 PDOs", &["cia301.eds.1"]);
     assert_eq!(device_failures(&report), ["cia301.eds.1"]);
     // Its SDO client 1280h is what cia301.sdo.20 reads and resets.
-    let sdo20 = report.tests.iter().find(|t| t.id == "cia301.sdo.20").expect("sdo.20 ran");
+    let sdo20 = report
+        .tests
+        .iter()
+        .find(|t| t.id == "cia301.sdo.20")
+        .expect("sdo.20 ran");
     assert_eq!(sdo20.verdict, Verdict::Pass, "{}", sdo20.reason);
     eprintln!("cia301.sdo.20: {}", sdo20.reason);
 }

@@ -233,6 +233,16 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["sdo", "writes", "nmt"],
             run: further_sdo_channels,
         },
+        TestDef {
+            id: "cia301.sdo.21",
+            suite: "cia301",
+            group: "sdo",
+            title: "A block upload acknowledged with sequence number 128 is aborted",
+            references: &[req::SDO_BLOCK_UPLOAD, req::SDO_ABORT, "CCT SDO 27"],
+            precondition: "always (a device without block transfer refuses the initiate with 0504 0001h: not_applicable)",
+            tags: &["sdo", "block"],
+            run: block_ack_sequence_128,
+        },
     ]
 }
 
@@ -907,4 +917,81 @@ fn further_sdo_channels(ctx: &mut Ctx<'_, '_>) -> Outcome {
         entries.len(),
         changed.map_or(String::new(), |c| format!(" (after {c})"))
     )))
+}
+
+/// The block size `cia301.sdo.21` asks for.
+const ACK_TEST_BLOCK: u8 = 4;
+
+fn block_ack_sequence_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let at = long_entry(ctx).unwrap_or((0x1000, 0));
+    let [lo, hi] = at.0.to_le_bytes();
+    let node = u16::from(ctx.node());
+    // Initiate block upload (ccs 5, CRC offered, no protocol switch), block size 4.
+    let initiate = [0xA4, lo, hi, at.1, ACK_TEST_BLOCK, 0, 0, 0];
+    let text = format!(
+        "SDO block upload initiate {} of {:04X}h:{:02X}",
+        hex(&initiate),
+        at.0,
+        at.1
+    );
+    match Reply::of_raw(ctx.raw_sdo(initiate)?) {
+        // scs 6 (block upload), ss 0 (initiate).
+        Reply::Frame(d) if d[0] & 0xE1 == 0xC0 => {}
+        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) => {
+            return Ok(Finding::not_applicable(
+                "the device has no block transfer (0504 0001h)",
+            ));
+        }
+        other => {
+            if matches!(other, Reply::Frame(_)) {
+                // End whatever the server started.
+                let [a, b, c, d] = abort::COMMAND_SPECIFIER_INVALID.to_le_bytes();
+                ctx.send(0x600 + node, &[0x80, lo, hi, at.1, a, b, c, d])?;
+            }
+            return Ok(refused_unexpectedly(
+                &text,
+                &other,
+                req::SDO_BLOCK_UPLOAD,
+                "the block upload server is broken",
+            ));
+        }
+    }
+    // Start: the server sends sub-blocks with sequence numbers 1..block size, the last one of the
+    // value with bit 7 set (CiA 301 §7.2.4.3.14).
+    ctx.send(0x600 + node, &[0xA3, 0, 0, 0, 0, 0, 0, 0])?;
+    let response = ctx.id(0x580 + node);
+    let mut last_seq = 0;
+    loop {
+        let timeout = ctx.timeout();
+        let Some(segment) = ctx.wait_for(timeout, |f| f.id() == response && !f.is_remote())? else {
+            break;
+        };
+        let data = segment.frame.data();
+        last_seq = data.first().map_or(0, |b| b & 0x7F);
+        if data.first().is_some_and(|b| b & 0x80 != 0) || last_seq >= ACK_TEST_BLOCK {
+            break;
+        }
+    }
+    if last_seq == 0 {
+        return Ok(Finding::inconclusive(format!(
+            "no sub-block after the start of the block upload ({text})"
+        )));
+    }
+    // Acknowledge sequence number 128: no sub-block has it (1..127, and the block size was 4).
+    let ack = [0xA2, 128, ACK_TEST_BLOCK, 0, 0, 0, 0, 0];
+    let reply = Reply::of_raw(ctx.raw_sdo(ack)?);
+    if !matches!(reply, Reply::Refused(_)) {
+        let [a, b, c, d] = abort::INVALID_SEQUENCE_NUMBER.to_le_bytes();
+        ctx.send(0x600 + node, &[0x80, lo, hi, at.1, a, b, c, d])?;
+    }
+    Ok(expect_refusal(
+        &format!(
+            "{text}, start, {last_seq} sub-block(s) received, block acknowledge {}",
+            hex(&ack)
+        ),
+        &reply,
+        req::SEQUENCE_NUMBER,
+        req::SDO_BLOCK_UPLOAD,
+        "the server does not check the acknowledged sequence number",
+    ))
 }
