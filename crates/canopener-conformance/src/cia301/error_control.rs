@@ -156,6 +156,16 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["heartbeat", "guarding", "writes"],
             run: heartbeat_over_guarding,
         },
+        TestDef {
+            id: "cia301.ec.9",
+            suite: "cia301",
+            group: "ec",
+            title: "Node guarding: remote frames on other nodes' guarding IDs (700h–77Fh) are not answered, its own is",
+            references: &[req::GUARDING, "CCT Guarding 04"],
+            precondition: "the EDS has 100Ch and 100Dh",
+            tags: &["guarding"],
+            run: guarding_id_range,
+        },
     ]
 }
 
@@ -714,4 +724,72 @@ fn heartbeat_over_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
         seen.push(format!("{} with {what}", frames.len()));
     }
     Ok(Finding::pass(format!("heartbeats: {}", seen.join("; "))))
+}
+
+fn guarding_id_range(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !ctx.model().has_guarding() {
+        return Ok(Finding::not_applicable("the EDS has no 100Ch/100Dh"));
+    }
+    // Guarding is served while the heartbeat producer is off (CiA 301 §7.2.8.3.2).
+    if ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
+        ctx.modify(0x1017, 0, vec![0, 0])?;
+    }
+    // A heartbeat the previous test's producer already had on its way is not an answer.
+    ctx.listen(Duration::from_millis(100), |_| false)?;
+    let node = ctx.node();
+    // The ends of the range and the neighbours of the node under test.
+    let mut others: Vec<u8> = [0u8, 1, node.wrapping_sub(1), node.saturating_add(1), 127]
+        .into_iter()
+        .filter(|n| *n != node && *n <= 127)
+        .collect();
+    others.dedup();
+    for other in &others {
+        ctx.send_remote(0x700 + u16::from(*other), 1)?;
+    }
+    let answers = ctx.listen(Duration::from_millis(100), |f| {
+        !f.id().is_extended() && (0x700..=0x77F).contains(&f.id().as_raw()) && !f.is_remote()
+    })?;
+    let asked: Vec<String> = others
+        .iter()
+        .map(|n| format!("{:#X}", 0x700 + u16::from(*n)))
+        .collect();
+    if let Some(answer) = answers.first() {
+        return Ok(Finding::fail(
+            format!(
+                "answered a guarding request for another node: {:#X} {}",
+                answer.frame.id().as_raw(),
+                hex(answer.frame.data())
+            ),
+            Evidence {
+                request: format!("remote frames on {}", asked.join(", ")),
+                requirement: format!(
+                    "{}: the device answers only the guarding request on 700h + its node-ID ({:#X})",
+                    req::GUARDING,
+                    0x700 + u16::from(node)
+                ),
+                answer: format!("{} frame(s) in 100 ms", answers.len()),
+                cause: "the guarding request's CAN-ID is not compared with the node-ID".to_owned(),
+            },
+        ));
+    }
+    let own = ctx.id(0x700 + u16::from(node));
+    ctx.send_remote(0x700 + u16::from(node), 1)?;
+    let answer = ctx.wait_for(Duration::from_millis(100), |f| f.id() == own && !f.is_remote())?;
+    Ok(match answer {
+        Some(answer) => Finding::pass(format!(
+            "{} not answered; {:#X} answered {}",
+            asked.join(", "),
+            0x700 + u16::from(node),
+            hex(answer.frame.data())
+        )),
+        None => Finding::fail(
+            "its own guarding request was not answered",
+            Evidence {
+                request: format!("a remote frame on {:#X}", 0x700 + u16::from(node)),
+                requirement: format!("{}: each guarding request is answered", req::GUARDING),
+                answer: "no answer within 100 ms".to_owned(),
+                cause: "node guarding is not served".to_owned(),
+            },
+        ),
+    })
 }
