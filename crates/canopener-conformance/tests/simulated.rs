@@ -129,6 +129,16 @@ fn a_device_with_many_pdos_fails_only_the_eds_check_of_its_file() {
         .expect("sdo.20 ran");
     assert_eq!(sdo20.verdict, Verdict::Pass, "{}", sdo20.reason);
     eprintln!("cia301.sdo.20: {}", sdo20.reason);
+    // And its 1280h:03, saved with 1010h:01, is what cia301.other.4 keeps across a reset
+    // communication.
+    let other4 = report
+        .tests
+        .iter()
+        .find(|t| t.id == "cia301.other.4")
+        .expect("other.4 ran");
+    assert_eq!(other4.verdict, Verdict::Pass, "{}", other4.reason);
+    let stored = support::run(MANY_PDOS, &[Fault::StoreIgnored], &["cia301.other.4"]);
+    assert_eq!(device_failures(&stored), ["cia301.other.4"]);
 }
 
 /// The device the fault matrix runs on: it has node guarding, limits, an EMCY producer, RPDOs and

@@ -67,6 +67,16 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["store", "sync", "writes", "nmt"],
             run: save_sync_settings,
         },
+        TestDef {
+            id: "cia301.other.4",
+            suite: "cia301",
+            group: "other",
+            title: "A saved SDO channel parameter (1201h–12FFh) survives a reset communication; restoring the defaults brings it back",
+            references: &[req::STORE_RESTORE, req::SDO_CLIENT_PARAMETER, "CCT SDO 30"],
+            precondition: "1010h:01 and 1011h:01 with bit 0 set, and a writable node-ID or valid COB-ID with a DefaultValue in 1201h–12FFh",
+            tags: &["store", "sdo", "writes", "nmt"],
+            run: save_sdo_channel,
+        },
     ]
 }
 
@@ -131,7 +141,7 @@ fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
     ) else {
         return Ok(Finding::not_applicable("no writable 1017h with a DefaultValue"));
     };
-    survives_reset(ctx, &[target])
+    survives_reset(ctx, &[target], Reset::Node)
 }
 
 fn save_sync_settings(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -154,7 +164,7 @@ fn save_sync_settings(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "no writable 1019h (with 1006h = 0) or 1007h with a DefaultValue",
         ));
     }
-    survives_reset(ctx, &targets)
+    survives_reset(ctx, &targets, Reset::Node)
 }
 
 /// A value to save: `index`:00, its DefaultValue and a value other than the default (`value`, or
@@ -168,6 +178,7 @@ fn stored_target(ctx: &Ctx<'_, '_>, index: u16, value: Vec<u8>, other: Vec<u8>) 
     let value = if default == value { other } else { value };
     Some(Stored {
         index,
+        sub: 0,
         default,
         value,
     })
@@ -176,6 +187,7 @@ fn stored_target(ctx: &Ctx<'_, '_>, index: u16, value: Vec<u8>, other: Vec<u8>) 
 /// An entry the save tests change, save and restore.
 struct Stored {
     index: u16,
+    sub: u8,
     default: Vec<u8>,
     value: Vec<u8>,
 }
@@ -183,7 +195,7 @@ struct Stored {
 /// Writes every target's value, saves all parameters ("save" to 1010h:01), resets the node and
 /// expects the values back; then restores the defaults ("load" to 1011h:01), resets the node and
 /// expects the defaults.
-fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored]) -> Outcome {
+fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Outcome {
     if !on_command(ctx, 0x1010)? || !on_command(ctx, 0x1011)? {
         return Ok(Finding::not_applicable(
             "1010h:01 or 1011h:01 does not save/restore on command",
@@ -191,17 +203,21 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored]) -> Outcome {
     }
     let written: Vec<String> = targets
         .iter()
-        .map(|t| download_text((t.index, 0), &t.value))
+        .map(|t| download_text((t.index, t.sub), &t.value))
         .collect();
-    let read: Vec<String> = targets.iter().map(|t| upload_text((t.index, 0))).collect();
+    let read: Vec<String> = targets.iter().map(|t| upload_text((t.index, t.sub))).collect();
     let steps = format!(
-        "{}, {}, NMT reset node, {}",
+        "{}, {}, NMT {}, {}",
         written.join(", "),
         download_text((0x1010, 1), SAVE),
+        reset.name(),
         read.join(", ")
     );
     for target in targets {
-        if !matches!(ctx.write(target.index, 0, target.value.clone())?, Reply::Done(_)) {
+        if !matches!(
+            ctx.write(target.index, target.sub, target.value.clone())?,
+            Reply::Done(_)
+        ) {
             // The verdict is already decided; the restore only puts the device back.
             let _ = restore_defaults(ctx, targets)?;
             return Ok(Finding::inconclusive(format!(
@@ -226,13 +242,20 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored]) -> Outcome {
             },
         ));
     }
-    if !reset_node(ctx)? {
+    let reset_ok = match reset {
+        Reset::Node => reset_node(ctx)?,
+        Reset::Communication => crate::cia301::helpers::reset_communication(ctx)?,
+    };
+    if !reset_ok {
         let _ = restore_defaults(ctx, targets)?;
-        return Ok(Finding::inconclusive("no boot-up after the reset node"));
+        return Ok(Finding::inconclusive(format!(
+            "no boot-up after the {}",
+            reset.name()
+        )));
     }
     let mut lost = None;
     for target in targets {
-        let after = ctx.read(target.index, 0)?;
+        let after = ctx.read(target.index, target.sub)?;
         if !matches!(&after, Reply::Done(d) if *d == target.value) {
             lost = Some((target, after));
             break;
@@ -241,7 +264,12 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored]) -> Outcome {
     let restored = restore_defaults(ctx, targets)?;
     if let Some((target, after)) = lost {
         return Ok(Finding::fail(
-            format!("the saved {:04X}h did not survive a reset node", target.index),
+            format!(
+                "the saved {:04X}h:{:02X} did not survive a {}",
+                target.index,
+                target.sub,
+                reset.name()
+            ),
             Evidence {
                 request: steps,
                 requirement: format!(
@@ -269,7 +297,7 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored]) -> Outcome {
                 request: format!(
                     "{}, NMT reset node, {}",
                     download_text((0x1011, 1), LOAD),
-                    upload_text((target.index, 0))
+                    upload_text((target.index, target.sub))
                 ),
                 requirement: format!(
                     "{}: restored defaults ({}) apply at the next reset",
@@ -294,10 +322,55 @@ fn restore_defaults<'t>(
         return Ok(targets.first().map_or(Ok(()), |t| Err((t, None))));
     }
     for target in targets {
-        let reply = ctx.read(target.index, 0)?;
+        let reply = ctx.read(target.index, target.sub)?;
         if !matches!(&reply, Reply::Done(d) if *d == target.default) {
             return Ok(Err((target, Some(reply))));
         }
     }
     Ok(Ok(()))
+}
+
+/// The reset after which saved values must be back.
+#[derive(Debug, Clone, Copy)]
+enum Reset {
+    Node,
+    Communication,
+}
+
+impl Reset {
+    fn name(self) -> &'static str {
+        match self {
+            Reset::Node => "reset node",
+            Reset::Communication => "reset communication",
+        }
+    }
+}
+
+fn save_sdo_channel(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // A node-ID (sub-index 3) or a valid COB-ID (made invalid) of 1201h–12FFh can always change.
+    let target = ctx
+        .model()
+        .entries
+        .values()
+        .filter(|e| (0x1201..=0x12FF).contains(&e.index) && e.writable())
+        .find_map(|e| {
+            let default = e.default.clone()?;
+            let value = match (e.sub, default.as_slice()) {
+                (3, [node]) => vec![if *node == 1 { 2 } else { 1 }],
+                (1 | 2, [a, b, c, d]) if d & 0x80 == 0 => vec![*a, *b, *c, d | 0x80],
+                _ => return None,
+            };
+            Some(Stored {
+                index: e.index,
+                sub: e.sub,
+                default,
+                value,
+            })
+        });
+    let Some(target) = target else {
+        return Ok(Finding::not_applicable(
+            "no writable node-ID or valid COB-ID with a DefaultValue in 1201h–12FFh",
+        ));
+    };
+    survives_reset(ctx, &[target], Reset::Communication)
 }
