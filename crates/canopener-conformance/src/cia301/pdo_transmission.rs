@@ -234,8 +234,12 @@ fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
     )
 }
 
-/// The inhibit time `cia301.pdo.12` sets, in 100 µs: 30 ms.
-pub const TEST_INHIBIT_100US: u16 = 300;
+/// The inhibit time `cia301.pdo.12` sets, in 100 µs: 50 ms.
+pub const TEST_INHIBIT_100US: u16 = 500;
+/// How much shorter than the inhibit time a measured interval may be: the jitter of time stamps
+/// taken after the bus (a hub on a loaded host showed 6 ms); a device ignoring the inhibit time
+/// sends at the 10 ms event timer.
+pub const INHIBIT_SLACK_MS: f64 = 10.0;
 /// The event timer `cia301.pdo.12` sets, shorter than the inhibit time, in ms.
 pub const TEST_SHORT_EVENT_TIMER_MS: u16 = 10;
 /// How long `cia301.pdo.12` watches the TPDOs.
@@ -281,18 +285,17 @@ fn inhibit_time(ctx: &mut Ctx<'_, '_>) -> Outcome {
         WATCH.as_millis()
     );
     let requirement = format!(
-        "{}: an event-driven TPDO is sent when its event timer elapses, and never twice within the inhibit time 18xxh:03 (canopener allows {:.0} % for time stamps)",
-        req::PDO_PARAMETERS,
-        EVENT_TIMER_TOLERANCE * 100.0
+        "{}: an event-driven TPDO is sent when its event timer elapses, and never twice within the inhibit time 18xxh:03 (canopener allows {INHIBIT_SLACK_MS} ms for time stamps)",
+        req::PDO_PARAMETERS
     );
     // The event timer elapses every 10 ms: a TPDO is due at least at the end of every inhibit time
-    // plus one timer period, so fewer than a third of the inhibit periods means the timer is ignored.
+    // plus one timer period, so fewer than half of those periods means the timer is ignored.
     let least =
         (WATCH.as_secs_f64() * 1000.0 / (inhibit_ms + f64::from(TEST_SHORT_EVENT_TIMER_MS))) as usize / 2;
     let early = intervals
         .iter()
         .copied()
-        .find(|i| *i < inhibit_ms * (1.0 - EVENT_TIMER_TOLERANCE));
+        .find(|i| *i < inhibit_ms - INHIBIT_SLACK_MS);
     Ok(if let Some(early) = early {
         Finding::fail(
             format!("two TPDOs {early:.1} ms apart with an inhibit time of {inhibit_ms} ms"),
