@@ -393,3 +393,39 @@ fn a_write_only_object_in_a_tpdo_mapping_fails_only_on_a_device_that_accepts_it(
     assert_eq!(verdict(&[]), Verdict::Pass);
     assert_eq!(verdict(&[Fault::UnmappableAccepted]), Verdict::Fail);
 }
+
+#[test]
+fn a_run_cancelled_in_the_middle_of_a_test_writes_back_what_the_test_changed() {
+    // Ctrl-C right after the device confirmed cia301.ec.1's write of 1017h = 100 ms.
+    let report = support::run_cancelled_on(FAULT_DEVICE, &["cia301.ec.1"], &|frame| {
+        frame.id().as_raw() == 0x580 + u32::from(support::NODE)
+            && frame.data().starts_with(&[0x60, 0x17, 0x10])
+    });
+    assert!(report.interrupted);
+    assert_eq!(report.tests.len(), 1);
+    assert!(
+        report.tests[0].reason.contains("interrupted"),
+        "{}",
+        report.tests[0].reason
+    );
+    assert!(report.left_modified.is_empty(), "{:?}", report.left_modified);
+    // After the confirmation of 64 00 (100 ms) the old value goes back and is confirmed.
+    let telegrams = &report.tests[0].telegrams;
+    let set = telegrams
+        .iter()
+        .position(|t| t.id == "0x605" && t.data.starts_with("2B 17 10 00 64 00"))
+        .expect("the test's write of 1017h");
+    let back = telegrams[set + 1..]
+        .iter()
+        .position(|t| {
+            t.id == "0x605" && t.data.starts_with("2B 17 10 00") && !t.data.starts_with("2B 17 10 00 64 00")
+        })
+        .map(|i| i + set + 1)
+        .unwrap_or_else(|| panic!("1017h not written back: {telegrams:#?}"));
+    assert!(
+        telegrams[back + 1..]
+            .iter()
+            .any(|t| t.id == "0x585" && t.data.starts_with("60 17 10 00")),
+        "the write-back was not confirmed"
+    );
+}
