@@ -134,6 +134,11 @@ impl<'r, 'l> Ctx<'r, 'l> {
         self.eds_errors
     }
 
+    /// Whether the link was cancelled (Ctrl-C).
+    pub fn link_cancelled(&self) -> bool {
+        self.link().is_cancelled()
+    }
+
     /// The node under test.
     pub fn node(&self) -> u8 {
         self.sdo.node()

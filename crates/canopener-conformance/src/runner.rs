@@ -34,6 +34,11 @@ pub struct RunSpec<'a> {
     /// The errors of canopener's EDS checks on the file ([`crate::cia301::eds::errors`]); `None`
     /// when the description was not an EDS/DCF.
     pub eds_errors: Option<Vec<String>>,
+    /// The token the link honours (the CLI's Ctrl-C). When it stops a test, the runner takes the
+    /// cancellation back once to put the device into pre-operational and write back what the test
+    /// changed (each SDO transfer bounded by the timeout), then cancels again; a second Ctrl-C
+    /// stops the write-back too. `None`: nothing is written back after a cancellation.
+    pub cancel: Option<canopener_runtime::cancel::Cancel>,
 }
 
 /// How far a run got, for a progress bar.
@@ -221,12 +226,20 @@ fn run_one(recorder: &mut Recorder<'_>, spec: &RunSpec<'_>, test: &TestDef) -> R
     if !test.needs_device() {
         return Ok((finding, measurements, Vec::new(), stopped));
     }
+    let interrupted = stopped && ctx.link_cancelled();
+    if let Some(cancel) = spec.cancel.as_ref().filter(|_| interrupted) {
+        cancel.resume();
+    }
     // Pre-operational first: a device left stopped would not serve the SDO writes that restore it.
     let cleanup = (|| -> Result<Vec<String>, Stop> {
         ctx.nmt(NmtCommand::EnterPreOperational, false)?;
         ctx.listen(Duration::from_millis(10), |_| false)?;
         ctx.restore()
     })();
+    if let Some(cancel) = spec.cancel.as_ref().filter(|_| interrupted) {
+        // The run still ends here, as the user asked.
+        cancel.cancel();
+    }
     let left = match cleanup {
         Ok(left) => left,
         Err(_) => {

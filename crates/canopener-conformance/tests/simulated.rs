@@ -70,9 +70,16 @@ fn check_clean(report: &canopener_conformance::model::Report, what: &str, allowe
         report.tests.len(),
         canopener_conformance::catalogue::catalogue().len()
     );
+    let mut longest: Vec<_> = report
+        .tests
+        .iter()
+        .map(|t| (t.duration_s, t.id.as_str()))
+        .collect();
+    longest.sort_by(|a, b| b.0.total_cmp(&a.0));
+    longest.truncate(30);
     assert!(
         report.duration_s < 10.0,
-        "{what}: {} virtual seconds",
+        "{what}: {} virtual seconds; the longest tests: {longest:?}",
         report.duration_s
     );
     assert!(
@@ -114,6 +121,24 @@ fn a_device_with_many_pdos_fails_only_the_eds_check_of_its_file() {
     let report = support::run(MANY_PDOS, &[], &[]);
     check_clean(&report, "CANopenSocket: 16+16 PDOs", &["cia301.eds.1"]);
     assert_eq!(device_failures(&report), ["cia301.eds.1"]);
+    // Its SDO client 1280h is what cia301.sdo.20 reads and resets.
+    let sdo20 = report
+        .tests
+        .iter()
+        .find(|t| t.id == "cia301.sdo.20")
+        .expect("sdo.20 ran");
+    assert_eq!(sdo20.verdict, Verdict::Pass, "{}", sdo20.reason);
+    eprintln!("cia301.sdo.20: {}", sdo20.reason);
+    // And its 1280h:03, saved with 1010h:01, is what cia301.other.4 keeps across a reset
+    // communication.
+    let other4 = report
+        .tests
+        .iter()
+        .find(|t| t.id == "cia301.other.4")
+        .expect("other.4 ran");
+    assert_eq!(other4.verdict, Verdict::Pass, "{}", other4.reason);
+    let stored = support::run(MANY_PDOS, &[Fault::StoreIgnored], &["cia301.other.4"]);
+    assert_eq!(device_failures(&stored), ["cia301.other.4"]);
 }
 
 /// The device the fault matrix runs on: it has node guarding, limits, an EMCY producer, RPDOs and
@@ -139,12 +164,14 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         ],
         Fault::HeartbeatTooFast | Fault::HeartbeatJitter => &["cia301.ec.1"],
         Fault::GuardingAndHeartbeat => &["cia301.ec.3"],
-        Fault::IgnoresNmtStop => &["cia301.nmt.2", "cia301.nmt.3", "cia301.nmt.4"],
+        Fault::IgnoresNmtStop => &["cia301.pdo.15", "cia301.nmt.2", "cia301.nmt.3", "cia301.nmt.4"],
         Fault::NmtBroadcastIgnored => &["cia301.nmt.3"],
         Fault::SdoToggleIgnored => &["cia301.sdo.13"],
         Fault::SdoExpeditedSizeWrong => &[
+            "cia301.ec.8",
             "cia301.sdo.14",
             "cia301.sdo.16",
+            "cia301.sdo.19",
             "cia301.pdo.1",
             "cia301.od.1",
             "cia301.od.2",
@@ -164,7 +191,7 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         Fault::NoEmcy => &["cia301.emcy.3", "cia301.ec.6", "cia301.ec.7"],
         Fault::EmcyNoErrorReset => &["cia301.emcy.4"],
         // On STORE_DEVICE: the PRL120 has no store/restore and no SYNC producer.
-        Fault::StoreIgnored => &["cia301.other.2"],
+        Fault::StoreIgnored => &["cia301.other.2", "cia301.other.3"],
         Fault::SyncCounterMissing => &["cia301.sync.4"],
         // CiA 305 (LSS), not CiA 301: part 2.
         Fault::NoLss | Fault::LssStateNotChanged => &[],
@@ -356,4 +383,49 @@ fn a_cancelled_run_aborts_the_running_transfer_on_the_bus_and_keeps_what_ran() {
         .find(|t| t.id == "0x605" && t.data.starts_with("80 "))
         .unwrap_or_else(|| panic!("no abort in {:#?}", stopped.telegrams));
     assert!(abort.data.ends_with("00 00 00 08"), "{}", abort.data);
+}
+
+#[test]
+fn a_write_only_object_in_a_tpdo_mapping_fails_only_on_a_device_that_accepts_it() {
+    // The Technosoft ISD860's EDS has mappable wo objects; the fault matrix device has none.
+    const WO_DEVICE: &str = "ros-industrial__ros_canopen__canopen_chain_node__test__eds__ISD860.eds";
+    let verdict = |faults: &[Fault]| support::run(WO_DEVICE, faults, &["cia301.pdo.17"]).tests[0].verdict;
+    assert_eq!(verdict(&[]), Verdict::Pass);
+    assert_eq!(verdict(&[Fault::UnmappableAccepted]), Verdict::Fail);
+}
+
+#[test]
+fn a_run_cancelled_in_the_middle_of_a_test_writes_back_what_the_test_changed() {
+    // Ctrl-C right after the device confirmed cia301.ec.1's write of 1017h = 100 ms.
+    let report = support::run_cancelled_on(FAULT_DEVICE, &["cia301.ec.1"], &|frame| {
+        frame.id().as_raw() == 0x580 + u32::from(support::NODE)
+            && frame.data().starts_with(&[0x60, 0x17, 0x10])
+    });
+    assert!(report.interrupted);
+    assert_eq!(report.tests.len(), 1);
+    assert!(
+        report.tests[0].reason.contains("interrupted"),
+        "{}",
+        report.tests[0].reason
+    );
+    assert!(report.left_modified.is_empty(), "{:?}", report.left_modified);
+    // After the confirmation of 64 00 (100 ms) the old value goes back and is confirmed.
+    let telegrams = &report.tests[0].telegrams;
+    let set = telegrams
+        .iter()
+        .position(|t| t.id == "0x605" && t.data.starts_with("2B 17 10 00 64 00"))
+        .expect("the test's write of 1017h");
+    let back = telegrams[set + 1..]
+        .iter()
+        .position(|t| {
+            t.id == "0x605" && t.data.starts_with("2B 17 10 00") && !t.data.starts_with("2B 17 10 00 64 00")
+        })
+        .map(|i| i + set + 1)
+        .unwrap_or_else(|| panic!("1017h not written back: {telegrams:#?}"));
+    assert!(
+        telegrams[back + 1..]
+            .iter()
+            .any(|t| t.id == "0x585" && t.data.starts_with("60 17 10 00")),
+        "the write-back was not confirmed"
+    );
 }

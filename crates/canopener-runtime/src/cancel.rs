@@ -20,6 +20,13 @@ impl Cancel {
         self.0.store(true, Ordering::SeqCst);
     }
 
+    /// Takes a cancellation back, for a loop that stopped at its safe point and must still finish a
+    /// bounded clean-up on the bus (writing back what it changed); a later
+    /// [`cancel`](Cancel::cancel), e.g. a second Ctrl-C, stops that too.
+    pub fn resume(&self) {
+        self.0.store(false, Ordering::SeqCst);
+    }
+
     /// Whether [`cancel`](Cancel::cancel) has been called on this token or a clone.
     pub fn is_cancelled(&self) -> bool {
         self.0.load(Ordering::SeqCst)
@@ -37,5 +44,7 @@ mod tests {
         assert!(!loop_side.is_cancelled());
         token.cancel();
         assert!(loop_side.is_cancelled());
+        loop_side.resume();
+        assert!(!token.is_cancelled());
     }
 }

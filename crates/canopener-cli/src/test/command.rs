@@ -59,11 +59,13 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
     }
     // The EDS check alone runs without a bus (an empty simulated one stands in for it).
     let needs_device = tests.iter().any(TestDef::needs_device);
-    let mut link: Box<dyn Link> = if needs_device {
-        let bus = open_bus(args.bus.spec.as_deref(), "test")?;
-        Box::new(BusLink::new(bus, StopFlag::install()?.token())?)
-    } else {
-        Box::new(Simulation::ideal().start()?)
+    let stop = needs_device.then(StopFlag::install).transpose()?;
+    let mut link: Box<dyn Link> = match &stop {
+        Some(stop) => {
+            let bus = open_bus(args.bus.spec.as_deref(), "test")?;
+            Box::new(BusLink::new(bus, stop.token())?)
+        }
+        None => Box::new(Simulation::ideal().start()?),
     };
     let spec = RunSpec {
         node,
@@ -77,6 +79,7 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
         started: rfc3339_utc(canopener_runtime::clock::wall_time()),
         sdo_timeout: args.timeout,
         eds_errors,
+        cancel: stop.as_ref().map(StopFlag::token),
     };
     let bar = progress_bar(tests.len());
     let outcome = runner::run(link.as_mut(), &spec, &tests, |progress| {

@@ -48,6 +48,16 @@ pub fn tests() -> Vec<TestDef> {
             run: consumer_reaction,
         },
         TestDef {
+            id: "cia301.ec.10",
+            suite: "cia301",
+            group: "ec",
+            title: "Heartbeat consumer across a reset node: 1016h:01 back at its default, and monitoring starts only with the first heartbeat",
+            references: &[req::HEARTBEAT_CONSUMER, req::HEARTBEAT, "CCT Heartbeat 07"],
+            precondition: "a writable 1016h:01 with a DefaultValue and an EMCY producer (1014h)",
+            tags: &["heartbeat", "emcy", "nmt", "writes"],
+            run: consumer_after_reset,
+        },
+        TestDef {
             id: "cia301.ec.7",
             suite: "cia301",
             group: "ec",
@@ -185,7 +195,8 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
         "{}, NMT start, heartbeats of node {producer} every {TESTER_PERIOD_MS} ms",
         download_text((0x1016, 1), &consumer)
     );
-    let while_alive = produce(ctx, producer, 6, emcy)?;
+    // 400 ms of heartbeats: longer than the consumer time, so an early timeout shows.
+    let while_alive = produce(ctx, producer, 4, emcy)?;
     if let Some(alarm) = while_alive.iter().find(|d| d.starts_with(&[0x30, 0x81])) {
         return Ok(Finding::fail(
             "EMCY 8130h while the consumed heartbeat came in time",
@@ -245,7 +256,7 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 /// The guard time the life guarding test sets, in ms; with a life time factor of 3.
-pub const TEST_GUARD_MS: u16 = 100;
+pub const TEST_GUARD_MS: u16 = 50;
 
 fn life_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let writable_var = |ctx: &Ctx<'_, '_>, index| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
@@ -364,4 +375,91 @@ impl Reaction {
             },
         )
     }
+}
+
+/// The consumer time `cia301.ec.10` sets, in ms.
+pub const RESET_CONSUMER_MS: u16 = 100;
+
+fn consumer_after_reset(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some(default) = ctx
+        .model()
+        .entry(0x1016, 1)
+        .filter(|e| e.writable())
+        .and_then(|e| e.default.clone())
+    else {
+        return Ok(Finding::not_applicable(
+            "no writable 1016h:01 with a DefaultValue",
+        ));
+    };
+    let Some(emcy) = emcy_id(ctx)? else {
+        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
+    };
+    let producer = producer_node(ctx);
+    let consumer = entry(producer, RESET_CONSUMER_MS);
+    if !matches!(ctx.modify(0x1016, 1, consumer.clone())?, Reply::Done(_)) {
+        return Ok(Finding::inconclusive(format!(
+            "{} was refused",
+            download_text((0x1016, 1), &consumer)
+        )));
+    }
+    if !crate::cia301::helpers::reset_node(ctx)? {
+        return Ok(Finding::inconclusive("no boot-up after the reset node"));
+    }
+    let after_reset = ctx.read(0x1016, 1)?;
+    if !matches!(&after_reset, Reply::Done(d) if *d == default) {
+        return Ok(Finding::fail(
+            "1016h:01 is not its default after a reset node",
+            Evidence {
+                request: format!(
+                    "{}, NMT reset node, {}",
+                    download_text((0x1016, 1), &consumer),
+                    crate::cia301::helpers::upload_text((0x1016, 1))
+                ),
+                requirement: format!(
+                    "{}: reset node sets every parameter to its power-on value ({} by the EDS)",
+                    req::NMT_MODULE_CONTROL,
+                    hex(&default)
+                ),
+                answer: after_reset.describe(),
+                cause: "the consumer configuration survives a reset node".to_owned(),
+            },
+        ));
+    }
+    // Armed again, with no heartbeat from the producer at all: CiA 301 starts the monitoring with
+    // the first heartbeat received, so three consumer times pass without an event.
+    if !matches!(ctx.write(0x1016, 1, consumer.clone())?, Reply::Done(_)) {
+        return Ok(Finding::inconclusive(format!(
+            "{} was refused after the reset",
+            download_text((0x1016, 1), &consumer)
+        )));
+    }
+    let id = ctx.id(emcy);
+    let alarm = ctx.wait_for(Duration::from_millis(u64::from(RESET_CONSUMER_MS) * 3), |f| {
+        f.id() == id && f.data().starts_with(&[0x30, 0x81])
+    })?;
+    // Written back here: the test wrote it after the reset, outside `modify`.
+    ctx.write(0x1016, 1, default.clone())?;
+    Ok(match alarm {
+        Some(alarm) => Finding::fail(
+            "EMCY 8130h although the consumed node never sent a heartbeat",
+            Evidence {
+                request: format!(
+                    "NMT reset node, {}, no heartbeat of node {producer}",
+                    download_text((0x1016, 1), &consumer)
+                ),
+                requirement: format!(
+                    "{}: heartbeat consuming starts with the first heartbeat received",
+                    req::HEARTBEAT
+                ),
+                answer: format!("EMCY {}", hex(alarm.frame.data())),
+                cause: "the consumer times out from the configuration instead of from the first heartbeat"
+                    .to_owned(),
+            },
+        ),
+        None => Finding::pass(format!(
+            "default {} after the reset; no event in {} ms without a first heartbeat",
+            hex(&default),
+            u64::from(RESET_CONSUMER_MS) * 3
+        )),
+    })
 }

@@ -140,6 +140,32 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["guarding"],
             run: guarding_toggle,
         },
+        TestDef {
+            id: "cia301.ec.8",
+            suite: "cia301",
+            group: "ec",
+            title: "Heartbeats follow 1017h with guarding off and with guard time and life time factor set",
+            references: &[
+                req::HEARTBEAT,
+                req::GUARDING,
+                "CCT Heartbeat versus guarding 01",
+                "CCT Heartbeat versus guarding 04",
+                "CCT Heartbeat versus guarding 06",
+            ],
+            precondition: "a writable 1017h; the guarding phases where 100Ch (and 100Dh) are writable",
+            tags: &["heartbeat", "guarding", "writes"],
+            run: heartbeat_over_guarding,
+        },
+        TestDef {
+            id: "cia301.ec.9",
+            suite: "cia301",
+            group: "ec",
+            title: "Node guarding: remote frames on other nodes' guarding IDs (700h–77Fh) are not answered, its own is",
+            references: &[req::GUARDING, "CCT Guarding 04"],
+            precondition: "the EDS has 100Ch and 100Dh",
+            tags: &["guarding"],
+            run: guarding_id_range,
+        },
     ]
 }
 
@@ -406,10 +432,10 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ));
     }
     let id = ctx.id(0x700 + u16::from(ctx.node()));
-    // One period to settle, then ten.
+    // One period to settle, then seven.
     ctx.listen(Duration::from_millis(u64::from(TIMING_HEARTBEAT_MS)), |_| false)?;
     let frames = ctx.listen(
-        Duration::from_millis(u64::from(TIMING_HEARTBEAT_MS) * 21 / 2),
+        Duration::from_millis(u64::from(TIMING_HEARTBEAT_MS) * 15 / 2),
         |f| f.id() == id && !f.is_remote(),
     )?;
     let period = f64::from(TIMING_HEARTBEAT_MS);
@@ -420,9 +446,9 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .copied()
         .max_by(|a, b| (a - period).abs().total_cmp(&(b - period).abs()));
     Ok(match worst {
-        _ if frames.len() < 9 => Finding::fail(
+        _ if frames.len() < 7 => Finding::fail(
             format!(
-                "{} heartbeats in 10.5 periods of {TIMING_HEARTBEAT_MS} ms",
+                "{} heartbeats in 7.5 periods of {TIMING_HEARTBEAT_MS} ms",
                 frames.len()
             ),
             Evidence {
@@ -431,7 +457,7 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 answer: format!(
                     "{} heartbeats in {} ms",
                     frames.len(),
-                    u64::from(TIMING_HEARTBEAT_MS) * 21 / 2
+                    u64::from(TIMING_HEARTBEAT_MS) * 15 / 2
                 ),
                 cause: "the producer does not run at the configured period".to_owned(),
             },
@@ -602,5 +628,168 @@ fn guarding_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 .to_owned(),
             },
         )
+    })
+}
+
+/// The heartbeat period `cia301.ec.8` sets, in ms.
+pub const PRECEDENCE_HEARTBEAT_MS: u16 = 50;
+/// How long `cia301.ec.8` counts heartbeats in each phase: four periods.
+pub const PRECEDENCE_WATCH: Duration = Duration::from_millis(200);
+
+/// SDO writes of one phase: (index, value of sub-index 0).
+type Writes = Vec<(u16, Vec<u8>)>;
+
+fn heartbeat_over_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // The objects hold their CiA 301 types (CCT Heartbeat versus guarding 01).
+    for (index, size) in [(0x1017u16, 2usize), (0x100C, 2), (0x100D, 1)] {
+        if ctx.model().entry(index, 0).is_none() {
+            continue;
+        }
+        let reply = ctx.read(index, 0)?;
+        if !matches!(&reply, Reply::Done(d) if d.len() == size) {
+            return Ok(refused_unexpectedly(
+                &upload_text((index, 0)),
+                &reply,
+                req::HEARTBEAT,
+                &format!("{index:04X}h does not read as {size} byte(s)"),
+            ));
+        }
+    }
+    let writable = |ctx: &Ctx<'_, '_>, index: u16| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
+    if !writable(ctx, 0x1017) {
+        return Ok(Finding::not_applicable("1017h is not writable"));
+    }
+    let mut phases: Vec<(&str, Writes)> = Vec::new();
+    if writable(ctx, 0x100C) {
+        phases.push(("guard time 100Ch = 0 (guarding off)", vec![(0x100C, vec![0, 0])]));
+        if writable(ctx, 0x100D) {
+            phases.push((
+                "guard time 100Ch = 50 ms and life time factor 100Dh = 2 (guarding configured)",
+                vec![(0x100C, 50u16.to_le_bytes().to_vec()), (0x100D, vec![2])],
+            ));
+        }
+    } else {
+        phases.push(("guarding parameters as they are", Vec::new()));
+    }
+    let period = PRECEDENCE_HEARTBEAT_MS.to_le_bytes().to_vec();
+    let heartbeat = ctx.modify(0x1017, 0, period.clone())?;
+    if !matches!(heartbeat, Reply::Done(_)) {
+        return Ok(refused_unexpectedly(
+            &download_text((0x1017, 0), &period),
+            &heartbeat,
+            req::HEARTBEAT,
+            "1017h does not take a producer time",
+        ));
+    }
+    // One period for the producer restarted by the write.
+    ctx.listen(Duration::from_millis(u64::from(PRECEDENCE_HEARTBEAT_MS)), |_| {
+        false
+    })?;
+    let id = ctx.id(0x700 + u16::from(ctx.node()));
+    let least = (PRECEDENCE_WATCH.as_millis() / u128::from(PRECEDENCE_HEARTBEAT_MS)) as usize - 1;
+    let mut seen = Vec::new();
+    for (what, writes) in phases {
+        for (index, data) in writes {
+            let reply = ctx.modify(index, 0, data.clone())?;
+            if !matches!(reply, Reply::Done(_)) {
+                return Ok(Finding::inconclusive(format!(
+                    "{} got {}",
+                    download_text((index, 0), &data),
+                    reply.describe()
+                )));
+            }
+        }
+        let frames = ctx.listen(PRECEDENCE_WATCH, |f| f.id() == id && !f.is_remote())?;
+        if frames.len() < least {
+            return Ok(Finding::fail(
+                format!(
+                    "{} heartbeats in {} ms with {what}",
+                    frames.len(),
+                    PRECEDENCE_WATCH.as_millis()
+                ),
+                Evidence {
+                    request: format!(
+                        "1017h = {PRECEDENCE_HEARTBEAT_MS} ms, {what}; {} ms of listening",
+                        PRECEDENCE_WATCH.as_millis()
+                    ),
+                    requirement: format!(
+                        "{}: with a producer heartbeat time set the device produces heartbeats, whatever the guarding parameters (at least {least} here)",
+                        req::HEARTBEAT
+                    ),
+                    answer: format!("{} heartbeats", frames.len()),
+                    cause: "the guarding parameters switch the heartbeat producer off".to_owned(),
+                },
+            ));
+        }
+        seen.push(format!("{} with {what}", frames.len()));
+    }
+    Ok(Finding::pass(format!("heartbeats: {}", seen.join("; "))))
+}
+
+fn guarding_id_range(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !ctx.model().has_guarding() {
+        return Ok(Finding::not_applicable("the EDS has no 100Ch/100Dh"));
+    }
+    // Guarding is served while the heartbeat producer is off (CiA 301 §7.2.8.3.2).
+    if ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
+        ctx.modify(0x1017, 0, vec![0, 0])?;
+    }
+    // A heartbeat the previous test's producer already had on its way is not an answer.
+    ctx.listen(Duration::from_millis(100), |_| false)?;
+    let node = ctx.node();
+    // The ends of the range and the neighbours of the node under test.
+    let mut others: Vec<u8> = [0u8, 1, node.wrapping_sub(1), node.saturating_add(1), 127]
+        .into_iter()
+        .filter(|n| *n != node && *n <= 127)
+        .collect();
+    others.dedup();
+    for other in &others {
+        ctx.send_remote(0x700 + u16::from(*other), 1)?;
+    }
+    let answers = ctx.listen(Duration::from_millis(100), |f| {
+        !f.id().is_extended() && (0x700..=0x77F).contains(&f.id().as_raw()) && !f.is_remote()
+    })?;
+    let asked: Vec<String> = others
+        .iter()
+        .map(|n| format!("{:#X}", 0x700 + u16::from(*n)))
+        .collect();
+    if let Some(answer) = answers.first() {
+        return Ok(Finding::fail(
+            format!(
+                "answered a guarding request for another node: {:#X} {}",
+                answer.frame.id().as_raw(),
+                hex(answer.frame.data())
+            ),
+            Evidence {
+                request: format!("remote frames on {}", asked.join(", ")),
+                requirement: format!(
+                    "{}: the device answers only the guarding request on 700h + its node-ID ({:#X})",
+                    req::GUARDING,
+                    0x700 + u16::from(node)
+                ),
+                answer: format!("{} frame(s) in 100 ms", answers.len()),
+                cause: "the guarding request's CAN-ID is not compared with the node-ID".to_owned(),
+            },
+        ));
+    }
+    let own = ctx.id(0x700 + u16::from(node));
+    ctx.send_remote(0x700 + u16::from(node), 1)?;
+    let answer = ctx.wait_for(Duration::from_millis(100), |f| f.id() == own && !f.is_remote())?;
+    Ok(match answer {
+        Some(answer) => Finding::pass(format!(
+            "{} not answered; {:#X} answered {}",
+            asked.join(", "),
+            0x700 + u16::from(node),
+            hex(answer.frame.data())
+        )),
+        None => Finding::fail(
+            "its own guarding request was not answered",
+            Evidence {
+                request: format!("a remote frame on {:#X}", 0x700 + u16::from(node)),
+                requirement: format!("{}: each guarding request is answered", req::GUARDING),
+                answer: "no answer within 100 ms".to_owned(),
+                cause: "node guarding is not served".to_owned(),
+            },
+        ),
     })
 }

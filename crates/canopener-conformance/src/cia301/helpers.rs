@@ -153,7 +153,17 @@ pub fn back_to_pre_operational(ctx: &mut Ctx<'_, '_>) -> Result<(), Stop> {
 /// NMT reset node and the boot-up after it; `false` without one within
 /// [`BOOT_UP_WAIT`](crate::cia301::nmt::BOOT_UP_WAIT).
 pub fn reset_node(ctx: &mut Ctx<'_, '_>) -> Result<bool, Stop> {
-    ctx.nmt(canopener_wire::NmtCommand::ResetNode, false)?;
+    reset(ctx, canopener_wire::NmtCommand::ResetNode)
+}
+
+/// NMT reset communication and the boot-up after it; `false` without one within
+/// [`BOOT_UP_WAIT`](crate::cia301::nmt::BOOT_UP_WAIT).
+pub fn reset_communication(ctx: &mut Ctx<'_, '_>) -> Result<bool, Stop> {
+    reset(ctx, canopener_wire::NmtCommand::ResetCommunication)
+}
+
+fn reset(ctx: &mut Ctx<'_, '_>, command: canopener_wire::NmtCommand) -> Result<bool, Stop> {
+    ctx.nmt(command, false)?;
     let boot = ctx.id(0x700 + u16::from(ctx.node()));
     let heard = ctx
         .wait_for(crate::cia301::nmt::BOOT_UP_WAIT, |f| {

@@ -46,6 +46,16 @@ pub fn tests() -> Vec<TestDef> {
             run: tpdo_rtr,
         },
         TestDef {
+            id: "cia301.pdo.15",
+            suite: "cia301",
+            group: "pdo",
+            title: "Stopped: a TPDO that answers a remote frame in operational does not answer it",
+            references: &[req::PDO, req::NMT_STATES, "CCT PDO 09"],
+            precondition: "as cia301.pdo.3; a TPDO that does not answer in operational makes it inconclusive",
+            tags: &["pdo", "nmt"],
+            run: tpdo_rtr_stopped,
+        },
+        TestDef {
             id: "cia301.pdo.4",
             suite: "cia301",
             group: "pdo",
@@ -187,10 +197,12 @@ fn default_mappings(ctx: &mut Ctx<'_, '_>) -> Outcome {
     Ok(Finding::pass(format!("{checked} mapped objects exist")))
 }
 
-fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    // A TPDO already set up for RTR-only transmission (FCh/FDh) with RTR allowed, else the first TPDO
-    // whose parameters the EDS makes writable, configured so.
-    let mut chosen = None;
+/// A TPDO that answers remote frames: (number, CAN-ID, transmission type).
+type RtrTpdo = (u16, u16, u8);
+
+/// A TPDO already set up for RTR-only transmission (FCh/FDh) with RTR allowed, else the first TPDO
+/// whose parameters the EDS makes writable, configured so; `Err` is the not_applicable finding.
+fn rtr_tpdo(ctx: &mut Ctx<'_, '_>) -> Result<Result<RtrTpdo, Finding>, Stop> {
     for pdo in ctx.model().pdos(PdoDirection::Transmit) {
         let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
             continue;
@@ -200,36 +212,39 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
             _ => continue,
         };
         if cob & 0xC000_0000 == 0 && (kind == 0xFC || kind == 0xFD) {
-            chosen = Some((pdo.number, (cob & 0x7FF) as u16, kind));
-            break;
+            return Ok(Ok((pdo.number, (cob & 0x7FF) as u16, kind)));
         }
     }
-    if chosen.is_none() {
-        let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
-            return Ok(Finding::not_applicable(
-                "no TPDO set up for RTR, and none whose COB-ID and transmission type are writable",
-            ));
-        };
-        // RTR-only transmission and RTR on PDOs are optional (CiA 301 §7.2.2.2.1).
-        if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![0xFD])], true)? {
-            return Ok(Finding::not_applicable(format!(
-                "TPDO{} cannot be set up for RTR: {refused}",
-                pdo.number
-            )));
-        }
-        chosen = Some((pdo.number, (cob & 0x7FF) as u16, 0xFD));
+    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
+        return Ok(Err(Finding::not_applicable(
+            "no TPDO set up for RTR, and none whose COB-ID and transmission type are writable",
+        )));
+    };
+    // RTR-only transmission and RTR on PDOs are optional (CiA 301 §7.2.2.2.1).
+    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![0xFD])], true)? {
+        return Ok(Err(Finding::not_applicable(format!(
+            "TPDO{} cannot be set up for RTR: {refused}",
+            pdo.number
+        ))));
     }
-    let Some((number, cob, kind)) = chosen else {
-        return Ok(Finding::inconclusive("no TPDO chosen"));
+    Ok(Ok((pdo.number, (cob & 0x7FF) as u16, 0xFD)))
+}
+
+/// Sends a remote frame on `cob` and returns the TPDO that answers within 100 ms.
+fn ask_tpdo(ctx: &mut Ctx<'_, '_>, cob: u16) -> Result<Option<crate::recorder::Logged>, Stop> {
+    ctx.send_remote(cob, 0)?;
+    let id = ctx.id(cob);
+    ctx.wait_for(Duration::from_millis(100), |f| f.id() == id && !f.is_remote())
+}
+
+fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let (number, cob, kind) = match rtr_tpdo(ctx)? {
+        Ok(chosen) => chosen,
+        Err(finding) => return Ok(finding),
     };
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
-    ctx.send_remote(cob, 0)?;
-    let id = ctx.id(cob);
-    let answer: Vec<_> = ctx
-        .wait_for(Duration::from_millis(100), |f| f.id() == id && !f.is_remote())?
-        .into_iter()
-        .collect();
+    let answer: Vec<_> = ask_tpdo(ctx, cob)?.into_iter().collect();
     back_to_pre_operational(ctx)?;
     Ok(if answer.is_empty() {
         Finding::fail(
@@ -256,24 +271,34 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
 /// §7.5.2.38), and its current COB-ID.
 pub fn configurable_tpdo(ctx: &mut Ctx<'_, '_>, subs: &[u8]) -> Result<Option<(PdoModel, u32)>, Stop> {
     for pdo in ctx.model().pdos(PdoDirection::Transmit) {
-        if !subs
-            .iter()
-            .all(|sub| ctx.model().entry(pdo.comm, *sub).is_some_and(|e| e.writable()))
-        {
-            continue;
-        }
-        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
-            continue;
-        };
-        let Some(mapping) = pdo.mapping else {
-            continue;
-        };
-        let mapped = matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0));
-        if mapped && cob & 0x7FF != 0 {
-            return Ok(Some((pdo, cob)));
+        if let Some(found) = configurable_tpdo_at(ctx, &pdo, subs)? {
+            return Ok(Some(found));
         }
     }
     Ok(None)
+}
+
+/// `pdo` with its current COB-ID if the EDS makes `subs` of its communication parameter writable,
+/// it maps data and has a CAN-ID.
+pub fn configurable_tpdo_at(
+    ctx: &mut Ctx<'_, '_>,
+    pdo: &PdoModel,
+    subs: &[u8],
+) -> Result<Option<(PdoModel, u32)>, Stop> {
+    if !subs
+        .iter()
+        .all(|sub| ctx.model().entry(pdo.comm, *sub).is_some_and(|e| e.writable()))
+    {
+        return Ok(None);
+    }
+    let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+        return Ok(None);
+    };
+    let Some(mapping) = pdo.mapping else {
+        return Ok(None);
+    };
+    let mapped = matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0));
+    Ok((mapped && cob & 0x7FF != 0).then(|| (pdo.clone(), cob)))
 }
 
 /// Configures a TPDO the way CiA 301 §7.5.2.37 allows: disabled, `settings` written (sub-index,
@@ -386,4 +411,41 @@ fn unmappable(ctx: &mut Ctx<'_, '_>) -> Outcome {
         req::PDO_PARAMETERS,
         "the mapping entry is not checked against the object's PDO mapping attribute",
     ))
+}
+
+fn tpdo_rtr_stopped(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let (number, cob, kind) = match rtr_tpdo(ctx)? {
+        Ok(chosen) => chosen,
+        Err(finding) => return Ok(finding),
+    };
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    let operational = ask_tpdo(ctx, cob)?;
+    ctx.nmt(NmtCommand::StopRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    let stopped = match operational {
+        Some(_) => ask_tpdo(ctx, cob)?,
+        None => None,
+    };
+    back_to_pre_operational(ctx)?;
+    Ok(match (operational, stopped) {
+        (None, _) => Finding::inconclusive(format!(
+            "TPDO{number} ({cob:#X}) did not answer a remote frame in operational either (see cia301.pdo.3)"
+        )),
+        (Some(_), Some(answer)) => Finding::fail(
+            format!("TPDO{number} ({cob:#X}) answered a remote frame in stopped"),
+            Evidence {
+                request: format!(
+                    "TPDO{number} with transmission type {kind:02X}h and RTR allowed; NMT start, a remote frame (answered), NMT stop, a remote frame on {cob:#X}"
+                ),
+                requirement: format!(
+                    "{}: in stopped only NMT and error control are served, no PDO",
+                    req::NMT_STATES
+                ),
+                answer: format!("the TPDO {}", hex(answer.frame.data())),
+                cause: "PDO communication is not switched off in stopped".to_owned(),
+            },
+        ),
+        (Some(_), None) => Finding::pass(format!("TPDO{number} answered in operational, not in stopped")),
+    })
 }

@@ -3,7 +3,7 @@
 //! the wrong direction, with the abort codes the CCT accepts (reference §3.4).
 
 use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, u32_of};
+use crate::cia301::helpers::{download_text, expect_refusal, refused_unexpectedly, u32_of};
 use crate::context::{Ctx, Reply};
 use crate::device_model::{EntryModel, PdoDirection, PdoModel};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
@@ -51,6 +51,36 @@ pub fn tests() -> Vec<TestDef> {
             precondition: "an RPDO with writable COB-ID and mapping, and a mappable ro object",
             tags: &["pdo", "writes"],
             run: wrong_direction,
+        },
+        TestDef {
+            id: "cia301.pdo.16",
+            suite: "cia301",
+            group: "pdo",
+            title: "A mappable process input (ro or rwr) is accepted in a TPDO mapping",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 30"],
+            precondition: "a TPDO with writable COB-ID and mapping, and an ro/rwr object with PDOMapping=1",
+            tags: &["pdo", "writes"],
+            run: input_into_tpdo,
+        },
+        TestDef {
+            id: "cia301.pdo.17",
+            suite: "cia301",
+            group: "pdo",
+            title: "A write-only (process output) object is refused in a TPDO mapping",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 31"],
+            precondition: "a TPDO with writable COB-ID and mapping, and a wo object with PDOMapping=1 (rww objects are readable: CiA 301 allows them in a TPDO, so they are not tried)",
+            tags: &["pdo", "writes"],
+            run: output_into_tpdo,
+        },
+        TestDef {
+            id: "cia301.pdo.18",
+            suite: "cia301",
+            group: "pdo",
+            title: "A dummy entry the EDS's [DummyUsage] enables is accepted in an RPDO mapping",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 33"],
+            precondition: "[DummyUsage] enables one of 0002h–0007h, and an RPDO with writable COB-ID and mapping",
+            tags: &["pdo", "writes"],
+            run: dummy_into_rpdo,
         },
     ]
 }
@@ -323,4 +353,125 @@ fn wrong_direction(ctx: &mut Ctx<'_, '_>) -> Outcome {
         req::PDO_PARAMETERS,
         "the direction of a mapped object (process input into a receive PDO) is not checked",
     ))
+}
+
+/// The mapping entry value of `e` (index, sub-index, length in bits), for 1-, 2- and 4-byte entries.
+fn entry_value(e: &EntryModel) -> Option<u32> {
+    let size = e.size().filter(|s| matches!(s, 1 | 2 | 4))?;
+    Some((u32::from(e.index) << 16) | (u32::from(e.sub) << 8) | (size as u32 * 8))
+}
+
+/// The first entry with PDOMapping=1 and one of `access`, as a mapping entry value, with its label.
+fn mappable_with_access(ctx: &Ctx<'_, '_>, access: &[canopener_eds::AccessType]) -> Option<(u32, String)> {
+    ctx.model()
+        .entries
+        .values()
+        .filter(|e| e.pdo_mapping && e.access.is_some_and(|a| access.contains(&a)))
+        .find_map(|e| entry_value(e).map(|v| (v, e.label())))
+}
+
+/// Runs the mapping procedure on the first PDO of `direction` with a writable mapping to map
+/// `entry` alone (sub-index 1, then 1 to sub-index 0); every value written back after the test.
+/// Returns the requests and the first answer that is not a confirmation (or the last one), or the
+/// finding that ends the test first.
+fn map_alone(
+    ctx: &mut Ctx<'_, '_>,
+    direction: PdoDirection,
+    entry: u32,
+) -> Result<Result<(String, Reply), Finding>, Stop> {
+    let Some(m) = mappable(ctx, direction)? else {
+        return Ok(Err(Finding::not_applicable(format!(
+            "no {} with a writable mapping",
+            direction.name()
+        ))));
+    };
+    if let Some(refused) = open_mapping(ctx, &m)? {
+        return Ok(Err(Finding::inconclusive(format!(
+            "the mapping procedure could not start: {refused}"
+        ))));
+    }
+    let mut requests = Vec::new();
+    let mut last = Reply::Done(Vec::new());
+    for (sub, data) in [(1u8, entry.to_le_bytes().to_vec()), (0, vec![1])] {
+        requests.push(download_text((m.mapping, sub), &data));
+        last = ctx.modify(m.mapping, sub, data)?;
+        if !matches!(last, Reply::Done(_)) {
+            break;
+        }
+    }
+    Ok(Ok((
+        format!(
+            "mapping procedure on {}{}: {}",
+            direction.name(),
+            m.pdo.number,
+            requests.join(", ")
+        ),
+        last,
+    )))
+}
+
+fn input_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    use canopener_eds::AccessType;
+    let Some((entry, label)) = mappable_with_access(ctx, &[AccessType::Ro, AccessType::Rwr]) else {
+        return Ok(Finding::not_applicable("no mappable ro/rwr object"));
+    };
+    let (request, reply) = match map_alone(ctx, PdoDirection::Transmit, entry)? {
+        Ok(done) => done,
+        Err(finding) => return Ok(finding),
+    };
+    Ok(match reply {
+        Reply::Done(_) => Finding::pass(format!("{label} mapped into a TPDO")),
+        other => refused_unexpectedly(
+            &format!("{request} ({label})"),
+            &other,
+            req::PDO_PARAMETERS,
+            "a process input with PDOMapping=1 cannot be mapped into a transmit PDO",
+        ),
+    })
+}
+
+fn output_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((entry, label)) = mappable_with_access(ctx, &[canopener_eds::AccessType::Wo]) else {
+        return Ok(Finding::not_applicable("no mappable wo object"));
+    };
+    let (request, reply) = match map_alone(ctx, PdoDirection::Transmit, entry)? {
+        Ok(done) => done,
+        Err(finding) => return Ok(finding),
+    };
+    Ok(expect_refusal(
+        &format!("{request} ({label}, wo)"),
+        &reply,
+        req::NOT_MAPPABLE,
+        req::PDO_PARAMETERS,
+        "the direction of a mapped object (a write-only process output into a transmit PDO) is not checked",
+    ))
+}
+
+fn dummy_into_rpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // Dummy entries 0002h–0007h: INTEGER8/16/32, UNSIGNED8/16/32 (CiA 301 §7.4.7.1); BOOLEAN (0001h)
+    // is left out, a 1-bit entry some devices cannot place.
+    let bits = |index: u16| match index {
+        2 | 5 => 8u32,
+        3 | 6 => 16,
+        _ => 32,
+    };
+    let Some(index) = (2u16..=7).find(|i| ctx.model().dummies[usize::from(*i)]) else {
+        return Ok(Finding::not_applicable(
+            "the EDS's [DummyUsage] enables none of 0002h–0007h",
+        ));
+    };
+    let entry = (u32::from(index) << 16) | bits(index);
+    let (request, reply) = match map_alone(ctx, PdoDirection::Receive, entry)? {
+        Ok(done) => done,
+        Err(finding) => return Ok(finding),
+    };
+    Ok(match reply {
+        Reply::Done(_) => Finding::pass(format!("dummy {index:04X}h mapped into an RPDO")),
+        other => refused_unexpectedly(
+            &request,
+            &other,
+            req::PDO_PARAMETERS,
+            "[DummyUsage] enables the dummy entry but the device refuses it",
+        ),
+    })
 }

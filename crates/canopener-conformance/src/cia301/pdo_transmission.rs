@@ -8,8 +8,8 @@ use canopener_wire::NmtCommand;
 use crate::catalogue::TestDef;
 use crate::cia301::helpers::{back_to_pre_operational, intervals_text, measure_intervals};
 use crate::cia301::pdo::{configurable_tpdo, configure_tpdo};
-use crate::context::Ctx;
-use crate::finding::{Evidence, Finding, Outcome};
+use crate::context::{Ctx, Reply};
+use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::requirements as req;
 
 /// The event timer the test sets, in ms.
@@ -53,6 +53,65 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["pdo", "sync", "writes", "nmt"],
             run: synchronous,
         },
+        TestDef {
+            id: "cia301.pdo.12",
+            suite: "cia301",
+            group: "pdo",
+            title: "Event-driven TPDO (type FFh): TPDOs follow the event timer but never within the inhibit time",
+            references: &[
+                req::PDO,
+                req::PDO_PARAMETERS,
+                "CCT PDO 04",
+                "CCT PDO 10",
+                "CCT PDO 16",
+            ],
+            precondition: "a TPDO with writable COB-ID, transmission type, inhibit time and event timer and mapped data; a refusal is not_applicable",
+            tags: &["pdo", "timing", "writes", "nmt"],
+            run: inhibit_time,
+        },
+        TestDef {
+            id: "cia301.pdo.13",
+            suite: "cia301",
+            group: "pdo",
+            title: "Synchronous acyclic (type 0): a TPDO only right after a SYNC, at most one per SYNC",
+            references: &[req::PDO, req::SYNC, "CCT PDO 07", "CCT PDO 13", "CCT PDO 19"],
+            precondition: "a TPDO with writable COB-ID and transmission type and mapped data; a refusal is not_applicable",
+            tags: &["pdo", "sync", "writes", "nmt"],
+            run: synchronous_acyclic,
+        },
+        TestDef {
+            id: "cia301.pdo.14",
+            suite: "cia301",
+            group: "pdo",
+            title: "SYNC start value: a cyclic TPDO starts at the SYNC whose counter equals 18xxh:06",
+            references: &[
+                req::PDO,
+                req::PDO_PARAMETERS,
+                req::SYNC_OBJECTS,
+                "CCT PDO 08",
+                "CCT PDO 14",
+                "CCT PDO 20",
+            ],
+            precondition: "a TPDO with writable COB-ID, transmission type and SYNC start value and mapped data, a writable 1019h, the device not a SYNC producer; a refusal is not_applicable",
+            tags: &["pdo", "sync", "writes", "nmt"],
+            run: sync_start_value,
+        },
+        TestDef {
+            id: "cia301.sync.5",
+            suite: "cia301",
+            group: "sync",
+            title: "SYNC consumer (1005h bit 30 clear, 1006h = 0): every TPDO set to type 1 follows every SYNC once",
+            references: &[
+                req::SYNC,
+                req::SYNC_OBJECTS,
+                req::PDO,
+                "CCT Synchronization 03",
+                "CCT Synchronization 04",
+            ],
+            precondition: "TPDOs with writable COB-ID and transmission type and mapped data (up to 8 are counted); 1005h/1006h are written only where the EDS makes them writable",
+            tags: &["sync", "pdo", "writes", "nmt"],
+            run: sync_consumer,
+        },
     ]
 }
 
@@ -72,7 +131,7 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let id = ctx.id((cob & 0x7FF) as u16);
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     let frames = ctx.listen(
-        Duration::from_millis(u64::from(TEST_EVENT_TIMER_MS) * 21 / 2),
+        Duration::from_millis(u64::from(TEST_EVENT_TIMER_MS) * 13 / 2),
         |f| f.id() == id && !f.is_remote(),
     )?;
     back_to_pre_operational(ctx)?;
@@ -80,7 +139,7 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let intervals = measure_intervals(ctx, "event_timer_interval", &frames);
     let period = f64::from(TEST_EVENT_TIMER_MS);
     let request = format!(
-        "TPDO{} ({:#X}) with type FFh and event timer {TEST_EVENT_TIMER_MS} ms; NMT start, 10.5 timer periods",
+        "TPDO{} ({:#X}) with type FFh and event timer {TEST_EVENT_TIMER_MS} ms; NMT start, 6.5 timer periods",
         pdo.number,
         cob & 0x7FF
     );
@@ -94,10 +153,10 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .iter()
         .copied()
         .find(|i| *i > period * (1.0 + EVENT_TIMER_TOLERANCE));
-    Ok(if frames.len() < 9 {
+    Ok(if frames.len() < 5 {
         Finding::fail(
             format!(
-                "{} TPDOs in 10.5 periods of a {TEST_EVENT_TIMER_MS} ms event timer",
+                "{} TPDOs in 6.5 periods of a {TEST_EVENT_TIMER_MS} ms event timer",
                 frames.len()
             ),
             Evidence {
@@ -134,25 +193,12 @@ fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
             pdo.number
         )));
     }
-    let sync = match crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?) {
-        Some(cob) => (cob & 0x7FF) as u16,
-        None => 0x80,
-    };
-    let id = ctx.id((cob & 0x7FF) as u16);
+    let sync = sync_id(ctx)?;
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
-    // After each SYNC: did a TPDO follow before the next one?
-    let mut after_sync = Vec::new();
-    for _ in 0..TEST_SYNCS {
-        ctx.send(sync, &[])?;
-        let frames = ctx.listen(SYNC_SPACING, |f| f.id() == id && !f.is_remote())?;
-        after_sync.push(frames.len());
-    }
+    let after_sync = tpdos_after_syncs(ctx, sync, cob, &[None; TEST_SYNCS])?;
     back_to_pre_operational(ctx)?;
-    let pattern: String = after_sync
-        .iter()
-        .map(|n| if *n > 0 { 'T' } else { '.' })
-        .collect();
+    let pattern = sync_pattern(&after_sync);
     let sent: Vec<usize> = after_sync
         .iter()
         .enumerate()
@@ -186,4 +232,393 @@ fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
             )
         },
     )
+}
+
+/// The inhibit time `cia301.pdo.12` sets, in 100 µs: 50 ms.
+pub const TEST_INHIBIT_100US: u16 = 500;
+/// How much shorter than the inhibit time a measured interval may be: the jitter of time stamps
+/// taken after the bus (a hub on a loaded host showed 6 ms); a device ignoring the inhibit time
+/// sends at the 10 ms event timer.
+pub const INHIBIT_SLACK_MS: f64 = 10.0;
+/// The event timer `cia301.pdo.12` sets, shorter than the inhibit time, in ms.
+pub const TEST_SHORT_EVENT_TIMER_MS: u16 = 10;
+/// How long `cia301.pdo.12` watches the TPDOs.
+pub const WATCH: Duration = Duration::from_millis(300);
+/// How long `cia301.pdo.13` watches without SYNC.
+pub const UNSYNCED_WATCH: Duration = Duration::from_millis(100);
+/// SYNCs `cia301.pdo.13` sends.
+pub const ACYCLIC_SYNCS: usize = 6;
+/// The counter overflow value (1019h) `cia301.pdo.14` sets.
+pub const TEST_OVERFLOW: u8 = 10;
+/// The SYNC start value (18xxh:06) `cia301.pdo.14` sets.
+pub const TEST_START_VALUE: u8 = 5;
+/// The cyclic transmission type `cia301.pdo.14` sets: every 2nd SYNC.
+pub const TEST_START_EVERY: u8 = 2;
+
+fn inhibit_time(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 3, 5])? else {
+        return Ok(Finding::not_applicable(
+            "no TPDO with writable COB-ID, transmission type, inhibit time and event timer",
+        ));
+    };
+    let settings = [
+        (2u8, vec![0xFF]),
+        (3, TEST_INHIBIT_100US.to_le_bytes().to_vec()),
+        (5, TEST_SHORT_EVENT_TIMER_MS.to_le_bytes().to_vec()),
+    ];
+    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} cannot use an inhibit time with an event timer: {refused}",
+            pdo.number
+        )));
+    }
+    let id = ctx.id((cob & 0x7FF) as u16);
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    let frames = ctx.listen(WATCH, |f| f.id() == id && !f.is_remote())?;
+    back_to_pre_operational(ctx)?;
+    let intervals = measure_intervals(ctx, "inhibited_interval", &frames);
+    let inhibit_ms = f64::from(TEST_INHIBIT_100US) / 10.0;
+    let request = format!(
+        "TPDO{} ({:#X}) with type FFh, inhibit time {inhibit_ms} ms, event timer {TEST_SHORT_EVENT_TIMER_MS} ms; NMT start, {} ms",
+        pdo.number,
+        cob & 0x7FF,
+        WATCH.as_millis()
+    );
+    let requirement = format!(
+        "{}: an event-driven TPDO is sent when its event timer elapses, and never twice within the inhibit time 18xxh:03 (canopener allows {INHIBIT_SLACK_MS} ms for time stamps)",
+        req::PDO_PARAMETERS
+    );
+    // The event timer elapses every 10 ms: a TPDO is due at least at the end of every inhibit time
+    // plus one timer period, so fewer than half of those periods means the timer is ignored.
+    let least =
+        (WATCH.as_secs_f64() * 1000.0 / (inhibit_ms + f64::from(TEST_SHORT_EVENT_TIMER_MS))) as usize / 2;
+    let early = intervals
+        .iter()
+        .copied()
+        .find(|i| *i < inhibit_ms - INHIBIT_SLACK_MS);
+    Ok(if let Some(early) = early {
+        Finding::fail(
+            format!("two TPDOs {early:.1} ms apart with an inhibit time of {inhibit_ms} ms"),
+            Evidence {
+                request,
+                requirement,
+                answer: format!("intervals {}", intervals_text(&intervals)),
+                cause: "the inhibit time 18xxh:03 is not applied".to_owned(),
+            },
+        )
+    } else if frames.len() < least {
+        Finding::fail(
+            format!(
+                "{} TPDOs in {} ms with a {TEST_SHORT_EVENT_TIMER_MS} ms event timer (at least {least} expected)",
+                frames.len(),
+                WATCH.as_millis()
+            ),
+            Evidence {
+                request,
+                requirement,
+                answer: format!("{} TPDOs", frames.len()),
+                cause: "an event inhibited by the inhibit time is dropped instead of deferred, or the event timer is not applied".to_owned(),
+            },
+        )
+    } else {
+        Finding::pass(format!(
+            "{} TPDOs, none closer than the {inhibit_ms} ms inhibit time",
+            frames.len()
+        ))
+    })
+}
+
+fn synchronous_acyclic(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
+        return Ok(Finding::not_applicable(
+            "no TPDO with writable COB-ID and transmission type",
+        ));
+    };
+    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![0])], false)? {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} cannot be synchronous acyclic: {refused}",
+            pdo.number
+        )));
+    }
+    let sync = sync_id(ctx)?;
+    let id = ctx.id((cob & 0x7FF) as u16);
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    // Without SYNC a synchronous TPDO has no occasion to go out, whatever its events.
+    let unsynced = ctx.listen(UNSYNCED_WATCH, |f| f.id() == id && !f.is_remote())?;
+    let after_sync = tpdos_after_syncs(ctx, sync, cob, &[None; ACYCLIC_SYNCS])?;
+    back_to_pre_operational(ctx)?;
+    let pattern = sync_pattern(&after_sync);
+    let request = format!(
+        "TPDO{} ({:#X}) with transmission type 0; NMT start, {} ms without SYNC, then {ACYCLIC_SYNCS} SYNCs on {sync:#X}, {} ms apart",
+        pdo.number,
+        cob & 0x7FF,
+        UNSYNCED_WATCH.as_millis(),
+        SYNC_SPACING.as_millis()
+    );
+    let requirement = format!(
+        "{}: a TPDO of type 0 is sent after a SYNC when an event occurred, so never without SYNC and at most once per SYNC",
+        req::PDO
+    );
+    Ok(if !unsynced.is_empty() {
+        Finding::fail(
+            format!("{} TPDOs while no SYNC was sent", unsynced.len()),
+            Evidence {
+                request,
+                requirement,
+                answer: format!(
+                    "{} TPDOs in {} ms without SYNC",
+                    unsynced.len(),
+                    UNSYNCED_WATCH.as_millis()
+                ),
+                cause: "type 0 is treated as event-driven".to_owned(),
+            },
+        )
+    } else if after_sync.iter().any(|n| *n > 1) {
+        Finding::fail(
+            format!("more than one TPDO after a SYNC: {pattern}"),
+            Evidence {
+                request,
+                requirement,
+                answer: format!("TPDOs per SYNC {after_sync:?}"),
+                cause: "events are sent as they occur instead of once at the next SYNC".to_owned(),
+            },
+        )
+    } else {
+        // Whether an event occurs is up to the application: no TPDO at all is allowed.
+        Finding::pass(format!(
+            "none without SYNC; after the SYNCs {pattern} (T: a TPDO followed; the application decides the events)"
+        ))
+    })
+}
+
+fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !ctx.model().entry(0x1019, 0).is_some_and(|e| e.writable()) {
+        return Ok(Finding::not_applicable("no writable 1019h"));
+    }
+    if crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
+        return Ok(Finding::not_applicable(
+            "the device produces SYNC (1005h bit 30): the tester cannot send the counter",
+        ));
+    }
+    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 6])? else {
+        return Ok(Finding::not_applicable(
+            "no TPDO with writable COB-ID, transmission type and SYNC start value",
+        ));
+    };
+    let overflow = ctx.modify(0x1019, 0, vec![TEST_OVERFLOW])?;
+    if !matches!(overflow, Reply::Done(_)) {
+        return Ok(Finding::not_applicable(format!(
+            "1019h does not take {TEST_OVERFLOW}: {}",
+            overflow.describe()
+        )));
+    }
+    let settings = [(2u8, vec![TEST_START_EVERY]), (6, vec![TEST_START_VALUE])];
+    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} cannot use a SYNC start value: {refused}",
+            pdo.number
+        )));
+    }
+    let sync = sync_id(ctx)?;
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    // The counter runs 1..=overflow and wraps to 1 (CiA 301 §7.2.5).
+    let counters: Vec<Option<u8>> = (0..TEST_SYNCS)
+        .map(|i| Some((i % usize::from(TEST_OVERFLOW)) as u8 + 1))
+        .collect();
+    let after_sync = tpdos_after_syncs(ctx, sync, cob, &counters)?;
+    back_to_pre_operational(ctx)?;
+    let pattern = sync_pattern(&after_sync);
+    // CiA 301 §7.5.2.35: the SYNC whose counter equals the start value "shall be regarded as the
+    // first received SYNC". Stacks read that two ways for n > 1: CANopenNode transmits at that SYNC,
+    // others count it as the first of n. Both are accepted; counting from the first SYNC sent
+    // (ignoring the start value) puts the first TPDO before it and fails.
+    let every = usize::from(TEST_START_EVERY);
+    let expect_from = |first: usize| -> String {
+        (0..TEST_SYNCS)
+            .map(|i| {
+                if i >= first && (i - first).is_multiple_of(every) {
+                    'T'
+                } else {
+                    '.'
+                }
+            })
+            .collect()
+    };
+    let at_start = expect_from(usize::from(TEST_START_VALUE) - 1);
+    let counted = expect_from(usize::from(TEST_START_VALUE) - 1 + every - 1);
+    let expected = format!("{at_start} or {counted}");
+    Ok(if pattern == at_start || pattern == counted {
+        Finding::pass(format!(
+            "TPDOs after the SYNCs {pattern} (counters 1..{TEST_OVERFLOW})"
+        ))
+    } else {
+        Finding::fail(
+            format!("TPDOs after the SYNCs {pattern}, expected {expected} (T: a TPDO followed)"),
+            Evidence {
+                request: format!(
+                    "1019h = {TEST_OVERFLOW}; TPDO{} ({:#X}) with type {TEST_START_EVERY} and SYNC start value {TEST_START_VALUE}; NMT start, {TEST_SYNCS} SYNCs with counters 1..{TEST_OVERFLOW} on {sync:#X}",
+                    pdo.number,
+                    cob & 0x7FF
+                ),
+                requirement: format!(
+                    "{}: the SYNC whose counter equals the SYNC start value is the first SYNC the TPDO counts; then every {TEST_START_EVERY}nd SYNC",
+                    req::PDO_PARAMETERS
+                ),
+                answer: format!("{pattern} ({} TPDOs)", after_sync.iter().sum::<usize>()),
+                cause: "the SYNC start value 18xxh:06 is ignored, or the SYNC counter is not read".to_owned(),
+            },
+        )
+    })
+}
+
+/// The SYNC CAN-ID from 1005h (80h when it cannot be read).
+fn sync_id(ctx: &mut Ctx<'_, '_>) -> Result<u16, Stop> {
+    Ok(match crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?) {
+        Some(cob) => (cob & 0x7FF) as u16,
+        None => 0x80,
+    })
+}
+
+/// Sends one SYNC per entry of `counters` (with the counter byte when `Some`), [`SYNC_SPACING`]
+/// apart, and counts the TPDOs on `cob` that followed each before the next.
+fn tpdos_after_syncs(
+    ctx: &mut Ctx<'_, '_>,
+    sync: u16,
+    cob: u32,
+    counters: &[Option<u8>],
+) -> Result<Vec<usize>, Stop> {
+    let per_sync = tpdo_counts_after_syncs(ctx, sync, &[(cob & 0x7FF) as u16], counters)?;
+    Ok(per_sync.into_iter().map(|counts| counts[0]).collect())
+}
+
+/// [`tpdos_after_syncs`] for several TPDOs: per SYNC, the number of frames on each of `ids`.
+fn tpdo_counts_after_syncs(
+    ctx: &mut Ctx<'_, '_>,
+    sync: u16,
+    ids: &[u16],
+    counters: &[Option<u8>],
+) -> Result<Vec<Vec<usize>>, Stop> {
+    let wanted: Vec<_> = ids.iter().map(|id| ctx.id(*id)).collect();
+    let mut per_sync = Vec::new();
+    for counter in counters {
+        match counter {
+            Some(counter) => ctx.send(sync, &[*counter])?,
+            None => ctx.send(sync, &[])?,
+        }
+        let frames = ctx.listen(SYNC_SPACING, |f| wanted.contains(&f.id()) && !f.is_remote())?;
+        per_sync.push(
+            wanted
+                .iter()
+                .map(|id| frames.iter().filter(|l| l.frame.id() == *id).count())
+                .collect(),
+        );
+    }
+    Ok(per_sync)
+}
+
+/// `..T..T`: `T` where a TPDO followed the SYNC.
+fn sync_pattern(after_sync: &[usize]) -> String {
+    after_sync
+        .iter()
+        .map(|n| if *n > 0 { 'T' } else { '.' })
+        .collect()
+}
+
+/// The most TPDOs `cia301.sync.5` counts (each costs a handful of SDO transfers).
+pub const MAX_COUNTED_TPDOS: usize = 8;
+/// SYNCs `cia301.sync.5` sends.
+pub const CONSUMER_SYNCS: usize = 5;
+
+fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let writable = |ctx: &Ctx<'_, '_>, index: u16| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
+    // Make the device a SYNC consumer where the EDS allows it (CCT Synchronization 04).
+    let mut setup = Vec::new();
+    if writable(ctx, 0x1005) {
+        let cob = crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).unwrap_or(0x80) & !0x4000_0000;
+        setup.push((0x1005u16, cob.to_le_bytes().to_vec()));
+    }
+    if writable(ctx, 0x1006) {
+        setup.push((0x1006, vec![0; 4]));
+    }
+    for (index, data) in setup {
+        let reply = ctx.modify(index, 0, data.clone())?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(crate::cia301::helpers::refused_unexpectedly(
+                &crate::cia301::helpers::download_text((index, 0), &data),
+                &reply,
+                req::SYNC_OBJECTS,
+                "the device refuses to be a SYNC consumer",
+            ));
+        }
+    }
+    if crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
+        return Ok(Finding::not_applicable(
+            "the device produces SYNC (1005h bit 30) and 1005h is not writable",
+        ));
+    }
+    let mut ids: Vec<u16> = Vec::new();
+    let mut names = Vec::new();
+    for pdo in ctx.model().pdos(crate::device_model::PdoDirection::Transmit) {
+        if ids.len() == MAX_COUNTED_TPDOS {
+            break;
+        }
+        let Some((pdo, cob)) = crate::cia301::pdo::configurable_tpdo_at(ctx, &pdo, &[1, 2])? else {
+            continue;
+        };
+        let id = (cob & 0x7FF) as u16;
+        if ids.contains(&id) {
+            continue;
+        }
+        if configure_tpdo(ctx, &pdo, cob, &[(2, vec![1])], false)?.is_none() {
+            ids.push(id);
+            names.push(format!("TPDO{} ({id:#X})", pdo.number));
+        }
+    }
+    if ids.is_empty() {
+        return Ok(Finding::not_applicable(
+            "no TPDO with writable COB-ID and transmission type takes type 1",
+        ));
+    }
+    let counter = match ctx.read(0x1019, 0)? {
+        Reply::Done(d) => d.first().copied().filter(|c| *c > 1),
+        _ => None,
+    };
+    let counters: Vec<Option<u8>> = (0..CONSUMER_SYNCS)
+        .map(|i| counter.map(|overflow| (i % usize::from(overflow)) as u8 + 1))
+        .collect();
+    let sync = sync_id(ctx)?;
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    let per_sync = tpdo_counts_after_syncs(ctx, sync, &ids, &counters)?;
+    back_to_pre_operational(ctx)?;
+    let wrong: Vec<String> = names
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| per_sync.iter().any(|counts| counts[*i] != 1))
+        .map(|(i, name)| {
+            let counts: Vec<usize> = per_sync.iter().map(|c| c[i]).collect();
+            format!("{name}: {counts:?}")
+        })
+        .collect();
+    Ok(if wrong.is_empty() {
+        Finding::pass(format!(
+            "{} followed each of {CONSUMER_SYNCS} SYNCs once",
+            names.join(", ")
+        ))
+    } else {
+        Finding::fail(
+            format!("not one TPDO per SYNC: {}", wrong.join("; ")),
+            Evidence {
+                request: format!(
+                    "{} with transmission type 1; NMT start, {CONSUMER_SYNCS} SYNCs on {sync:#X}, {} ms apart",
+                    names.join(", "),
+                    SYNC_SPACING.as_millis()
+                ),
+                requirement: format!("{}: a TPDO of type 1 is sent after every SYNC", req::PDO),
+                answer: format!("TPDOs per SYNC: {}", wrong.join("; ")),
+                cause: "the SYNC consumer misses SYNCs, or a TPDO is not served on every SYNC".to_owned(),
+            },
+        )
+    })
 }

@@ -10,7 +10,7 @@ use crate::cia301::helpers::{
 };
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{number_bytes, number_text, step_beyond};
-use crate::finding::{Evidence, Finding, Outcome};
+use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::requirements::{self as req, code_meaning};
 
 /// The SDO tests.
@@ -207,6 +207,41 @@ pub fn tests() -> Vec<TestDef> {
             precondition: "always (a device without block transfer refuses with 0504 0001h, which is accepted)",
             tags: &["sdo", "block"],
             run: block_size_128,
+        },
+        TestDef {
+            id: "cia301.sdo.19",
+            suite: "cia301",
+            group: "sdo",
+            title: "A segmented download of 100Ch and 1017h is confirmed and reads back",
+            references: &[req::SDO_DOWNLOAD_SEGMENT, "CCT SDO 14", "CCT SDO 15"],
+            precondition: "a writable 2-byte 100Ch (guarding) or 1017h (heartbeat) in the EDS",
+            tags: &["sdo", "writes"],
+            run: segmented_download,
+        },
+        TestDef {
+            id: "cia301.sdo.20",
+            suite: "cia301",
+            group: "sdo",
+            title: "1201h–12FFh (further SDO servers, SDO clients) read with their types and hold their defaults after a reset communication",
+            references: &[
+                req::SDO_SERVER_PARAMETER,
+                req::SDO_CLIENT_PARAMETER,
+                "CCT SDO 28",
+                "CCT SDO 29",
+            ],
+            precondition: "the EDS has one of 1201h–12FFh; the reset communication part changes a writable node-ID (sub-index 3) or valid COB-ID first",
+            tags: &["sdo", "writes", "nmt"],
+            run: further_sdo_channels,
+        },
+        TestDef {
+            id: "cia301.sdo.21",
+            suite: "cia301",
+            group: "sdo",
+            title: "A block upload acknowledged with sequence number 128 is aborted",
+            references: &[req::SDO_BLOCK_UPLOAD, req::SDO_ABORT, "CCT SDO 27"],
+            precondition: "always (a device without block transfer refuses the initiate with 0504 0001h: not_applicable)",
+            tags: &["sdo", "block"],
+            run: block_ack_sequence_128,
         },
     ]
 }
@@ -628,54 +663,110 @@ fn block_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
         return Ok(Finding::not_applicable("the EDS has no writable 1017h or 100Ch"));
     };
     let value = 1234u16.to_le_bytes().to_vec();
+    Ok(
+        match download_and_read_back(
+            ctx,
+            at,
+            value,
+            DownloadMode::Block,
+            "block",
+            req::SDO_BLOCK_DOWNLOAD,
+        )? {
+            Err(Reply::Refused(abort::COMMAND_SPECIFIER_INVALID)) => {
+                Finding::not_applicable("the device has no block transfer (0504 0001h)")
+            }
+            Err(other) => Finding::inconclusive(format!("{} failed: {}", upload_text(at), other.describe())),
+            Ok(finding) => finding,
+        },
+    )
+}
+
+fn segmented_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let model = ctx.model();
+    let targets: Vec<(u16, u8)> = [(0x100Cu16, 0u8), (0x1017, 0)]
+        .into_iter()
+        .filter(|(i, s)| {
+            model
+                .entry(*i, *s)
+                .is_some_and(|e| e.writable() && e.size() == Some(2))
+        })
+        .collect();
+    if targets.is_empty() {
+        return Ok(Finding::not_applicable("the EDS has no writable 100Ch or 1017h"));
+    }
+    let mut done = Vec::new();
+    for at in targets {
+        let value = 1234u16.to_le_bytes().to_vec();
+        match download_and_read_back(
+            ctx,
+            at,
+            value,
+            DownloadMode::Segmented,
+            "segmented",
+            req::SDO_DOWNLOAD_SEGMENT,
+        )? {
+            Err(other) => {
+                return Ok(Finding::inconclusive(format!(
+                    "{} failed: {}",
+                    upload_text(at),
+                    other.describe()
+                )));
+            }
+            Ok(finding) if finding.verdict != crate::model::Verdict::Pass => return Ok(finding),
+            Ok(_) => done.push(format!("{:04X}h", at.0)),
+        }
+    }
+    Ok(Finding::pass(format!(
+        "{} written by segmented download and read back",
+        done.join(" and ")
+    )))
+}
+
+/// Writes `value` to `at` in `mode` (`what` names it), reads it back and writes the original value
+/// back with an ordinary download (the test must not depend on the write path under test). `Err`
+/// holds the answer to the first read when the entry cannot be read, or the refusal of the
+/// download when it is one the caller decides about (0504 0001h).
+fn download_and_read_back(
+    ctx: &mut Ctx<'_, '_>,
+    at: (u16, u8),
+    value: Vec<u8>,
+    mode: DownloadMode,
+    what: &str,
+    clause: &str,
+) -> Result<Result<Finding, Reply>, Stop> {
     let original = match ctx.read(at.0, at.1)? {
         Reply::Done(data) => data,
-        other => {
-            return Ok(Finding::inconclusive(format!(
-                "{} failed: {}",
-                upload_text(at),
-                other.describe()
-            )));
-        }
+        other => return Ok(Err(other)),
     };
-    let reply = ctx.write_with(at.0, at.1, value.clone(), DownloadMode::Block)?;
-    let request = format!(
-        "SDO block download {:04X}h:{:02X} = {} with CRC",
-        at.0,
-        at.1,
-        hex(&value)
-    );
+    let reply = ctx.write_with(at.0, at.1, value.clone(), mode)?;
+    let request = format!("SDO {what} download {:04X}h:{:02X} = {}", at.0, at.1, hex(&value));
     let finding = match reply {
-        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) => {
-            return Ok(Finding::not_applicable(
-                "the device has no block transfer (0504 0001h)",
-            ));
+        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) if mode == DownloadMode::Block => {
+            return Ok(Err(reply));
         }
         Reply::Done(_) => match ctx.read(at.0, at.1)? {
-            Reply::Done(back) if back == value => Finding::pass("written by block download and read back"),
+            Reply::Done(back) if back == value => {
+                Finding::pass(format!("written by {what} download and read back"))
+            }
             other => Finding::fail(
-                "the value written by block download does not read back",
+                format!("the value written by {what} download does not read back"),
                 Evidence {
                     request: format!("{request}, then {}", upload_text(at)),
-                    requirement: format!(
-                        "{}: a confirmed download stores the value",
-                        req::SDO_BLOCK_DOWNLOAD
-                    ),
+                    requirement: format!("{clause}: a confirmed download stores the value"),
                     answer: other.describe(),
-                    cause: "the block download server confirms without storing".to_owned(),
+                    cause: format!("the {what} download server confirms without storing"),
                 },
             ),
         },
         other => refused_unexpectedly(
             &request,
             &other,
-            req::SDO_BLOCK_DOWNLOAD,
-            "the block download server is broken",
+            clause,
+            &format!("the {what} download server is broken"),
         ),
     };
-    // Written back here rather than by `modify`: the test must not depend on the write path under test.
     ctx.write(at.0, at.1, original)?;
-    Ok(finding)
+    Ok(Ok(finding))
 }
 
 fn specific_abort_codes(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -729,5 +820,178 @@ fn block_size_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
         req::BLOCK_SIZE,
         req::SDO_BLOCK_UPLOAD,
         "the server does not check the client's block size (1..127)",
+    ))
+}
+
+fn further_sdo_channels(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let entries: Vec<_> = ctx
+        .model()
+        .entries
+        .values()
+        .filter(|e| (0x1201..=0x12FF).contains(&e.index) && e.readable())
+        .cloned()
+        .collect();
+    if entries.is_empty() {
+        return Ok(Finding::not_applicable("the EDS has none of 1201h–12FFh"));
+    }
+    let clause = |index: u16| {
+        if index < 0x1280 {
+            req::SDO_SERVER_PARAMETER
+        } else {
+            req::SDO_CLIENT_PARAMETER
+        }
+    };
+    // CCT SDO 28: every entry reads with its type's size.
+    let mut current = Vec::new();
+    for e in &entries {
+        let reply = ctx.read(e.index, e.sub)?;
+        match (&reply, e.size()) {
+            (Reply::Done(d), Some(size)) if d.len() != size => {
+                return Ok(Finding::fail(
+                    format!("{} reads as {} bytes, its type has {size}", e.label(), d.len()),
+                    Evidence {
+                        request: upload_text((e.index, e.sub)),
+                        requirement: format!("{}: the entry has the type CiA 301 gives it", clause(e.index)),
+                        answer: reply.describe(),
+                        cause: "the SDO channel parameter has the wrong type".to_owned(),
+                    },
+                ));
+            }
+            (Reply::Done(d), _) => current.push((e, d.clone())),
+            _ => {
+                return Ok(refused_unexpectedly(
+                    &upload_text((e.index, e.sub)),
+                    &reply,
+                    clause(e.index),
+                    "a readable SDO channel parameter cannot be read",
+                ));
+            }
+        }
+    }
+    // CCT SDO 29: change one value, reset communication, and every default is back. A node-ID
+    // (sub-index 3) or a valid COB-ID (made invalid) can always change (CiA 301 §7.5.2.33/34).
+    let change = current.iter().find_map(|(e, d)| {
+        if !e.writable() {
+            return None;
+        }
+        match (e.sub, d.as_slice()) {
+            (3, [node]) => Some((e.index, e.sub, vec![if *node == 1 { 2 } else { 1 }])),
+            (1 | 2, [a, b, c, d]) if d & 0x80 == 0 => Some((e.index, e.sub, vec![*a, *b, *c, d | 0x80])),
+            _ => None,
+        }
+    });
+    let mut changed = None;
+    if let Some((index, sub, value)) = change
+        && matches!(ctx.modify(index, sub, value.clone())?, Reply::Done(_))
+    {
+        changed = Some(download_text((index, sub), &value));
+    }
+    if !crate::cia301::helpers::reset_communication(ctx)? {
+        return Ok(Finding::inconclusive("no boot-up after the reset communication"));
+    }
+    for e in &entries {
+        let Some(default) = &e.default else { continue };
+        let reply = ctx.read(e.index, e.sub)?;
+        if !matches!(&reply, Reply::Done(d) if d == default) {
+            return Ok(Finding::fail(
+                format!("{} is not its default after a reset communication", e.label()),
+                Evidence {
+                    request: format!(
+                        "{}NMT reset communication, {}",
+                        changed.as_ref().map_or(String::new(), |c| format!("{c}, ")),
+                        upload_text((e.index, e.sub))
+                    ),
+                    requirement: format!(
+                        "{}: reset communication sets the communication parameters to their power-on values ({} by the EDS)",
+                        req::NMT_MODULE_CONTROL,
+                        hex(default)
+                    ),
+                    answer: reply.describe(),
+                    cause: "the SDO channel parameters are not reset with the communication area".to_owned(),
+                },
+            ));
+        }
+    }
+    Ok(Finding::pass(format!(
+        "{} entries read with their types; defaults back after a reset communication{}",
+        entries.len(),
+        changed.map_or(String::new(), |c| format!(" (after {c})"))
+    )))
+}
+
+/// The block size `cia301.sdo.21` asks for.
+const ACK_TEST_BLOCK: u8 = 4;
+
+fn block_ack_sequence_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let at = long_entry(ctx).unwrap_or((0x1000, 0));
+    let [lo, hi] = at.0.to_le_bytes();
+    let node = u16::from(ctx.node());
+    // Initiate block upload (ccs 5, CRC offered, no protocol switch), block size 4.
+    let initiate = [0xA4, lo, hi, at.1, ACK_TEST_BLOCK, 0, 0, 0];
+    let text = format!(
+        "SDO block upload initiate {} of {:04X}h:{:02X}",
+        hex(&initiate),
+        at.0,
+        at.1
+    );
+    match Reply::of_raw(ctx.raw_sdo(initiate)?) {
+        // scs 6 (block upload), ss 0 (initiate).
+        Reply::Frame(d) if d[0] & 0xE1 == 0xC0 => {}
+        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) => {
+            return Ok(Finding::not_applicable(
+                "the device has no block transfer (0504 0001h)",
+            ));
+        }
+        other => {
+            if matches!(other, Reply::Frame(_)) {
+                // End whatever the server started.
+                let [a, b, c, d] = abort::COMMAND_SPECIFIER_INVALID.to_le_bytes();
+                ctx.send(0x600 + node, &[0x80, lo, hi, at.1, a, b, c, d])?;
+            }
+            return Ok(refused_unexpectedly(
+                &text,
+                &other,
+                req::SDO_BLOCK_UPLOAD,
+                "the block upload server is broken",
+            ));
+        }
+    }
+    // Start: the server sends sub-blocks with sequence numbers 1..block size, the last one of the
+    // value with bit 7 set (CiA 301 §7.2.4.3.14).
+    ctx.send(0x600 + node, &[0xA3, 0, 0, 0, 0, 0, 0, 0])?;
+    let response = ctx.id(0x580 + node);
+    let mut last_seq = 0;
+    loop {
+        let timeout = ctx.timeout();
+        let Some(segment) = ctx.wait_for(timeout, |f| f.id() == response && !f.is_remote())? else {
+            break;
+        };
+        let data = segment.frame.data();
+        last_seq = data.first().map_or(0, |b| b & 0x7F);
+        if data.first().is_some_and(|b| b & 0x80 != 0) || last_seq >= ACK_TEST_BLOCK {
+            break;
+        }
+    }
+    if last_seq == 0 {
+        return Ok(Finding::inconclusive(format!(
+            "no sub-block after the start of the block upload ({text})"
+        )));
+    }
+    // Acknowledge sequence number 128: no sub-block has it (1..127, and the block size was 4).
+    let ack = [0xA2, 128, ACK_TEST_BLOCK, 0, 0, 0, 0, 0];
+    let reply = Reply::of_raw(ctx.raw_sdo(ack)?);
+    if !matches!(reply, Reply::Refused(_)) {
+        let [a, b, c, d] = abort::INVALID_SEQUENCE_NUMBER.to_le_bytes();
+        ctx.send(0x600 + node, &[0x80, lo, hi, at.1, a, b, c, d])?;
+    }
+    Ok(expect_refusal(
+        &format!(
+            "{text}, start, {last_seq} sub-block(s) received, block acknowledge {}",
+            hex(&ack)
+        ),
+        &reply,
+        req::SEQUENCE_NUMBER,
+        req::SDO_BLOCK_UPLOAD,
+        "the server does not check the acknowledged sequence number",
     ))
 }

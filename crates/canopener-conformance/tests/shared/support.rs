@@ -3,11 +3,14 @@
 
 use std::time::Duration;
 
+use canopener_can::{CanFrame, Instant};
 use canopener_conformance::catalogue::{Selection, catalogue};
 use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::Report;
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_device::faults::Fault;
+use canopener_runtime::cancel::Cancel;
+use canopener_runtime::link::{Link, LinkError, Stamped, Timestamps};
 use canopener_runtime::simulator::simulation::Simulation;
 
 /// The node every simulated device under test has.
@@ -35,19 +38,41 @@ pub(crate) fn run_cancelled_at(
     only: &[&str],
     cancel_at: Option<&str>,
 ) -> Report {
-    let cancel = canopener_runtime::cancel::Cancel::new();
+    run_cancelled(name, node, faults, only, cancel_at, &|_| false)
+}
+
+/// [`run_at`], cancelling the link (as Ctrl-C does) when the tester receives a frame `on_frame`
+/// accepts: in the middle of a test.
+pub(crate) fn run_cancelled_on(name: &str, only: &[&str], on_frame: &dyn Fn(&CanFrame) -> bool) -> Report {
+    run_cancelled(name, NODE, &[], only, None, on_frame)
+}
+
+fn run_cancelled(
+    name: &str,
+    node: u8,
+    faults: &[Fault],
+    only: &[&str],
+    cancel_at: Option<&str>,
+    on_frame: &dyn Fn(&CanFrame) -> bool,
+) -> Report {
+    let cancel = Cancel::new();
     let path = canopener_testkit::corpus::eds(name);
     let bytes = canopener_testkit::fixture::read(&path).expect("corpus file");
     let loaded = canopener_eds::load(&bytes);
     let eds_errors = Some(canopener_conformance::cia301::eds::errors(&loaded, Some(name)));
     let eds = loaded.eds;
     let model = DeviceModel::new(&eds, node);
-    let mut bus = Simulation::ideal()
+    let bus = Simulation::ideal()
         .device(&eds, node)
         .faults(faults.iter().copied())
         .cancel(cancel.clone())
         .start()
         .expect("simulation");
+    let mut bus = CancelOn {
+        inner: bus,
+        cancel: cancel.clone(),
+        on_frame,
+    };
     let selection = Selection {
         only: only.iter().map(|s| (*s).to_owned()).collect(),
         ..Selection::default()
@@ -61,6 +86,7 @@ pub(crate) fn run_cancelled_at(
         started: STARTED.to_owned(),
         sdo_timeout: Duration::from_millis(500),
         eds_errors,
+        cancel: Some(cancel.clone()),
     };
     runner::run(&mut bus, &spec, &tests, |progress| {
         if progress.current.is_some_and(|t| Some(t.id) == cancel_at) {
@@ -69,4 +95,47 @@ pub(crate) fn run_cancelled_at(
     })
     .expect("run")
     .report
+}
+
+/// A link that cancels `cancel` when it receives a frame `on_frame` accepts.
+struct CancelOn<'f, L> {
+    inner: L,
+    cancel: Cancel,
+    on_frame: &'f dyn Fn(&CanFrame) -> bool,
+}
+
+impl<L: Link> Link for CancelOn<'_, L> {
+    fn now(&self) -> Instant {
+        self.inner.now()
+    }
+
+    fn send(&mut self, frame: &CanFrame) -> Result<(), LinkError> {
+        self.inner.send(frame)
+    }
+
+    fn recv_until(&mut self, deadline: Instant) -> Result<Option<(Instant, CanFrame)>, LinkError> {
+        Ok(self
+            .recv_stamped_until(deadline)?
+            .map(|stamped| (stamped.at, stamped.frame)))
+    }
+
+    fn recv_stamped_until(&mut self, deadline: Instant) -> Result<Option<Stamped>, LinkError> {
+        let received = self.inner.recv_stamped_until(deadline)?;
+        if received.as_ref().is_some_and(|s| (self.on_frame)(&s.frame)) {
+            self.cancel.cancel();
+        }
+        Ok(received)
+    }
+
+    fn is_cancelled(&self) -> bool {
+        self.inner.is_cancelled()
+    }
+
+    fn describe(&self) -> String {
+        self.inner.describe()
+    }
+
+    fn timestamps(&self) -> Timestamps {
+        self.inner.timestamps()
+    }
 }
