@@ -116,6 +116,31 @@ fn clean_simulated_devices_pass_within_ten_virtual_seconds() {
     }
 }
 
+/// Three more vendors whose EDS files pass canopener's checks and describe self-consistent devices,
+/// from the extended corpus (their licences forbid vendoring them: CI has them, a fresh clone skips).
+const CLEAN_EXTENDED: &[(&str, &str)] = &[
+    (
+        "davidsenoner__emec-drv-canopen-tester__app__resources__eds__emecdrv5_rev09.eds",
+        "EMEC drive",
+    ),
+    ("dereklu76__Emtas_CANopen_28069__slave1.eds", "emtas slave"),
+    ("jinr-greenlab__canopen__JINR_HV_DAC_00010001.eds", "JINR HV DAC"),
+];
+
+#[test]
+fn clean_devices_of_three_more_vendors_pass_within_ten_virtual_seconds() {
+    for (name, what) in CLEAN_EXTENDED {
+        let Some(report) = support::run_extended(name) else {
+            return;
+        };
+        check_clean(&report, what, &[]);
+        eprintln!(
+            "{what}: {} passed, {} not applicable in {:.2} s virtual time",
+            report.summary.pass, report.summary.not_applicable, report.duration_s
+        );
+    }
+}
+
 #[test]
 fn a_device_with_many_pdos_fails_only_the_eds_check_of_its_file() {
     let report = support::run(MANY_PDOS, &[], &[]);

@@ -55,9 +55,35 @@ fn run_cancelled(
     cancel_at: Option<&str>,
     on_frame: &dyn Fn(&CanFrame) -> bool,
 ) -> Report {
+    run_file(
+        &canopener_testkit::corpus::eds(name),
+        name,
+        node,
+        faults,
+        only,
+        cancel_at,
+        on_frame,
+    )
+}
+
+/// Runs every test against a simulated device from a file only the extended corpus holds (the
+/// vendors whose licences forbid redistribution); `None` without an extended corpus.
+pub(crate) fn run_extended(name: &str) -> Option<Report> {
+    let path = canopener_testkit::corpus::extended_file(canopener_testkit::corpus::Kind::Eds, name)?;
+    Some(run_file(&path, name, NODE, &[], &[], None, &|_| false))
+}
+
+fn run_file(
+    path: &std::path::Path,
+    name: &str,
+    node: u8,
+    faults: &[Fault],
+    only: &[&str],
+    cancel_at: Option<&str>,
+    on_frame: &dyn Fn(&CanFrame) -> bool,
+) -> Report {
     let cancel = Cancel::new();
-    let path = canopener_testkit::corpus::eds(name);
-    let bytes = canopener_testkit::fixture::read(&path).expect("corpus file");
+    let bytes = canopener_testkit::fixture::read(path).expect("corpus file");
     let loaded = canopener_eds::load(&bytes);
     let eds_errors = Some(canopener_conformance::cia301::eds::errors(&loaded, Some(name)));
     let eds = loaded.eds;
