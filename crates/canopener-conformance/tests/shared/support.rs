@@ -38,32 +38,17 @@ pub(crate) fn run_cancelled_at(
     only: &[&str],
     cancel_at: Option<&str>,
 ) -> Report {
-    run_cancelled(name, node, faults, only, cancel_at, &|_| false)
+    run_file(&vendored(name), name, node, faults, only, cancel_at, &|_| false)
 }
 
 /// [`run_at`], cancelling the link (as Ctrl-C does) when the tester receives a frame `on_frame`
 /// accepts: in the middle of a test.
 pub(crate) fn run_cancelled_on(name: &str, only: &[&str], on_frame: &dyn Fn(&CanFrame) -> bool) -> Report {
-    run_cancelled(name, NODE, &[], only, None, on_frame)
+    run_file(&vendored(name), name, NODE, &[], only, None, on_frame)
 }
 
-fn run_cancelled(
-    name: &str,
-    node: u8,
-    faults: &[Fault],
-    only: &[&str],
-    cancel_at: Option<&str>,
-    on_frame: &dyn Fn(&CanFrame) -> bool,
-) -> Report {
-    run_file(
-        &canopener_testkit::corpus::eds(name),
-        name,
-        node,
-        faults,
-        only,
-        cancel_at,
-        on_frame,
-    )
+fn vendored(name: &str) -> std::path::PathBuf {
+    canopener_testkit::corpus::eds(name)
 }
 
 /// Runs every test against a simulated device from a file only the extended corpus holds (the
