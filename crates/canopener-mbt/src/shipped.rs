@@ -20,7 +20,7 @@ pub const MODELS: &[Shipped] = &[
     },
     Shipped {
         name: "sdo",
-        covers: "SDO server, expedited: upload sizes of 1000h/1001h/1018h, aborts for an absent object and sub-index, a read-only write and an unknown command, silence in Stopped (CiA 301 §7.2.4.3); uses nmt",
+        covers: "SDO server, expedited and segmented: upload sizes of 1000h/1001h/1018h, segmented upload of 1008h and download to 1005h with the toggle bit, aborts for an absent object and sub-index, a read-only write, an unknown command and a wrong toggle (0503 0000h), silence in Stopped (CiA 301 §7.2.4.3); uses nmt",
         text: include_str!("../models/sdo.mbt"),
     },
     Shipped {

@@ -98,6 +98,16 @@ fn clean_devices_pass_every_shipped_model() {
                 "{names:?} seed {seed}: {:?} {:?}",
                 outcome.coverage.transitions, outcome.coverage.locations
             );
+            if names == ["sdo"] {
+                // The segmented transfers ran: 1008h's upload in segments, 1005h's download.
+                for label in ["!SDO_TX !0x41 !0x1008", "!SDO_TX !0x60 !0x1005", "!SDO_TX !0x20"] {
+                    assert!(
+                        outcome.trace.iter().any(|s| s.label.starts_with(label)),
+                        "{label}: {}",
+                        show(&outcome)
+                    );
+                }
+            }
             if names == ["sync"] {
                 assert!(
                     outcome
@@ -130,6 +140,7 @@ fn protocol_faults_are_caught() {
         (&["sdo"], Fault::SdoExpeditedSizeWrong),
         (&["sdo"], Fault::WrongAbortCode),
         (&["sdo"], Fault::SdoBadCommandSilent),
+        (&["sdo"], Fault::SdoToggleIgnored),
         (&["sync"], Fault::SyncCounterMissing),
         (&["lss"], Fault::LssStateNotChanged),
         (&["lss"], Fault::NoLss),
