@@ -39,6 +39,16 @@ pub const MODELS: &[Shipped] = &[
         text: include_str!("../models/emcy.mbt"),
     },
     Shipped {
+        name: "guarding",
+        covers: "Node guarding after 1017h = 0: every remote request answered with the NMT state and a toggle bit that starts at 0 after initialisation and alternates (CiA 301 §7.2.8.3.2.1)",
+        text: include_str!("../models/guarding.mbt"),
+    },
+    Shipped {
+        name: "heartbeat",
+        covers: "Heartbeat consumer 1016h: timeout after the consumer time, EMCY 8130h, NMT reaction per 1029h:01 (absent = Pre-operational) seen in the device's heartbeat (CiA 301 §7.2.8.3.2.2, 1029h)",
+        text: include_str!("../models/heartbeat.mbt"),
+    },
+    Shipped {
         name: "energybus-ems",
         covers: "DRAFT: EnergyBus EMS virtual device FSA (CiA 454) from public material only: control word 6001h transitions, status word 6002h state, automatic steps; no device to test it on here",
         text: include_str!("../models/energybus-ems.mbt"),

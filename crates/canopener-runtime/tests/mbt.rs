@@ -76,12 +76,16 @@ fn show(o: &Outcome) -> String {
 #[test]
 fn clean_devices_pass_every_shipped_model() {
     let eds = eds();
+    // Which branches of the sync model the seeds took: producer, consumer (TPDO type n).
+    let mut sync_branches = [false; 2];
     for names in [
         &["nmt"][..],
         &["sdo"][..],
         &["sync"][..],
         &["lss"][..],
         &["emcy"][..],
+        &["guarding"][..],
+        &["heartbeat"][..],
     ] {
         let model = model(names, &eds);
         for seed in 1..=3 {
@@ -108,20 +112,60 @@ fn clean_devices_pass_every_shipped_model() {
                     );
                 }
             }
-            if names == ["sync"] {
+            if names == ["guarding"] {
+                // Answers with the toggle set came: the toggle alternated.
                 assert!(
                     outcome
                         .trace
                         .iter()
-                        .filter(|s| s.label.starts_with("!SYNC !0x05"))
-                        .count()
-                        > 5,
+                        .any(|s| ["!EC !0x84", "!EC !0x85", "!EC !0xFF"].contains(&s.label.as_str())),
                     "{}",
                     show(&outcome)
                 );
             }
+            if names == ["heartbeat"] {
+                // The event and the reaction (no 1029h: Pre-operational) were seen.
+                assert!(
+                    outcome.trace.iter().any(|s| s.label.starts_with("!EMCY !0x8130")),
+                    "{}",
+                    show(&outcome)
+                );
+            }
+            if names == ["sync"] {
+                let count = |prefix: &str| {
+                    outcome
+                        .trace
+                        .iter()
+                        .filter(|s| s.label.starts_with(prefix))
+                        .count()
+                };
+                // TPDOs after the first SYNC the tester sent (before it, TPDO1 ran with the type it
+                // starts with).
+                let tpdos = outcome
+                    .trace
+                    .iter()
+                    .skip_while(|s| !s.label.starts_with("?SYNC_IN"))
+                    .filter(|s| s.label.starts_with("!TPDO"))
+                    .count();
+                let syncs_in = count("?SYNC_IN");
+                if syncs_in == 0 {
+                    // The producer branch: SYNCs with the counter running up to 5.
+                    assert!(count("!SYNC !0x05") > 5, "{}", show(&outcome));
+                } else {
+                    // The consumer branch: TPDO1 of type 3 after every third SYNC the tester sent
+                    // (the run may end between the third SYNC and its TPDO).
+                    assert!(syncs_in > 9, "{}", show(&outcome));
+                    assert!(
+                        (syncs_in / 3 - 1..=syncs_in / 3).contains(&tpdos),
+                        "{syncs_in} SYNCs, {tpdos} TPDOs: {}",
+                        show(&outcome)
+                    );
+                }
+                sync_branches[usize::from(syncs_in > 0)] = true;
+            }
         }
     }
+    assert_eq!(sync_branches, [true, true], "seeds 1..3 take both branches of sync");
 }
 
 #[test]
@@ -146,6 +190,9 @@ fn protocol_faults_are_caught() {
         (&["lss"], Fault::NoLss),
         (&["emcy"], Fault::NoEmcy),
         (&["emcy"], Fault::EmcyNoErrorReset),
+        (&["guarding"], Fault::HeartbeatStateWrong),
+        (&["guarding"], Fault::IgnoresNmtStop),
+        (&["heartbeat"], Fault::NoEmcy),
     ];
     for (names, fault) in cases {
         let model = model(names, &eds);
