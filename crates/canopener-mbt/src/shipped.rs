@@ -25,12 +25,12 @@ pub const MODELS: &[Shipped] = &[
     },
     Shipped {
         name: "sync",
-        covers: "SYNC producer configured over SDO: period 1006h and counter 1019h on every SYNC, including a missing counter byte (CiA 301 §7.2.5)",
+        covers: "SYNC producer configured over SDO: period 1006h and counter 1019h on every SYNC, including a missing counter byte; SYNC consumer: TPDO1 of synchronous type n after every n-th SYNC and never between (CiA 301 §7.2.5, 1800h)",
         text: include_str!("../models/sync.mbt"),
     },
     Shipped {
         name: "lss",
-        covers: "LSS slave: waiting/configuration, switch state global and selective, inquire identity and node-ID (CiA 305)",
+        covers: "LSS slave: waiting/configuration, switch state global and selective, inquire identity and node-ID, fastscan (non-configured devices are found part by part and selected, configured ones keep silent) (CiA 305)",
         text: include_str!("../models/lss.mbt"),
     },
     Shipped {

@@ -23,6 +23,11 @@ fn eds() -> Eds {
 }
 
 fn model(names: &[&str], eds: &Eds) -> Model {
+    model_for(names, eds, NODE)
+}
+
+/// The models for the device with `node_id` (FFh: LSS non-configured).
+fn model_for(names: &[&str], eds: &Eds, node_id: u8) -> Model {
     let sources: Vec<Source> = names
         .iter()
         .map(|n| Source {
@@ -31,7 +36,7 @@ fn model(names: &[&str], eds: &Eds) -> Model {
         })
         .collect();
     let options = Options {
-        node_id: NODE,
+        node_id,
         eds: Some(eds),
         set: Vec::new(),
     };
@@ -40,8 +45,12 @@ fn model(names: &[&str], eds: &Eds) -> Model {
 }
 
 fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+    test_node(model, eds, NODE, faults, seed, steps)
+}
+
+fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
     let mut bus = Simulation::ideal()
-        .device(eds, NODE)
+        .device(eds, node_id)
         .faults(faults.iter().copied())
         .start()
         .expect("simulation");
@@ -165,7 +174,11 @@ fn clean_devices_pass_every_shipped_model() {
             }
         }
     }
-    assert_eq!(sync_branches, [true, true], "seeds 1..3 take both branches of sync");
+    assert_eq!(
+        sync_branches,
+        [true, true],
+        "seeds 1..3 take both branches of sync"
+    );
 }
 
 #[test]
@@ -209,6 +222,75 @@ fn protocol_faults_are_caught() {
             show(&outcome)
         );
     }
+}
+
+/// LSS fastscan (CiA 305 §6.7) on a non-configured device (node-ID FFh): the clean device is found
+/// part by part and selected; with the fault that drops the selecting step the model misses the
+/// answer. A configured device is run by `clean_devices_pass_every_shipped_model` (it must keep
+/// silent).
+#[test]
+fn fastscan_finds_a_non_configured_device_and_catches_a_lost_selection() {
+    let eds = eds();
+    let model = model_for(&["lss"], &eds, 0xFF);
+    for seed in 1..=3 {
+        let outcome = test_node(&model, &eds, 0xFF, &[], seed, 400);
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+    }
+    // Guided by the shipped purpose: the whole address is confirmed and the slave answers the
+    // selecting step.
+    let purpose = model
+        .purposes
+        .iter()
+        .find(|p| p.name == "fastscan_select")
+        .expect("shipped purpose")
+        .clone();
+    for seed in 1..=3 {
+        let mut bus = Simulation::ideal()
+            .device(&eds, 0xFF)
+            .start()
+            .expect("simulation");
+        let config = RunConfig {
+            seed,
+            steps: 2000,
+            purpose: Some(purpose.clone()),
+            ..RunConfig::default()
+        };
+        let outcome = run(&mut bus, &model, config, None).expect("link");
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+        assert_eq!(
+            outcome.purpose,
+            Some(("fastscan_select".to_owned(), true)),
+            "seed {seed}: {}",
+            show(&outcome)
+        );
+    }
+    // The fault drops the selecting step (and switch state global to configuration): some guided
+    // run fails on the missing answer to the selecting step.
+    let mut caught = 0;
+    for seed in 1..=5 {
+        let mut bus = Simulation::ideal()
+            .device(&eds, 0xFF)
+            .fault(Fault::LssStateNotChanged)
+            .start()
+            .expect("simulation");
+        let config = RunConfig {
+            seed,
+            steps: 2000,
+            purpose: Some(purpose.clone()),
+            ..RunConfig::default()
+        };
+        let outcome = run(&mut bus, &model, config, None).expect("link");
+        assert_eq!(outcome.verdict, Verdict::Fail, "seed {seed}: {}", show(&outcome));
+        let last_input = outcome.trace.iter().rev().find(|s| s.label.starts_with('?'));
+        if outcome.reason.starts_with("missing output")
+            && last_input.is_some_and(|s| {
+                s.label.starts_with("?LSS_REQ !0x51") && s.label.ends_with("!0x00 !0x03 !0x00")
+            })
+        {
+            caught += 1;
+        }
+    }
+    assert!(caught > 0, "lss-state-not-changed on the fastscan selection");
 }
 
 #[test]
