@@ -176,6 +176,9 @@ pub(crate) struct RunArgs {
     /// Write the coverage as DOT: visited locations and transitions coloured.
     #[arg(long, value_name = "OUT.dot")]
     pub(crate) coverage_dot: Option<PathBuf>,
+    /// Write the coverage as SVG (the same colours, drawn without Graphviz).
+    #[arg(long, value_name = "OUT.svg")]
+    pub(crate) coverage_svg: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -46,6 +46,11 @@ pub(crate) fn run(args: RunArgs) -> CliResult {
             &canopener_mbt::explore::coverage_dot(&loaded.model, &outcome.coverage.taken),
         )?;
     }
+    if let Some(path) = &args.coverage_svg {
+        let svg = canopener_mbt::explore::coverage_svg(&loaded.model, &outcome.coverage.taken)
+            .map_err(|e| CliError::Internal(e.into()))?;
+        write(path, &svg)?;
+    }
     report(&header, &loaded.model, &outcome, args.format)
 }
 

@@ -50,6 +50,27 @@ fn runs_pass_fail_and_shrink_on_a_simulated_device() {
     assert!(json["coverage"]["transitions"][0].as_u64().unwrap() > 5);
 
     let dir = temp_dir("mbt-run");
+    // Coverage drawn as SVG without Graphviz: taken edges green, the others grey.
+    let svg_path = dir.join("coverage.svg");
+    let drawn = run(&[
+        "mbt",
+        "run",
+        "guarding",
+        "--sim",
+        &eds,
+        "--node",
+        "5",
+        "--steps",
+        "100",
+        "--coverage-svg",
+        svg_path.to_str().unwrap(),
+    ]);
+    assert_eq!(drawn.status.code(), Some(0), "{}", stderr(&drawn));
+    let svg = std::fs::read_to_string(&svg_path).expect("the SVG was written");
+    assert!(svg.contains("<svg"), "{svg}");
+    assert!(svg.contains("#006400"), "no taken (green) edge: {svg}");
+    assert!(svg.contains("#808080"), "no untaken (grey) edge: {svg}");
+    assert!(svg.contains(">Guarding<"), "{svg}");
     let log = dir.join("fail.jsonl");
     let fail = run(&[
         "mbt",
