@@ -71,6 +71,28 @@ fn runs_pass_fail_and_shrink_on_a_simulated_device() {
     assert!(svg.contains("#006400"), "no taken (green) edge: {svg}");
     assert!(svg.contains("#808080"), "no untaken (grey) edge: {svg}");
     assert!(svg.contains(">Guarding<"), "{svg}");
+
+    // A device without a node-ID (0xFF): fastscan finds and selects it.
+    let fastscan = run(&[
+        "mbt",
+        "run",
+        "lss",
+        "--sim",
+        &eds,
+        "--node",
+        "0xFF",
+        "--purpose",
+        "fastscan_select",
+        "--steps",
+        "2000",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(fastscan.status.code(), Some(0), "{}", stderr(&fastscan));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&fastscan)).unwrap();
+    assert_eq!(json["purpose"]["reached"], true, "{json}");
+    let other = run(&["mbt", "run", "lss", "--sim", &eds, "--node", "0x80"]);
+    assert_eq!(other.status.code(), Some(2), "{}", stderr(&other));
     let log = dir.join("fail.jsonl");
     let fail = run(&[
         "mbt",
