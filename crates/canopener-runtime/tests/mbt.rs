@@ -286,6 +286,53 @@ fn fastscan_finds_a_non_configured_device_and_catches_a_lost_selection() {
     assert!(caught > 0, "lss-state-not-changed on the fastscan selection");
 }
 
+/// The heartbeat consumer's reaction on a device whose description has no 1029h (CiA 301: it
+/// behaves as 1029h:01 = 0): started, then the watched node falls silent, so after EMCY 8130h its
+/// heartbeat must report Pre-operational (7Fh).
+#[test]
+fn heartbeat_event_without_1029h_moves_an_operational_device_to_pre_operational() {
+    let file = "CANopenNode__CanOpenSTM32__Elcom e-RIO 8xx CANopen Profile.eds";
+    let eds = canopener_eds::load(&std::fs::read(corpus::eds(file)).expect("EDS file")).eds;
+    assert!(!eds.objects.contains_key(&0x1029), "the EDS must lack 1029h");
+    let model = model(&["heartbeat"], &eds);
+    let mut reactions = 0;
+    for seed in 1..=3 {
+        let outcome = test(&model, &eds, &[], seed, 300);
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+        // Each 8130h on a started device comes with 7Fh: the heartbeat sent on the state change
+        // just before it (since the last beat of the tester's), or else the next heartbeat (unless
+        // a reset comes first).
+        let mut started = false;
+        let mut after_event = false;
+        let mut beat_since_peer: Option<&str> = None;
+        for step in &outcome.trace {
+            let label = step.label.as_str();
+            if label.starts_with("?NMT !0x01") {
+                started = true;
+            } else if label.starts_with("?NMT !0x81") {
+                (started, after_event) = (false, false);
+            } else if label.starts_with("?PEER") {
+                beat_since_peer = None;
+            } else if label.starts_with("!EMCY !0x8130") && started {
+                if beat_since_peer == Some("!EC !0x7F") {
+                    reactions += 1;
+                    started = false;
+                } else {
+                    after_event = true;
+                }
+            } else if label.starts_with("!EC ") {
+                beat_since_peer = Some(label);
+                if after_event {
+                    assert_eq!(label, "!EC !0x7F", "seed {seed}: {}", show(&outcome));
+                    reactions += 1;
+                    (started, after_event) = (false, false);
+                }
+            }
+        }
+    }
+    assert!(reactions > 0, "no run saw the event on a started device");
+}
+
 #[test]
 fn failing_runs_shrink_to_one_minimal_scripts() {
     let eds = eds();
