@@ -20,23 +20,33 @@ pub const MODELS: &[Shipped] = &[
     },
     Shipped {
         name: "sdo",
-        covers: "SDO server, expedited: upload sizes of 1000h/1001h/1018h, aborts for an absent object and sub-index, a read-only write and an unknown command, silence in Stopped (CiA 301 §7.2.4.3); uses nmt",
+        covers: "SDO server, expedited and segmented: upload sizes of 1000h/1001h/1018h, segmented upload of 1008h and download to 1005h with the toggle bit, aborts for an absent object and sub-index, a read-only write, an unknown command and a wrong toggle (0503 0000h), silence in Stopped (CiA 301 §7.2.4.3); uses nmt",
         text: include_str!("../models/sdo.mbt"),
     },
     Shipped {
         name: "sync",
-        covers: "SYNC producer configured over SDO: period 1006h and counter 1019h on every SYNC, including a missing counter byte (CiA 301 §7.2.5)",
+        covers: "SYNC producer configured over SDO: period 1006h and counter 1019h on every SYNC, including a missing counter byte; SYNC consumer: TPDO1 of synchronous type n after every n-th SYNC and never between (CiA 301 §7.2.5, 1800h)",
         text: include_str!("../models/sync.mbt"),
     },
     Shipped {
         name: "lss",
-        covers: "LSS slave: waiting/configuration, switch state global and selective, inquire identity and node-ID (CiA 305)",
+        covers: "LSS slave: waiting/configuration, switch state global and selective, inquire identity and node-ID, fastscan (non-configured devices are found part by part and selected, configured ones keep silent) (CiA 305)",
         text: include_str!("../models/lss.mbt"),
     },
     Shipped {
         name: "emcy",
         covers: "EMCY producer: heartbeat-consumer event 8130h with error register 11h after 1016h's time, and the error reset 0000h when heartbeats resume (CiA 301 §7.2.7)",
         text: include_str!("../models/emcy.mbt"),
+    },
+    Shipped {
+        name: "guarding",
+        covers: "Node guarding after 1017h = 0: every remote request answered with the NMT state and a toggle bit that starts at 0 after initialisation and alternates (CiA 301 §7.2.8.3.2.1)",
+        text: include_str!("../models/guarding.mbt"),
+    },
+    Shipped {
+        name: "heartbeat",
+        covers: "Heartbeat consumer 1016h: timeout after the consumer time, EMCY 8130h, NMT reaction per 1029h:01 (absent = Pre-operational) seen in the device's heartbeat (CiA 301 §7.2.8.3.2.2, 1029h)",
+        text: include_str!("../models/heartbeat.mbt"),
     },
     Shipped {
         name: "energybus-ems",

@@ -5,7 +5,9 @@
 //! 1. clean devices: every shipped model, SEEDS seeds of STEPS steps each, verdicts and time taken;
 //! 2. every fault of the catalogue against every model: how many of FAULT_SEEDS seeds fail, the
 //!    median steps and virtual time to the failure;
-//! 3. shrinking: for each caught fault (first failing seed), inputs before and after, 1-minimality.
+//! 3. shrinking: for each caught fault (first failing seed), inputs before and after, 1-minimality;
+//! 4. LSS fastscan on a device without a node-ID (FFh), guided by the purpose `fastscan_select`,
+//!    clean and with each LSS fault: SEEDS seeds.
 //!
 //! The device is CANopenNode's example I/O EDS from the corpus (heartbeat 1000 ms), node 5.
 
@@ -153,15 +155,71 @@ fn main() {
             ),
         }
     }
+
+    fastscan(&eds, seeds);
+}
+
+/// Section 4: fastscan on a non-configured device, guided by the shipped purpose.
+fn fastscan(eds: &Eds, seeds: u64) {
+    const NON_CONFIGURED: u8 = 0xFF;
+    let lss = model_for("lss", eds, NON_CONFIGURED);
+    let purpose = lss
+        .purposes
+        .iter()
+        .find(|p| p.name == "fastscan_select")
+        .expect("shipped purpose");
+    println!(
+        "\n### LSS fastscan, device without a node-ID (FFh), purpose `fastscan_select`: {seeds} seeds\n"
+    );
+    println!("| device | verdicts | purpose reached | median steps | median virtual time |");
+    println!("|---|---|---|---|---|");
+    for (label, faults) in [
+        ("clean", &[][..]),
+        ("lss-state-not-changed", &[Fault::LssStateNotChanged][..]),
+        ("no-lss", &[Fault::NoLss][..]),
+    ] {
+        let mut verdicts = Vec::new();
+        let mut reached = 0;
+        let mut steps = Vec::new();
+        let mut times = Vec::new();
+        for seed in 1..=seeds {
+            let config = RunConfig {
+                seed,
+                steps: 2000,
+                purpose: Some(purpose.clone()),
+                ..RunConfig::default()
+            };
+            let mut link = bus_for(eds, NON_CONFIGURED, faults).expect("virtual bus");
+            let o = run(&mut link, &lss, config, Some(Duration::from_secs(1_000_000))).expect("virtual bus");
+            verdicts.push(format!("{:?}", o.verdict).to_lowercase());
+            reached += usize::from(o.purpose.as_ref().is_some_and(|p| p.1));
+            steps.push(o.steps);
+            times.push(o.trace.last().map_or(0.0, |s| s.t));
+        }
+        verdicts.sort();
+        verdicts.dedup();
+        steps.sort_unstable();
+        times.sort_by(f64::total_cmp);
+        println!(
+            "| {label} | {} | {reached}/{seeds} | {} | {:.2} s |",
+            verdicts.join(", "),
+            steps[steps.len() / 2],
+            times[times.len() / 2]
+        );
+    }
 }
 
 fn model(name: &str, eds: &Eds) -> Model {
+    model_for(name, eds, NODE)
+}
+
+fn model_for(name: &str, eds: &Eds, node_id: u8) -> Model {
     let sources = [Source {
         origin: name.into(),
         text: shipped::text(name).expect("shipped").into(),
     }];
     let options = Options {
-        node_id: NODE,
+        node_id,
         eds: Some(eds),
         set: Vec::new(),
     };
@@ -171,8 +229,12 @@ fn model(name: &str, eds: &Eds) -> Model {
 }
 
 fn bus(eds: &Eds, faults: &[Fault]) -> Result<SimulatedBus, LinkError> {
+    bus_for(eds, NODE, faults)
+}
+
+fn bus_for(eds: &Eds, node_id: u8, faults: &[Fault]) -> Result<SimulatedBus, LinkError> {
     let mut bus = Simulation::ideal()
-        .device(eds, NODE)
+        .device(eds, node_id)
         .faults(faults.iter().copied())
         .start()
         .expect("simulation");

@@ -23,6 +23,11 @@ fn eds() -> Eds {
 }
 
 fn model(names: &[&str], eds: &Eds) -> Model {
+    model_for(names, eds, NODE)
+}
+
+/// The models for the device with `node_id` (FFh: LSS non-configured).
+fn model_for(names: &[&str], eds: &Eds, node_id: u8) -> Model {
     let sources: Vec<Source> = names
         .iter()
         .map(|n| Source {
@@ -31,7 +36,7 @@ fn model(names: &[&str], eds: &Eds) -> Model {
         })
         .collect();
     let options = Options {
-        node_id: NODE,
+        node_id,
         eds: Some(eds),
         set: Vec::new(),
     };
@@ -40,8 +45,12 @@ fn model(names: &[&str], eds: &Eds) -> Model {
 }
 
 fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+    test_node(model, eds, NODE, faults, seed, steps)
+}
+
+fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
     let mut bus = Simulation::ideal()
-        .device(eds, NODE)
+        .device(eds, node_id)
         .faults(faults.iter().copied())
         .start()
         .expect("simulation");
@@ -82,6 +91,8 @@ fn clean_devices_pass_every_shipped_model() {
         &["sync"][..],
         &["lss"][..],
         &["emcy"][..],
+        &["guarding"][..],
+        &["heartbeat"][..],
     ] {
         let model = model(names, &eds);
         for seed in 1..=3 {
@@ -98,15 +109,64 @@ fn clean_devices_pass_every_shipped_model() {
                 "{names:?} seed {seed}: {:?} {:?}",
                 outcome.coverage.transitions, outcome.coverage.locations
             );
-            if names == ["sync"] {
+            if names == ["sdo"] {
+                // The segmented transfers ran: 1008h's upload in segments, 1005h's download.
+                for label in ["!SDO_TX !0x41 !0x1008", "!SDO_TX !0x60 !0x1005", "!SDO_TX !0x20"] {
+                    assert!(
+                        outcome.trace.iter().any(|s| s.label.starts_with(label)),
+                        "{label}: {}",
+                        show(&outcome)
+                    );
+                }
+            }
+            if names == ["guarding"] {
+                // Answers with the toggle set came: the toggle alternated.
                 assert!(
                     outcome
                         .trace
                         .iter()
-                        .filter(|s| s.label.starts_with("!SYNC !0x05"))
-                        .count()
-                        > 5,
+                        .any(|s| ["!EC !0x84", "!EC !0x85", "!EC !0xFF"].contains(&s.label.as_str())),
                     "{}",
+                    show(&outcome)
+                );
+            }
+            if names == ["heartbeat"] {
+                // The event and the reaction (no 1029h: Pre-operational) were seen.
+                assert!(
+                    outcome.trace.iter().any(|s| s.label.starts_with("!EMCY !0x8130")),
+                    "{}",
+                    show(&outcome)
+                );
+            }
+            if names == ["sync"] {
+                let count = |prefix: &str| {
+                    outcome
+                        .trace
+                        .iter()
+                        .filter(|s| s.label.starts_with(prefix))
+                        .count()
+                };
+                // TPDOs after the first SYNC the tester sent (before it, TPDO1 ran with the type it
+                // starts with).
+                let tpdos = outcome
+                    .trace
+                    .iter()
+                    .skip_while(|s| !s.label.starts_with("?SYNC_IN"))
+                    .filter(|s| s.label.starts_with("!TPDO"))
+                    .count();
+                let syncs_in = count("?SYNC_IN");
+                // The producer part: the counter ran up to 5 and wrapped to 1.
+                assert!(
+                    count("!SYNC !0x05") >= 1 && count("!SYNC !0x01") >= 2,
+                    "{}",
+                    show(&outcome)
+                );
+                // The consumer part: TPDO1 of type 3 after every third SYNC the tester sent (the
+                // run may end between the third SYNC and its TPDO).
+                assert!(syncs_in > 9, "{}", show(&outcome));
+                assert!(
+                    (syncs_in / 3 - 1..=syncs_in / 3).contains(&tpdos),
+                    "{syncs_in} SYNCs, {tpdos} TPDOs: {}",
                     show(&outcome)
                 );
             }
@@ -130,11 +190,15 @@ fn protocol_faults_are_caught() {
         (&["sdo"], Fault::SdoExpeditedSizeWrong),
         (&["sdo"], Fault::WrongAbortCode),
         (&["sdo"], Fault::SdoBadCommandSilent),
+        (&["sdo"], Fault::SdoToggleIgnored),
         (&["sync"], Fault::SyncCounterMissing),
         (&["lss"], Fault::LssStateNotChanged),
         (&["lss"], Fault::NoLss),
         (&["emcy"], Fault::NoEmcy),
         (&["emcy"], Fault::EmcyNoErrorReset),
+        (&["guarding"], Fault::HeartbeatStateWrong),
+        (&["guarding"], Fault::IgnoresNmtStop),
+        (&["heartbeat"], Fault::NoEmcy),
     ];
     for (names, fault) in cases {
         let model = model(names, &eds);
@@ -151,6 +215,122 @@ fn protocol_faults_are_caught() {
             show(&outcome)
         );
     }
+}
+
+/// LSS fastscan (CiA 305 §6.7) on a non-configured device (node-ID FFh): the clean device is found
+/// part by part and selected; with the fault that drops the selecting step the model misses the
+/// answer. A configured device is run by `clean_devices_pass_every_shipped_model` (it must keep
+/// silent).
+#[test]
+fn fastscan_finds_a_non_configured_device_and_catches_a_lost_selection() {
+    let eds = eds();
+    let model = model_for(&["lss"], &eds, 0xFF);
+    for seed in 1..=3 {
+        let outcome = test_node(&model, &eds, 0xFF, &[], seed, 400);
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+    }
+    // Guided by the shipped purpose: the whole address is confirmed and the slave answers the
+    // selecting step.
+    let purpose = model
+        .purposes
+        .iter()
+        .find(|p| p.name == "fastscan_select")
+        .expect("shipped purpose")
+        .clone();
+    for seed in 1..=3 {
+        let mut bus = Simulation::ideal()
+            .device(&eds, 0xFF)
+            .start()
+            .expect("simulation");
+        let config = RunConfig {
+            seed,
+            steps: 2000,
+            purpose: Some(purpose.clone()),
+            ..RunConfig::default()
+        };
+        let outcome = run(&mut bus, &model, config, None).expect("link");
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+        assert_eq!(
+            outcome.purpose,
+            Some(("fastscan_select".to_owned(), true)),
+            "seed {seed}: {}",
+            show(&outcome)
+        );
+    }
+    // The fault drops the selecting step (and switch state global to configuration): some guided
+    // run fails on the missing answer to the selecting step.
+    let mut caught = 0;
+    for seed in 1..=5 {
+        let mut bus = Simulation::ideal()
+            .device(&eds, 0xFF)
+            .fault(Fault::LssStateNotChanged)
+            .start()
+            .expect("simulation");
+        let config = RunConfig {
+            seed,
+            steps: 2000,
+            purpose: Some(purpose.clone()),
+            ..RunConfig::default()
+        };
+        let outcome = run(&mut bus, &model, config, None).expect("link");
+        assert_eq!(outcome.verdict, Verdict::Fail, "seed {seed}: {}", show(&outcome));
+        let last_input = outcome.trace.iter().rev().find(|s| s.label.starts_with('?'));
+        if outcome.reason.starts_with("missing output")
+            && last_input.is_some_and(|s| {
+                s.label.starts_with("?LSS_REQ !0x51") && s.label.ends_with("!0x00 !0x03 !0x00")
+            })
+        {
+            caught += 1;
+        }
+    }
+    assert!(caught > 0, "lss-state-not-changed on the fastscan selection");
+}
+
+/// The heartbeat consumer's reaction on a device whose description has no 1029h (CiA 301: it
+/// behaves as 1029h:01 = 0): started, then the watched node falls silent, so after EMCY 8130h its
+/// heartbeat must report Pre-operational (7Fh).
+#[test]
+fn heartbeat_event_without_1029h_moves_an_operational_device_to_pre_operational() {
+    let file = "CANopenNode__CanOpenSTM32__Elcom e-RIO 8xx CANopen Profile.eds";
+    let eds = canopener_eds::load(&std::fs::read(corpus::eds(file)).expect("EDS file")).eds;
+    assert!(!eds.objects.contains_key(&0x1029), "the EDS must lack 1029h");
+    let model = model(&["heartbeat"], &eds);
+    let mut reactions = 0;
+    for seed in 1..=3 {
+        let outcome = test(&model, &eds, &[], seed, 300);
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+        // Each 8130h on a started device comes with 7Fh: the heartbeat sent on the state change
+        // just before it (since the last beat of the tester's), or else the next heartbeat (unless
+        // a reset comes first).
+        let mut started = false;
+        let mut after_event = false;
+        let mut beat_since_peer: Option<&str> = None;
+        for step in &outcome.trace {
+            let label = step.label.as_str();
+            if label.starts_with("?NMT !0x01") {
+                started = true;
+            } else if label.starts_with("?NMT !0x81") {
+                (started, after_event) = (false, false);
+            } else if label.starts_with("?PEER") {
+                beat_since_peer = None;
+            } else if label.starts_with("!EMCY !0x8130") && started {
+                if beat_since_peer == Some("!EC !0x7F") {
+                    reactions += 1;
+                    started = false;
+                } else {
+                    after_event = true;
+                }
+            } else if label.starts_with("!EC ") {
+                beat_since_peer = Some(label);
+                if after_event {
+                    assert_eq!(label, "!EC !0x7F", "seed {seed}: {}", show(&outcome));
+                    reactions += 1;
+                    (started, after_event) = (false, false);
+                }
+            }
+        }
+    }
+    assert!(reactions > 0, "no run saw the event on a started device");
 }
 
 #[test]

@@ -6,6 +6,23 @@ use clap::{Args, Subcommand, ValueEnum};
 
 use crate::args::{BusArg, parse_duration, parse_node_id};
 
+/// FFh, the node-ID of a device that has none yet (CiA 305: LSS non-configured).
+pub(crate) const NON_CONFIGURED: u8 = 0xFF;
+
+/// A node-ID as `--node` takes it everywhere, or FFh: a model may test a non-configured device.
+fn parse_model_node(text: &str) -> Result<u8, String> {
+    parse_node_id(text).or_else(|e| {
+        let value = match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
+            Some(hex) => u8::from_str_radix(hex, 16).ok(),
+            None => text.parse::<u8>().ok(),
+        };
+        match value {
+            Some(NON_CONFIGURED) => Ok(NON_CONFIGURED),
+            _ => Err(format!("{e}, or 0xFF for a device without a node-ID")),
+        }
+    })
+}
+
 #[derive(Debug, Subcommand)]
 pub(crate) enum MbtCommand {
     /// List the shipped models and what each covers.
@@ -43,6 +60,8 @@ Exit status: 0 synthesised, 6 the purpose cannot be reached, 3 a model or .aut t
   canopener mbt run nmt --bus socketcand://127.0.0.1:29536/can0 --node 5 --eds device.eds --steps 500
   canopener mbt run sync --sim device.eds --node 5 --format json | jq .verdict
   canopener mbt run nmt --sim device.eds --node 5 --purpose stop_and_start
+  canopener mbt run lss --sim device.eds --node 0xFF --purpose fastscan_select  # no node-ID yet
+  canopener mbt run guarding --sim device.eds --node 5 --coverage-svg coverage.svg
 Exit status: 0 pass, 6 fail or inconclusive, 7 the device did not answer at all, 3 a model that does
 not check, 2 bad arguments, 4 bus error.")]
     Run(RunArgs),
@@ -78,8 +97,9 @@ pub(crate) struct ModelArgs {
     /// Shipped model names (`canopener mbt models`) or model files; they are composed.
     #[arg(required = true, value_name = "MODEL")]
     pub(crate) models: Vec<String>,
-    /// The node-ID under test ($NODEID), decimal or 0x.
-    #[arg(long, default_value = "1", value_parser = parse_node_id, value_name = "N")]
+    /// The node-ID under test ($NODEID), decimal or 0x; 0xFF for a device without a node-ID (LSS
+    /// non-configured, e.g. for the `lss` model's fastscan).
+    #[arg(long, default_value = "1", value_parser = parse_model_node, value_name = "N")]
     pub(crate) node: u8,
     /// The device's EDS/DCF/XDD: the models' parameters read it (heartbeat period, identity...).
     #[arg(long, value_name = "FILE")]
@@ -176,6 +196,9 @@ pub(crate) struct RunArgs {
     /// Write the coverage as DOT: visited locations and transitions coloured.
     #[arg(long, value_name = "OUT.dot")]
     pub(crate) coverage_dot: Option<PathBuf>,
+    /// Write the coverage as SVG (the same colours, drawn without Graphviz).
+    #[arg(long, value_name = "OUT.svg")]
+    pub(crate) coverage_svg: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -12,6 +12,7 @@ use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
 
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult, exit_code};
+use crate::mbt::args::NON_CONFIGURED;
 use crate::mbt::args::{DeviceArgs, Format, ReplayArgs, RunArgs, ShrinkArgs, Strategy};
 use crate::mbt::load::{description, load, write};
 use crate::output::print_stdout;
@@ -45,6 +46,11 @@ pub(crate) fn run(args: RunArgs) -> CliResult {
             path,
             &canopener_mbt::explore::coverage_dot(&loaded.model, &outcome.coverage.taken),
         )?;
+    }
+    if let Some(path) = &args.coverage_svg {
+        let svg = canopener_mbt::explore::coverage_svg(&loaded.model, &outcome.coverage.taken)
+            .map_err(|e| CliError::Internal(e.into()))?;
+        write(path, &svg)?;
     }
     report(&header, &loaded.model, &outcome, args.format)
 }
@@ -150,7 +156,8 @@ fn warn_hash(header: &RunHeader, model: &Model) {
 fn simulated(file: &std::path::Path, device: &DeviceArgs, node: u8) -> CliResult<SimulatedBus> {
     let mut bus = Simulation::ideal()
         .file(file)
-        .first_node_id(Some(node))
+        // Without a node-ID of its own the device starts LSS non-configured.
+        .first_node_id((node != NON_CONFIGURED).then_some(node))
         .faults(device.faults.iter().copied())
         .start()?;
     bus.run_until(SIM_SETTLE)?;

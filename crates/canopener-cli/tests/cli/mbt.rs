@@ -50,6 +50,49 @@ fn runs_pass_fail_and_shrink_on_a_simulated_device() {
     assert!(json["coverage"]["transitions"][0].as_u64().unwrap() > 5);
 
     let dir = temp_dir("mbt-run");
+    // Coverage drawn as SVG without Graphviz: taken edges green, the others grey.
+    let svg_path = dir.join("coverage.svg");
+    let drawn = run(&[
+        "mbt",
+        "run",
+        "guarding",
+        "--sim",
+        &eds,
+        "--node",
+        "5",
+        "--steps",
+        "100",
+        "--coverage-svg",
+        svg_path.to_str().unwrap(),
+    ]);
+    assert_eq!(drawn.status.code(), Some(0), "{}", stderr(&drawn));
+    let svg = std::fs::read_to_string(&svg_path).expect("the SVG was written");
+    assert!(svg.contains("<svg"), "{svg}");
+    assert!(svg.contains("#006400"), "no taken (green) edge: {svg}");
+    assert!(svg.contains("#808080"), "no untaken (grey) edge: {svg}");
+    assert!(svg.contains(">Guarding<"), "{svg}");
+
+    // A device without a node-ID (0xFF): fastscan finds and selects it.
+    let fastscan = run(&[
+        "mbt",
+        "run",
+        "lss",
+        "--sim",
+        &eds,
+        "--node",
+        "0xFF",
+        "--purpose",
+        "fastscan_select",
+        "--steps",
+        "2000",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(fastscan.status.code(), Some(0), "{}", stderr(&fastscan));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&fastscan)).unwrap();
+    assert_eq!(json["purpose"]["reached"], true, "{json}");
+    let other = run(&["mbt", "run", "lss", "--sim", &eds, "--node", "0x80"]);
+    assert_eq!(other.status.code(), Some(2), "{}", stderr(&other));
     let log = dir.join("fail.jsonl");
     let fail = run(&[
         "mbt",
