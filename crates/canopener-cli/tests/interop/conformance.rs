@@ -10,7 +10,7 @@ use canopener_testkit::corpus::{self, Kind};
 use canopener_testkit::fixture::{self, ScratchDir};
 use serde_json::Value;
 
-use crate::support::{HubProc, Proc, canopener, python, python_peer};
+use crate::support::{HubProc, Proc, canopener, local_node, python};
 
 /// A vendored EDS with node guarding, limits, EMCY and RPDOs: all but the long-entry tests apply.
 const SIM_EDS: &str = "ros-industrial__ros_canopen__ipa_canopen_test__config__PRL120.eds";
@@ -295,19 +295,7 @@ fn a_foreign_device_runs_to_the_end_and_names_its_real_gaps() {
         return;
     };
     let hub = HubProc::start();
-    let args = [
-        hub.addr.ip().to_string(),
-        hub.addr.port().to_string(),
-        "can0".to_owned(),
-        "34".to_owned(),
-        eds.display().to_string(),
-    ];
-    let mut peer = python_peer(&python, "co_local_node.py", &args);
-    let ready = peer.json(Duration::from_secs(30));
-    assert_eq!(
-        ready["ready"], true,
-        "the python LocalNode did not start: {ready}"
-    );
+    let _peer = local_node(&python, &hub, "34", &eds, &[]);
     let dir = ScratchDir::new("conformance-foreign");
     let out = dir.join("report.json");
     let bus = hub.spec("can0");

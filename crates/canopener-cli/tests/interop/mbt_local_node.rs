@@ -8,6 +8,7 @@
 //! - a request with an invalid command specifier (E0h) as the first request gets no answer at all,
 //!   where CiA 301 asks for the abort 0504 0001h (LocalNode's abort needs the multiplexer of an earlier
 //!   transfer: `struct.pack` of `None` raises inside its receive callback).
+//! And with LocalNode as shipped (`--bare`), a third: no boot-up after a reset node.
 //!
 //! Runs are on the wall clock: a 50 ms tolerance and a 1 s SDO bound (`--set SDO_T=1s`, the model's
 //! default is 100 ms) absorb the Python process's latency on a loaded machine; with 100 ms, one run in
@@ -19,7 +20,7 @@ use std::process::Command;
 use canopener_testkit::corpus::{self, Kind};
 use serde_json::Value;
 
-use crate::support::{HubProc, canopener, python, python_peer};
+use crate::support::{HubProc, canopener, local_node, python};
 
 /// The EDS co_local_node.py is tested with in master_cli.rs (1017h = 0: no heartbeat).
 const EDS: &str = "jinr-greenlab__canopen__disk2__CANopen__eds__Test.eds";
@@ -64,19 +65,7 @@ fn nmt_and_sdo_models_report_local_node_gaps_and_no_false_failure() {
         return;
     };
     let hub = HubProc::start();
-    let args = [
-        hub.addr.ip().to_string(),
-        hub.addr.port().to_string(),
-        "can0".to_owned(),
-        NODE.to_owned(),
-        eds.display().to_string(),
-    ];
-    let mut peer = python_peer(&python, "co_local_node.py", &args);
-    let ready = peer.json(std::time::Duration::from_secs(30));
-    assert_eq!(
-        ready["ready"], true,
-        "the python LocalNode did not start: {ready}"
-    );
+    let _peer = local_node(&python, &hub, NODE, &eds, &[]);
 
     // First, while LocalNode's SDO server has served nothing yet: an invalid command as the first
     // request (a replayed script, so that it is the first whatever the seeds below choose).
@@ -151,4 +140,30 @@ fn nmt_and_sdo_models_report_local_node_gaps_and_no_false_failure() {
         answered_in_stopped,
         "seeds 1..8 stop the device and read an object"
     );
+}
+
+/// LocalNode as python canopen ships it, without the peer's boot-up and resets: the `nmt` model reports
+/// the missing boot-up after a reset node (CiA 301 §7.2.8.3.2) as a missing output, with the boot-up as
+/// what was allowed.
+#[test]
+fn the_nmt_model_reports_that_a_bare_local_node_sends_no_boot_up() {
+    let Some(python) = python() else { return };
+    let Some(eds) = corpus::extended_file(Kind::Eds, EDS) else {
+        eprintln!("skipped: {EDS} is in the extended corpus, which this checkout does not have");
+        return;
+    };
+    let hub = HubProc::start();
+    let _peer = local_node(&python, &hub, NODE, &eds, &["--bare"]);
+    // With 1017h = 0 and no boot-up, LocalNode sends nothing at all: the verdict is `fail`, and the
+    // exit code says that the device never answered (7).
+    let (code, json) = mbt_run(&hub, &eds, "nmt", 1);
+    assert_eq!(code, Some(7), "{json}");
+    assert_eq!(json["verdict"], "fail", "{json}");
+    let reason = json["reason"].as_str().unwrap_or_default();
+    assert!(reason.starts_with("missing output"), "{json}");
+    assert!(
+        json["allowed"].to_string().contains("EC !0x00"),
+        "the boot-up is what the model allowed: {json}"
+    );
+    eprintln!("bare LocalNode: {reason}; allowed {}", json["allowed"]);
 }

@@ -226,3 +226,29 @@ pub(crate) fn python_peer(python: &PathBuf, name: &str, args: &[String]) -> Proc
     command.arg("-u").arg(script(name)).args(args);
     Proc::spawn(name, command)
 }
+
+/// python canopen's `LocalNode` (tests/python/co_local_node.py) on the hub's `can0` as node `node`,
+/// started and booted; `extra` goes to the script (`--bare`: LocalNode without the peer's additions).
+pub(crate) fn local_node(
+    python: &PathBuf,
+    hub: &HubProc,
+    node: &str,
+    eds: &std::path::Path,
+    extra: &[&str],
+) -> Proc {
+    let mut args = vec![
+        hub.addr.ip().to_string(),
+        hub.addr.port().to_string(),
+        "can0".to_owned(),
+        node.to_owned(),
+        eds.display().to_string(),
+    ];
+    args.extend(extra.iter().map(|arg| (*arg).to_owned()));
+    let mut peer = python_peer(python, "co_local_node.py", &args);
+    let ready = peer.json(Duration::from_secs(30));
+    assert_eq!(
+        ready["ready"], true,
+        "the python LocalNode did not start: {ready}"
+    );
+    peer
+}

@@ -2,7 +2,10 @@
 master commands talk to. It reports on stdout, as JSON lines, what it observed, so a test can check the effect of
 a command on the device and not only the command's own output.
 
-Usage: co_local_node.py HOST PORT CHANNEL NODE_ID EDS_PATH
+Usage: co_local_node.py HOST PORT CHANNEL NODE_ID EDS_PATH [--bare]
+
+With --bare the peer adds nothing below: LocalNode exactly as python canopen ships it (no boot-up, its own
+reaction to the NMT resets), so a test can show what LocalNode lacks by itself.
 
 What python canopen 2.4.1's LocalNode does by itself: an SDO server (expedited and segmented; it answers a block
 upload with a normal upload whatever the client's protocol switch threshold, and aborts a block download with
@@ -173,12 +176,15 @@ def main() -> int:
     node = canopen.LocalNode(node_id, eds)
     network.add_node(node)
     peer = Peer(node)
-    network.unsubscribe(0, node.nmt.on_command)
-    network.subscribe(0, peer.on_nmt)
+    bare = sys.argv[6:] == ["--bare"]
+    if not bare:
+        network.unsubscribe(0, node.nmt.on_command)
+        network.subscribe(0, peer.on_nmt)
     network.subscribe(0x600 + node_id, peer.on_sdo_request)
     node.add_write_callback(peer.on_write)
-    peer.apply_application_values()
-    peer.boot()
+    if not bare:
+        peer.apply_application_values()
+        peer.boot()
     emit({"ready": True, "node_id": node_id})
     for line in sys.stdin:
         words = line.split(maxsplit=1)
