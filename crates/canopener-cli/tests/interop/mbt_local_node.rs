@@ -8,6 +8,7 @@
 //! - a request with an invalid command specifier (E0h) as the first request gets no answer at all,
 //!   where CiA 301 asks for the abort 0504 0001h (LocalNode's abort needs the multiplexer of an earlier
 //!   transfer: `struct.pack` of `None` raises inside its receive callback).
+//!
 //! And with LocalNode as shipped (`--bare`), a third: no boot-up after a reset node.
 //!
 //! Runs are on the wall clock: a 50 ms tolerance and a 1 s SDO bound (`--set SDO_T=1s`, the model's
