@@ -21,19 +21,19 @@ use crate::device_model::PdoDirection;
 use crate::finding::{Evidence, Finding, Outcome, Stop};
 
 /// CiA 401 device type and I/O functionality bits of 1000h.
-pub const DEVICE_TYPE: &str = "CiA 401 §5.1 (device type 1000h: 0191h, I/O functionality bits 16..23)";
+pub const DEVICE_TYPE: &str = "CiA 401 (device type 1000h: 0191h, I/O functionality bits 16..23)";
 /// Digital inputs and their polarity.
-pub const DIGITAL_INPUTS: &str = "CiA 401 §6.2 (6000h read input 8-bit, 6002h polarity input 8-bit)";
+pub const DIGITAL_INPUTS: &str = "CiA 401 (6000h read input 8-bit, 6002h polarity input 8-bit)";
 /// The global interrupt enable and the three interrupt masks.
-pub const INTERRUPTS: &str = "CiA 401 §6.2 (6005h global interrupt enable, 6006h/6007h/6008h interrupt masks any change, low-to-high, high-to-low)";
+pub const INTERRUPTS: &str = "CiA 401 (6005h global interrupt enable, 6006h/6007h/6008h interrupt masks any change, low-to-high, high-to-low)";
 /// Digital outputs.
 pub const DIGITAL_OUTPUTS: &str =
-    "CiA 401 §6.3 (6200h write output 8-bit, 6202h change polarity, 6206h/6207h error mode and value)";
+    "CiA 401 (6200h write output 8-bit, 6202h change polarity, 6206h/6207h error mode and value)";
 /// Analogue inputs.
-pub const ANALOG_INPUTS: &str = "CiA 401 §6.4 (6401h read analogue input 16-bit)";
+pub const ANALOG_INPUTS: &str = "CiA 401 (6401h read analogue input 16-bit)";
 /// The default PDOs of a CiA 401 device.
 pub const DEFAULT_PDOS: &str =
-    "CiA 401 §7 (default PDO mapping: TPDO1 digital inputs, TPDO2 analogue inputs, RPDO1 digital outputs)";
+    "CiA 401 (default PDO mapping: TPDO1 digital inputs, TPDO2 analogue inputs, RPDO1 digital outputs)";
 /// The thesis's factory test registers that drive the inputs.
 pub const FACTORY_REGISTERS: &str = "thesis §5.2 (factory test registers 2000h–2002h)";
 
