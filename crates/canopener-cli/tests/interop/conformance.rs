@@ -375,19 +375,7 @@ fn python_local_node_has_no_cia401_behaviour_and_never_passes_for_it() {
     let eds =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../canopener-conformance/test_data/cia401_full_io.eds");
     let hub = HubProc::start();
-    let args = [
-        hub.addr.ip().to_string(),
-        hub.addr.port().to_string(),
-        "can0".to_owned(),
-        "34".to_owned(),
-        eds.display().to_string(),
-    ];
-    let mut peer = python_peer(&python, "co_local_node.py", &args);
-    let ready = peer.json(Duration::from_secs(30));
-    assert_eq!(
-        ready["ready"], true,
-        "the python LocalNode did not start: {ready}"
-    );
+    let _peer = local_node(&python, &hub, "34", &eds, &[]);
     let dir = ScratchDir::new("conformance-cia401-local-node");
     let out = dir.join("report.json");
     let bus = hub.spec("can0");
