@@ -42,6 +42,11 @@ fn clean_cia401_device_passes_every_test() {
     for (id, verdict, reason) in verdicts(&report) {
         assert_eq!(verdict, Verdict::Pass, "{id}: {reason}");
     }
+    assert!(report.left_modified.is_empty(), "{:?}", report.left_modified);
+    eprintln!(
+        "cia401 suite, clean device: {:.2} virtual seconds",
+        report.duration_s
+    );
 }
 
 #[test]
