@@ -48,10 +48,11 @@ pub const GROUPS: &[(&str, &str)] = &[
     ("ec", "Guarding/Heartbeat Test"),
     ("other", "Store/Restore and Restricted CAN-ID Test"),
     ("nmt", "NMT State and Transition Test"),
+    ("io", "CiA 401 Generic I/O Test"),
 ];
 
 /// The suites.
-pub const SUITES: &[&str] = &["eds", "cia301"];
+pub const SUITES: &[&str] = &["eds", "cia301", "cia401"];
 
 /// Every test, in catalogue order.
 pub fn catalogue() -> Vec<TestDef> {
@@ -67,6 +68,7 @@ pub fn catalogue() -> Vec<TestDef> {
     all.extend(crate::cia301::consumer::tests());
     all.extend(crate::cia301::store::tests());
     all.extend(crate::cia301::nmt::tests());
+    all.extend(crate::cia401::tests());
     all
 }
 

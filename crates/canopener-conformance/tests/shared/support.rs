@@ -38,13 +38,38 @@ pub(crate) fn run_cancelled_at(
     only: &[&str],
     cancel_at: Option<&str>,
 ) -> Report {
-    run_file(&vendored(name), name, node, faults, only, cancel_at, &|_| false)
+    run_file(
+        &vendored(name),
+        name,
+        node,
+        faults,
+        only,
+        cancel_at,
+        &|_| false,
+        &|f, _| *f,
+    )
+}
+
+/// Runs the tests `only` selects against a simulated device from the EDS at `path`, every frame
+/// passed through `rewrite` (`true`: sent by the tester, `false`: received): a device that misreads
+/// some requests, without a fault of its own.
+#[allow(dead_code)]
+pub(crate) fn run_rewriting(
+    path: &std::path::Path,
+    only: &[&str],
+    rewrite: &dyn Fn(&CanFrame, bool) -> CanFrame,
+) -> Report {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    run_file(path, &name, NODE, &[], only, None, &|_| false, rewrite)
 }
 
 /// [`run_at`], cancelling the link (as Ctrl-C does) when the tester receives a frame `on_frame`
 /// accepts: in the middle of a test.
 pub(crate) fn run_cancelled_on(name: &str, only: &[&str], on_frame: &dyn Fn(&CanFrame) -> bool) -> Report {
-    run_file(&vendored(name), name, NODE, &[], only, None, on_frame)
+    run_file(&vendored(name), name, NODE, &[], only, None, on_frame, &|f, _| *f)
 }
 
 fn vendored(name: &str) -> std::path::PathBuf {
@@ -55,9 +80,19 @@ fn vendored(name: &str) -> std::path::PathBuf {
 /// vendors whose licences forbid redistribution); `None` without an extended corpus.
 pub(crate) fn run_extended(name: &str) -> Option<Report> {
     let path = canopener_testkit::corpus::extended_file(canopener_testkit::corpus::Kind::Eds, name)?;
-    Some(run_file(&path, name, NODE, &[], &[], None, &|_| false))
+    Some(run_file(
+        &path,
+        name,
+        NODE,
+        &[],
+        &[],
+        None,
+        &|_| false,
+        &|f, _| *f,
+    ))
 }
 
+#[allow(clippy::too_many_arguments)]
 fn run_file(
     path: &std::path::Path,
     name: &str,
@@ -66,6 +101,7 @@ fn run_file(
     only: &[&str],
     cancel_at: Option<&str>,
     on_frame: &dyn Fn(&CanFrame) -> bool,
+    rewrite: &dyn Fn(&CanFrame, bool) -> CanFrame,
 ) -> Report {
     let cancel = Cancel::new();
     let bytes = canopener_testkit::fixture::read(path).expect("corpus file");
@@ -83,6 +119,7 @@ fn run_file(
         inner: bus,
         cancel: cancel.clone(),
         on_frame,
+        rewrite,
     };
     let selection = Selection {
         only: only.iter().map(|s| (*s).to_owned()).collect(),
@@ -108,11 +145,13 @@ fn run_file(
     .report
 }
 
-/// A link that cancels `cancel` when it receives a frame `on_frame` accepts.
+/// A link that cancels `cancel` when it receives a frame `on_frame` accepts, and passes every frame
+/// through `rewrite` (`true` when sent).
 struct CancelOn<'f, L> {
     inner: L,
     cancel: Cancel,
     on_frame: &'f dyn Fn(&CanFrame) -> bool,
+    rewrite: &'f dyn Fn(&CanFrame, bool) -> CanFrame,
 }
 
 impl<L: Link> Link for CancelOn<'_, L> {
@@ -121,7 +160,7 @@ impl<L: Link> Link for CancelOn<'_, L> {
     }
 
     fn send(&mut self, frame: &CanFrame) -> Result<(), LinkError> {
-        self.inner.send(frame)
+        self.inner.send(&(self.rewrite)(frame, true))
     }
 
     fn recv_until(&mut self, deadline: Instant) -> Result<Option<(Instant, CanFrame)>, LinkError> {
@@ -131,7 +170,10 @@ impl<L: Link> Link for CancelOn<'_, L> {
     }
 
     fn recv_stamped_until(&mut self, deadline: Instant) -> Result<Option<Stamped>, LinkError> {
-        let received = self.inner.recv_stamped_until(deadline)?;
+        let received = self.inner.recv_stamped_until(deadline)?.map(|mut stamped| {
+            stamped.frame = (self.rewrite)(&stamped.frame, false);
+            stamped
+        });
         if received.as_ref().is_some_and(|s| (self.on_frame)(&s.frame)) {
             self.cancel.cancel();
         }
