@@ -23,26 +23,29 @@ pub mod services;
 
 use services::{Address, Lss, PART_NAMES};
 
-/// CiA 305 §4 (LSS slave states, waiting and configuration).
-const STATES: &str = "CiA 305 §4.3 (LSS slave state machine)";
+// Clauses are cited by service name: the section numbers of CiA 305 v3.0 were not at hand to
+// verify, and a wrong number is worse than none.
+
+/// CiA 305 LSS slave states (waiting and configuration).
+const STATES: &str = "CiA 305 v3.0 (LSS slave state machine)";
 /// CiA 305 switch state global.
-const SWITCH_GLOBAL: &str = "CiA 305 §5.3.1 (switch state global)";
+const SWITCH_GLOBAL: &str = "CiA 305 v3.0 (switch state global)";
 /// CiA 305 switch state selective.
-const SWITCH_SELECTIVE: &str = "CiA 305 §5.3.2 (switch state selective)";
+const SWITCH_SELECTIVE: &str = "CiA 305 v3.0 (switch state selective)";
 /// CiA 305 configure node-ID.
-const CONFIGURE_NODE_ID: &str = "CiA 305 §5.4.2 (configure node-ID)";
+const CONFIGURE_NODE_ID: &str = "CiA 305 v3.0 (configure node-ID)";
 /// CiA 305 configure bit timing.
-const CONFIGURE_BIT_TIMING: &str = "CiA 305 §5.4.3 (configure bit timing parameters)";
+const CONFIGURE_BIT_TIMING: &str = "CiA 305 v3.0 (configure bit timing parameters)";
 /// CiA 305 store configuration.
-const STORE: &str = "CiA 305 §5.4.5 (store configuration)";
+const STORE: &str = "CiA 305 v3.0 (store configuration)";
 /// CiA 305 inquire services.
-const INQUIRE: &str = "CiA 305 §5.5 (inquire LSS address, inquire node-ID)";
+const INQUIRE: &str = "CiA 305 v3.0 (inquire LSS address, inquire node-ID)";
 /// CiA 305 identify remote slave.
-const IDENTIFY_REMOTE: &str = "CiA 305 §5.6.1 (LSS identify remote slave)";
+const IDENTIFY_REMOTE: &str = "CiA 305 v3.0 (LSS identify remote slave)";
 /// CiA 305 identify non-configured remote slave.
-const IDENTIFY_NON_CONFIGURED: &str = "CiA 305 §5.6.3 (LSS identify non-configured remote slave)";
+const IDENTIFY_NON_CONFIGURED: &str = "CiA 305 v3.0 (LSS identify non-configured remote slave)";
 /// CiA 305 fastscan.
-const FASTSCAN: &str = "CiA 305 §5.6.4 (LSS fastscan)";
+const FASTSCAN: &str = "CiA 305 v3.0 (LSS fastscan)";
 
 /// The precondition every test states.
 const PRECONDITION: &str = "EDS LSS_Supported=1, or (key absent) the device answers inquire or identify";

@@ -513,6 +513,12 @@ fn the_lss_suite_passes_a_clean_lss_device_and_does_not_apply_to_one_without() {
         .collect();
     assert!(not_passed.is_empty(), "{not_passed:#?}");
     assert_eq!(clean.tests.len(), 10);
+    // The figure docs/conformance.md quotes.
+    eprintln!(
+        "cia305 on the PRL120: {} passed in {:.2} s virtual time",
+        clean.summary.pass,
+        clean.tests.iter().map(|t| t.duration_s).sum::<f64>()
+    );
     // ... and none applies where it says LSS_Supported=0 (the simulated device still answers LSS:
     // the EDS decides).
     let without = support::run(
@@ -532,13 +538,38 @@ fn the_lss_suite_passes_a_clean_lss_device_and_does_not_apply_to_one_without() {
             .map(|t| (&t.id, &t.reason))
             .collect::<Vec<_>>()
     );
+    // Without the key the suite asks the device: a device that answers is tested, one that does
+    // not gets not_applicable with that reason, never a failure.
+    let text =
+        canopener_testkit::fixture::read(canopener_testkit::corpus::eds(FAULT_DEVICE)).expect("corpus file");
+    let text = String::from_utf8_lossy(&text).replace("LSS_Supported=1", "");
+    let asked = support::run_edited(text.as_bytes(), FAULT_DEVICE, &[], &["cia305"]);
+    assert_eq!(
+        asked.summary.pass,
+        10,
+        "{:?}",
+        asked.tests.iter().map(|t| (&t.id, &t.reason)).collect::<Vec<_>>()
+    );
+    let silent = support::run_edited(text.as_bytes(), FAULT_DEVICE, &[Fault::NoLss], &["cia305"]);
+    assert!(
+        silent
+            .tests
+            .iter()
+            .all(|t| t.verdict == Verdict::NotApplicable && t.reason.contains("does not say LSS_Supported")),
+        "{:?}",
+        silent
+            .tests
+            .iter()
+            .map(|t| (&t.id, &t.reason))
+            .collect::<Vec<_>>()
+    );
     // The two LSS faults on the LSS suite alone (the whole catalogue's matrix is above).
     for fault in [Fault::NoLss, Fault::LssStateNotChanged] {
         let report = support::run(FAULT_DEVICE, &[fault], &["cia305"]);
         let failures = report.tests.iter().filter(|t| t.verdict == Verdict::Fail);
         for test in failures {
             assert!(
-                test.analysis.contains("Required: CiA 305 §"),
+                test.analysis.contains("Required: CiA 305 v3.0 ("),
                 "{}: {}",
                 test.id,
                 test.analysis

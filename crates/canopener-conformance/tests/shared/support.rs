@@ -103,9 +103,28 @@ fn run_file(
     on_frame: &dyn Fn(&CanFrame) -> bool,
     rewrite: &dyn Fn(&CanFrame, bool) -> CanFrame,
 ) -> Report {
-    let cancel = Cancel::new();
     let bytes = canopener_testkit::fixture::read(path).expect("corpus file");
-    let loaded = canopener_eds::load(&bytes);
+    run_bytes(&bytes, name, node, faults, only, cancel_at, on_frame)
+}
+
+/// Runs the tests `only` selects against a simulated device from the EDS text `bytes` (a corpus
+/// file edited by the test) on node [`NODE`].
+#[allow(dead_code)]
+pub(crate) fn run_edited(bytes: &[u8], name: &str, faults: &[Fault], only: &[&str]) -> Report {
+    run_bytes(bytes, name, NODE, faults, only, None, &|_| false)
+}
+
+fn run_bytes(
+    bytes: &[u8],
+    name: &str,
+    node: u8,
+    faults: &[Fault],
+    only: &[&str],
+    cancel_at: Option<&str>,
+    on_frame: &dyn Fn(&CanFrame) -> bool,
+) -> Report {
+    let cancel = Cancel::new();
+    let loaded = canopener_eds::load(bytes);
     let eds_errors = Some(canopener_conformance::cia301::eds::errors(&loaded, Some(name)));
     let eds = loaded.eds;
     let model = DeviceModel::new(&eds, node);
