@@ -20,8 +20,8 @@
 
 pub mod catalogue;
 pub mod cia301;
-pub mod cia401;
 pub mod cia305;
+pub mod cia401;
 pub mod context;
 pub mod device_model;
 pub mod finding;
