@@ -94,6 +94,7 @@ Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a 
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --only cia301.sdo --skip cia301.sdo.15
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --tag nmt --log logs/  # candump per test
   canopener test --list --suite cia301                 # ids, titles, CiA/CCT references, preconditions
+  canopener test --bus socketcan:can0 --node 5 --eds device.eds --suite cia305  # LSS; device alone on the bus
 Each test resets what it changed and leaves the device pre-operational; the run starts with NMT reset node.
 Exit status: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
 answer at all, 2 bad arguments, 3 unreadable EDS, 4 bus error, 130 interrupted (partial report written).")]

@@ -49,10 +49,11 @@ pub const GROUPS: &[(&str, &str)] = &[
     ("other", "Store/Restore and Restricted CAN-ID Test"),
     ("nmt", "NMT State and Transition Test"),
     ("io", "CiA 401 Generic I/O Test"),
+    ("lss", "LSS Test (CiA 305)"),
 ];
 
 /// The suites.
-pub const SUITES: &[&str] = &["eds", "cia301", "cia401"];
+pub const SUITES: &[&str] = &["eds", "cia301", "cia401", "cia305"];
 
 /// Every test, in catalogue order.
 pub fn catalogue() -> Vec<TestDef> {
@@ -69,6 +70,7 @@ pub fn catalogue() -> Vec<TestDef> {
     all.extend(crate::cia301::store::tests());
     all.extend(crate::cia301::nmt::tests());
     all.extend(crate::cia401::tests());
+    all.extend(crate::cia305::tests());
     all
 }
 

@@ -163,6 +163,11 @@ pub struct DeviceModel {
     pub objects: BTreeMap<u16, ObjectModel>,
     /// Which dummy entries 0001h–0007h the EDS says the device supports in PDO mappings.
     pub dummies: [bool; 8],
+    /// What `[DeviceInfo]` `LSS_Supported` says (`None` when the key is absent or not 0/1).
+    pub lss_supported: Option<bool>,
+    /// The bit rates (kbit/s) `[DeviceInfo]` `BaudRate_*` mentions, with whether it says supported
+    /// (`=1`).
+    pub bit_rates: Vec<(u16, bool)>,
 }
 
 impl DeviceModel {
@@ -173,6 +178,17 @@ impl DeviceModel {
             entries: BTreeMap::new(),
             objects: BTreeMap::new(),
             dummies: dummies(eds),
+            lss_supported: match eds
+                .device_info
+                .lss_supported
+                .as_deref()
+                .and_then(canopener_eds::model::int_of)
+            {
+                Some(0) => Some(false),
+                Some(1) => Some(true),
+                _ => None,
+            },
+            bit_rates: bit_rates(eds),
         };
         for (&index, object) in &eds.objects {
             let kind = match object.object_type() {
@@ -274,6 +290,16 @@ impl DeviceModel {
             .values()
             .filter(|e| e.readable() && e.obj_flags & OBJ_FLAG_REFUSE_READ == 0)
     }
+}
+
+fn bit_rates(eds: &Eds) -> Vec<(u16, bool)> {
+    [1000, 800, 500, 250, 125, 50, 20, 10]
+        .into_iter()
+        .filter_map(|kbit| {
+            let flag = eds.device_info.get(&format!("BaudRate_{kbit}"))?;
+            Some((kbit, canopener_eds::model::int_of(flag) == Some(1)))
+        })
+        .collect()
 }
 
 fn dummies(eds: &Eds) -> [bool; 8] {

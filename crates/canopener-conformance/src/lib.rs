@@ -6,6 +6,7 @@
 //!   it takes from the EDS; selection by suite, id and tag.
 //! - [`cia301`]: the CiA 301 device test (designed from CiA 301, covering the CCT's cases; see
 //!   `docs/conformance.md` for the mapping and what is not covered yet).
+//! - [`cia305`]: the CiA 305 (LSS) device test.
 //! - [`runner`]: runs a selection against one node, keeps each test's telegrams, restores what a test
 //!   changed and leaves the device in pre-operational between tests.
 //! - [`model`]: the report every suite fills (verdicts, telegrams, measurements with raw samples and
@@ -19,6 +20,7 @@
 
 pub mod catalogue;
 pub mod cia301;
+pub mod cia305;
 pub mod cia401;
 pub mod context;
 pub mod device_model;

@@ -70,18 +70,23 @@ fn check_clean(report: &canopener_conformance::model::Report, what: &str, allowe
         report.tests.len(),
         canopener_conformance::catalogue::catalogue().len()
     );
-    let mut longest: Vec<_> = report
-        .tests
-        .iter()
-        .map(|t| (t.duration_s, t.id.as_str()))
-        .collect();
-    longest.sort_by(|a, b| b.0.total_cmp(&a.0));
-    longest.truncate(30);
-    assert!(
-        report.duration_s < 10.0,
-        "{what}: {} virtual seconds; the longest tests: {longest:?}",
-        report.duration_s
-    );
+    // The budget is per suite: the CiA 301 suite within ten virtual seconds, and the CiA 305 suite
+    // within six more: its ten "must not answer" waits cost one 500 ms timeout each.
+    for (suite, budget) in [("cia301", 10.0), ("cia305", 6.0)] {
+        let mut longest: Vec<_> = report
+            .tests
+            .iter()
+            .filter(|t| t.suite == suite || (suite == "cia301" && t.suite == "eds"))
+            .map(|t| (t.duration_s, t.id.as_str()))
+            .collect();
+        let total: f64 = longest.iter().map(|(d, _)| d).sum();
+        longest.sort_by(|a, b| b.0.total_cmp(&a.0));
+        longest.truncate(30);
+        assert!(
+            total < budget,
+            "{what}: {suite} took {total} virtual seconds; the longest tests: {longest:?}"
+        );
+    }
     assert!(
         report.left_modified.is_empty(),
         "{what}: {:?}",
@@ -218,7 +223,7 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         // On STORE_DEVICE: the PRL120 has no store/restore and no SYNC producer.
         Fault::StoreIgnored => &["cia301.other.2", "cia301.other.3"],
         Fault::SyncCounterMissing => &["cia301.sync.4"],
-        // CiA 305 (LSS), not CiA 301: part 2.
+        // CiA 305 (LSS), not CiA 301: `expected_lss_failures`.
         Fault::NoLss | Fault::LssStateNotChanged => &[],
         // Not a CiA 301 violation (CiA 301 sets no SDO response time); handled below.
         Fault::SdoSlow => &[],
@@ -245,18 +250,25 @@ fn every_fault_fails_exactly_its_tests() {
             _ => FAULT_DEVICE,
         };
         let report = support::run(device, &[fault], &[]);
-        let mut expected: Vec<String> = expected_failures(fault).iter().map(|s| (*s).to_owned()).collect();
-        expected.sort();
-        let mut failed = device_failures(&report);
-        failed.sort();
-        if failed != expected {
-            mismatches.push(format!(
-                "{}: failed {failed:?}, expected {expected:?}",
-                fault.name()
-            ));
-        }
+        let expected = expected_failures(fault)
+            .iter()
+            .chain(expected_lss_failures(fault));
+        mismatches.extend(mismatch(&report, fault, expected));
     }
     assert!(mismatches.is_empty(), "{mismatches:#?}");
+}
+
+/// How the failures of `report` differ from `expected`, if they do.
+fn mismatch<'e>(
+    report: &canopener_conformance::model::Report,
+    fault: Fault,
+    expected: impl Iterator<Item = &'e &'e str>,
+) -> Option<String> {
+    let mut expected: Vec<String> = expected.map(|s| (*s).to_owned()).collect();
+    expected.sort();
+    let mut failed = device_failures(report);
+    failed.sort();
+    (failed != expected).then(|| format!("{}: failed {failed:?}, expected {expected:?}", fault.name()))
 }
 
 #[test]
@@ -453,4 +465,119 @@ fn a_run_cancelled_in_the_middle_of_a_test_writes_back_what_the_test_changed() {
             .any(|t| t.id == "0x585" && t.data.starts_with("60 17 10 00")),
         "the write-back was not confirmed"
     );
+}
+
+/// What each LSS fault must fail in the CiA 305 suite (the matrix of `docs/conformance.md`); every
+/// other fault must fail none of it.
+fn expected_lss_failures(fault: Fault) -> &'static [&'static str] {
+    match fault {
+        // No answer to anything: every test finds no LSS slave although the EDS says LSS_Supported=1.
+        Fault::NoLss => &[
+            "cia305.lss.1",
+            "cia305.lss.2",
+            "cia305.lss.3",
+            "cia305.lss.4",
+            "cia305.lss.5",
+            "cia305.lss.6",
+            "cia305.lss.7",
+            "cia305.lss.8",
+            "cia305.lss.9",
+            "cia305.lss.10",
+        ],
+        // Never in configuration state: everything that needs it fails; identify remote slave,
+        // identify non-configured (configured device) and the wrong-address selective switch are
+        // served in waiting state and pass.
+        Fault::LssStateNotChanged => &[
+            "cia305.lss.1",
+            "cia305.lss.2",
+            "cia305.lss.4",
+            "cia305.lss.5",
+            "cia305.lss.8",
+            "cia305.lss.9",
+            "cia305.lss.10",
+        ],
+        _ => &[],
+    }
+}
+
+#[test]
+fn the_lss_suite_passes_a_clean_lss_device_and_does_not_apply_to_one_without() {
+    // Every cia305 test passes (none is merely not applicable) on a device whose EDS says
+    // LSS_Supported=1 ...
+    let clean = support::run(FAULT_DEVICE, &[], &["cia305"]);
+    let not_passed: Vec<_> = clean
+        .tests
+        .iter()
+        .filter(|t| t.verdict != Verdict::Pass)
+        .map(|t| format!("{} {}: {}", t.id, t.verdict.as_str(), t.reason))
+        .collect();
+    assert!(not_passed.is_empty(), "{not_passed:#?}");
+    assert_eq!(clean.tests.len(), 10);
+    // The figure docs/conformance.md quotes.
+    eprintln!(
+        "cia305 on the PRL120: {} passed in {:.2} s virtual time",
+        clean.summary.pass,
+        clean.tests.iter().map(|t| t.duration_s).sum::<f64>()
+    );
+    // ... and none applies where it says LSS_Supported=0 (the simulated device still answers LSS:
+    // the EDS decides).
+    let without = support::run(
+        "ros-industrial__ros_canopen__canopen_chain_node__test__eds__ISD860.eds",
+        &[],
+        &["cia305"],
+    );
+    assert!(
+        without
+            .tests
+            .iter()
+            .all(|t| t.verdict == Verdict::NotApplicable && t.reason.contains("LSS_Supported=0")),
+        "{:?}",
+        without
+            .tests
+            .iter()
+            .map(|t| (&t.id, &t.reason))
+            .collect::<Vec<_>>()
+    );
+    // Without the key the suite asks the device: a device that answers is tested, one that does
+    // not gets not_applicable with that reason, never a failure.
+    let text =
+        canopener_testkit::fixture::read(canopener_testkit::corpus::eds(FAULT_DEVICE)).expect("corpus file");
+    let text = String::from_utf8_lossy(&text).replace("LSS_Supported=1", "");
+    let asked = support::run_edited(text.as_bytes(), FAULT_DEVICE, &[], &["cia305"]);
+    assert_eq!(
+        asked.summary.pass,
+        10,
+        "{:?}",
+        asked.tests.iter().map(|t| (&t.id, &t.reason)).collect::<Vec<_>>()
+    );
+    let silent = support::run_edited(text.as_bytes(), FAULT_DEVICE, &[Fault::NoLss], &["cia305"]);
+    assert!(
+        silent
+            .tests
+            .iter()
+            .all(|t| t.verdict == Verdict::NotApplicable && t.reason.contains("does not say LSS_Supported")),
+        "{:?}",
+        silent
+            .tests
+            .iter()
+            .map(|t| (&t.id, &t.reason))
+            .collect::<Vec<_>>()
+    );
+    // The two LSS faults on the LSS suite alone (the whole catalogue's matrix is above).
+    for fault in [Fault::NoLss, Fault::LssStateNotChanged] {
+        let report = support::run(FAULT_DEVICE, &[fault], &["cia305"]);
+        let failures = report.tests.iter().filter(|t| t.verdict == Verdict::Fail);
+        for test in failures {
+            assert!(
+                test.analysis.contains("Required: CiA 305 v3.0 ("),
+                "{}: {}",
+                test.id,
+                test.analysis
+            );
+        }
+        assert_eq!(
+            mismatch(&report, fault, expected_lss_failures(fault).iter()),
+            None
+        );
+    }
 }

@@ -32,7 +32,8 @@ pub(crate) struct TestArgs {
     /// The device's EDS/DCF (or XDD/XDC): preconditions and expected values come from it.
     #[arg(long, value_name = "FILE", required_unless_present = "list")]
     pub(crate) eds: Option<PathBuf>,
-    /// Which suite: cia301 (the device test), cia401 (generic I/O), eds (the EDS check only) or all.
+    /// Which suite: cia301 (the device test), cia401 (generic I/O), cia305 (LSS), eds (the EDS check
+    /// only) or all.
     #[arg(long, value_name = "SUITE", default_value = "all")]
     pub(crate) suite: String,
     /// Run only this test id, or every test under an id prefix (cia301.sdo); repeatable.

@@ -38,8 +38,8 @@ pub(crate) fn run_cancelled_at(
     only: &[&str],
     cancel_at: Option<&str>,
 ) -> Report {
-    run_file(
-        &vendored(name),
+    run_bytes(
+        &read(&vendored(name)),
         name,
         node,
         faults,
@@ -63,13 +63,22 @@ pub(crate) fn run_rewriting(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    run_file(path, &name, NODE, &[], only, None, &|_| false, rewrite)
+    run_bytes(&read(path), &name, NODE, &[], only, None, &|_| false, rewrite)
 }
 
 /// [`run_at`], cancelling the link (as Ctrl-C does) when the tester receives a frame `on_frame`
 /// accepts: in the middle of a test.
 pub(crate) fn run_cancelled_on(name: &str, only: &[&str], on_frame: &dyn Fn(&CanFrame) -> bool) -> Report {
-    run_file(&vendored(name), name, NODE, &[], only, None, on_frame, &|f, _| *f)
+    run_bytes(
+        &read(&vendored(name)),
+        name,
+        NODE,
+        &[],
+        only,
+        None,
+        on_frame,
+        &|f, _| *f,
+    )
 }
 
 fn vendored(name: &str) -> std::path::PathBuf {
@@ -80,8 +89,8 @@ fn vendored(name: &str) -> std::path::PathBuf {
 /// vendors whose licences forbid redistribution); `None` without an extended corpus.
 pub(crate) fn run_extended(name: &str) -> Option<Report> {
     let path = canopener_testkit::corpus::extended_file(canopener_testkit::corpus::Kind::Eds, name)?;
-    Some(run_file(
-        &path,
+    Some(run_bytes(
+        &read(&path),
         name,
         NODE,
         &[],
@@ -92,9 +101,21 @@ pub(crate) fn run_extended(name: &str) -> Option<Report> {
     ))
 }
 
+/// Reads a corpus file the runs simulate.
+fn read(path: &std::path::Path) -> Vec<u8> {
+    canopener_testkit::fixture::read(path).expect("corpus file")
+}
+
+/// Runs the tests `only` selects against a simulated device from the EDS text `bytes` (a corpus
+/// file edited by the test) on node [`NODE`].
+#[allow(dead_code)]
+pub(crate) fn run_edited(bytes: &[u8], name: &str, faults: &[Fault], only: &[&str]) -> Report {
+    run_bytes(bytes, name, NODE, faults, only, None, &|_| false, &|f, _| *f)
+}
+
 #[allow(clippy::too_many_arguments)]
-fn run_file(
-    path: &std::path::Path,
+fn run_bytes(
+    bytes: &[u8],
     name: &str,
     node: u8,
     faults: &[Fault],
@@ -104,8 +125,7 @@ fn run_file(
     rewrite: &dyn Fn(&CanFrame, bool) -> CanFrame,
 ) -> Report {
     let cancel = Cancel::new();
-    let bytes = canopener_testkit::fixture::read(path).expect("corpus file");
-    let loaded = canopener_eds::load(&bytes);
+    let loaded = canopener_eds::load(bytes);
     let eds_errors = Some(canopener_conformance::cia301::eds::errors(&loaded, Some(name)));
     let eds = loaded.eds;
     let model = DeviceModel::new(&eds, node);
