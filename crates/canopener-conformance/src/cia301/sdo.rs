@@ -11,7 +11,7 @@ use crate::cia301::helpers::{
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{number_bytes, number_text, step_beyond};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
-use crate::requirements::{self as req, code_meaning};
+use crate::requirements::{self as req, Accepted, code_meaning};
 
 /// The SDO tests.
 pub fn tests() -> Vec<TestDef> {
@@ -376,36 +376,39 @@ fn bad_command(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some(entry) = writable_of_size(ctx, &[1, 2]) else {
-        return Ok(Finding::not_applicable(
-            "the EDS has no writable 8- or 16-bit entry",
-        ));
-    };
-    let at = (entry.index, entry.sub);
-    let data = vec![0, 0, 0, 0];
-    let reply = ctx.modify(at.0, at.1, data.clone())?;
-    Ok(expect_refusal(
-        &format!("{} (4 bytes for {})", download_text(at, &data), entry.label()),
-        &reply,
-        req::TOO_LONG,
-        req::SDO_ABORT,
-        "the server does not compare the length of the data with the entry's type",
-    ))
+    wrong_length(ctx, &[1, 2], "8- or 16-bit", 4, req::TOO_LONG)
 }
 
 fn too_short(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some(entry) = writable_of_size(ctx, &[2, 4]) else {
-        return Ok(Finding::not_applicable(
-            "the EDS has no writable 16- or 32-bit entry",
-        ));
+    wrong_length(ctx, &[2, 4], "16- or 32-bit", 1, req::TOO_SHORT)
+}
+
+/// Downloads `length` zero bytes to the first writable entry of one of `sizes` bytes: a length that
+/// does not match the entry's type must be refused with the abort `requirement` names.
+fn wrong_length(
+    ctx: &mut Ctx<'_, '_>,
+    sizes: &[usize],
+    sizes_text: &str,
+    length: usize,
+    requirement: Accepted,
+) -> Outcome {
+    let Some(entry) = writable_of_size(ctx, sizes) else {
+        return Ok(Finding::not_applicable(format!(
+            "the EDS has no writable {sizes_text} entry"
+        )));
     };
     let at = (entry.index, entry.sub);
-    let data = vec![0];
+    let data = vec![0; length];
     let reply = ctx.modify(at.0, at.1, data.clone())?;
+    let bytes = if length == 1 {
+        "1 byte".to_owned()
+    } else {
+        format!("{length} bytes")
+    };
     Ok(expect_refusal(
-        &format!("{} (1 byte for {})", download_text(at, &data), entry.label()),
+        &format!("{} ({bytes} for {})", download_text(at, &data), entry.label()),
         &reply,
-        req::TOO_SHORT,
+        requirement,
         req::SDO_ABORT,
         "the server does not compare the length of the data with the entry's type",
     ))
