@@ -125,6 +125,20 @@ pub struct Measurement {
     pub statistics: Option<Statistics>,
     /// Every sample, in the order measured.
     pub samples: Vec<f64>,
+    /// The bounds a criterion put on each sample, when one decided the verdict; plots draw them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub limits: Option<Limits>,
+}
+
+/// The acceptable range a criterion gives a measurement's samples.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Limits {
+    /// The smallest acceptable sample, if bounded below.
+    pub low: Option<f64>,
+    /// The largest acceptable sample, if bounded above.
+    pub high: Option<f64>,
+    /// Where the bounds come from, e.g. `heartbeat deviation ±5 % (thesis default)` or the criteria file.
+    pub criterion: String,
 }
 
 impl Measurement {
@@ -134,7 +148,14 @@ impl Measurement {
             unit: unit.to_owned(),
             statistics: Statistics::of(&samples),
             samples,
+            limits: None,
         }
+    }
+
+    /// The same measurement judged against `limits`.
+    pub fn with_limits(mut self, limits: Limits) -> Measurement {
+        self.limits = Some(limits);
+        self
     }
 }
 
