@@ -91,6 +91,7 @@ Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a 
     #[command(after_help = "Examples:
   canopener test --bus socketcan:can0 --node 5 --eds device.eds
   canopener test --bus socketcand://127.0.0.1:29536/can0 --node 0x20 --eds io.eds --format json -o report.json
+  canopener test --bus socketcan:can0 --node 5 --eds device.eds --format html -o report.html  # plots, opens offline
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --only cia301.sdo --skip cia301.sdo.15
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --tag nmt --log logs/  # candump per test
   canopener test --list --suite cia301                 # ids, titles, CiA/CCT references, preconditions

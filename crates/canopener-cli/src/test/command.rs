@@ -1,5 +1,5 @@
 //! `canopener test`: loads the EDS, opens the bus, runs the selected tests with a progress bar, writes
-//! the report (human, JSON or JUnit) and the per-test candump logs, and ends with the documented exit
+//! the report (human, JSON, JUnit or HTML) and the per-test candump logs, and ends with the documented exit
 //! code: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
 //! answer at all, 2 usage, 3 an unreadable EDS, 130 interrupted (the partial report is still written).
 
@@ -10,7 +10,7 @@ use std::path::Path;
 use canopener_conformance::catalogue::{Selection, TestDef, catalogue};
 use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::{Report, rfc3339_utc};
-use canopener_conformance::render::{candump, human, junit};
+use canopener_conformance::render::{candump, html, human, junit};
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_runtime::files::{WriteError, create_dir_all, same_file, write_atomic};
 use canopener_runtime::link::{BusLink, Link};
@@ -98,6 +98,7 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
         ReportFormat::Human => human::render(report),
         ReportFormat::Json => report.to_json(),
         ReportFormat::Junit => junit::render(report),
+        ReportFormat::Html => html::render(report),
     };
     match &args.output {
         Some(path) => write_atomic(path, text.as_bytes(), false).map_err(write_error)?,
