@@ -444,8 +444,9 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
     ctx.measure(
         "heartbeat_interval",
         crate::model::Measurement::new("ms", intervals.clone()).with_limits(crate::model::Limits {
-            low: Some(period * (1.0 - HEARTBEAT_TOLERANCE)),
-            high: Some(period * (1.0 + HEARTBEAT_TOLERANCE)),
+            // As the verdict compares: |interval - period| > period × tolerance fails.
+            low: Some(period - period * HEARTBEAT_TOLERANCE),
+            high: Some(period + period * HEARTBEAT_TOLERANCE),
             criterion: format!(
                 "every interval within ±{:.0} % of the {TIMING_HEARTBEAT_MS} ms producer time (canopener's bound)",
                 HEARTBEAT_TOLERANCE * 100.0
