@@ -208,6 +208,7 @@ fn suite_heading(suite: &str) -> String {
         "cia301" => "CiA 301 device test",
         "cia401" => "CiA 401 generic I/O",
         "cia305" => "CiA 305 layer setting services",
+        "cia313" => "CiA 313-style performance",
         _ => return format!("Suite {}", esc(suite)),
     };
     format!("{name} <code>{}</code>", esc(suite))
@@ -224,9 +225,10 @@ fn write_suite(out: &mut String, report: &Report, suite: &str) {
     );
     let _ = writeln!(
         out,
-        "<h2>{} <span class=\"meta\">{} tests: {} passed, {} failed, {} inconclusive, {} not applicable</span></h2>",
+        "<h2>{} <span class=\"meta\">{} {}: {} passed, {} failed, {} inconclusive, {} not applicable</span></h2>",
         suite_heading(suite),
         tests.len(),
+        if tests.len() == 1 { "test" } else { "tests" },
         summary.pass,
         summary.fail,
         summary.inconclusive,
