@@ -608,17 +608,25 @@ mod plot {
     /// high one, so that two close limits do not write over each other.
     fn limit_line(out: &mut String, vertical: bool, high: bool, at: f64, text: &str) {
         if vertical {
-            let (x, anchor) = if high {
+            // About 6 px per character at the plot's font size; a label that would leave the plot goes
+            // to the other side of its line, one line lower, clear of the other limit's label.
+            let width = text.chars().count() as f64 * 6.0;
+            let fits = if high {
+                at + 3.0 + width <= WIDTH
+            } else {
+                at - 3.0 - width >= 0.0
+            };
+            let (x, anchor) = if high == fits {
                 (at + 3.0, "start")
             } else {
                 (at - 3.0, "end")
             };
+            let y = if fits { TOP + 10.0 } else { TOP + 22.0 };
             let _ = write!(
                 out,
                 "<line class=\"limit\" x1=\"{at:.1}\" y1=\"{TOP}\" x2=\"{at:.1}\" y2=\"{:.1}\"/>\
-                 <text class=\"limit-label\" x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"{anchor}\">{}</text>",
+                 <text class=\"limit-label\" x=\"{x:.1}\" y=\"{y:.1}\" text-anchor=\"{anchor}\">{}</text>",
                 HEIGHT - BOTTOM,
-                TOP + 10.0,
                 esc(text)
             );
         } else {
