@@ -604,29 +604,19 @@ mod plot {
     }
 
     /// A limit drawn across the plot: vertical at `x` (histogram) or horizontal at `y` (series).
-    /// The label sits outside the acceptable range: left of (below) a low limit, right of (above) a
-    /// high one, so that two close limits do not write over each other.
+    /// A limit's label sits outside the acceptable range: left of (below) a low limit, right of (above)
+    /// a high one.
     fn limit_line(out: &mut String, vertical: bool, high: bool, at: f64, text: &str) {
         if vertical {
-            // About 6 px per character at the plot's font size; a label that would leave the plot goes
-            // to the other side of its line, one line lower, clear of the other limit's label.
-            let width = text.chars().count() as f64 * 6.0;
-            let fits = if high {
-                at + 3.0 + width <= WIDTH
-            } else {
-                at - 3.0 - width >= 0.0
-            };
-            let (x, anchor) = if high == fits {
-                (at + 3.0, "start")
-            } else {
-                (at - 3.0, "end")
-            };
-            let y = if fits { TOP + 10.0 } else { TOP + 22.0 };
+            // Written upwards along the line, outside the accepted range (left of a low limit, right of a
+            // high one): it never runs off the plot and two close limits do not write over each other.
+            let x = if high { at + 12.0 } else { at - 4.0 };
             let _ = write!(
                 out,
                 "<line class=\"limit\" x1=\"{at:.1}\" y1=\"{TOP}\" x2=\"{at:.1}\" y2=\"{:.1}\"/>\
-                 <text class=\"limit-label\" x=\"{x:.1}\" y=\"{y:.1}\" text-anchor=\"{anchor}\">{}</text>",
+                 <text class=\"limit-label\" transform=\"translate({x:.1} {:.1}) rotate(-90)\" text-anchor=\"end\">{}</text>",
                 HEIGHT - BOTTOM,
+                TOP + 2.0,
                 esc(text)
             );
         } else {
