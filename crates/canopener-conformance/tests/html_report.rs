@@ -4,23 +4,19 @@
 //! device with a jittering heartbeat is open with its limits drawn. Screenshots are left in
 //! `CARGO_TARGET_TMPDIR` for people to look at.
 
-#[path = "shared/support.rs"]
-#[allow(dead_code)]
-mod support;
-
+use canopener_conformance::demo;
 use canopener_conformance::model::{Report, Summary, Verdict};
 use canopener_conformance::render::html;
 use canopener_device::faults::Fault;
 use canopener_testkit::browser::{self, png_size, tags};
 use canopener_testkit::fixture::{self, ScratchDir};
 
-/// The CiA 401 demo device with every optional CiA 401 object, so every suite applies.
-const FULL_IO: &str = "test_data/cia401_full_io.eds";
-
+/// A run of every suite against the demo's device (`test_data/cia401_full_io.eds`, so every suite
+/// applies) with `faults`, as `canopener demo` runs it.
 fn run(faults: &[Fault]) -> Report {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(FULL_IO);
-    let bytes = fixture::read(&path).expect("the full I/O EDS");
-    support::run_edited(&bytes, "cia401_full_io.eds", faults, &[])
+    demo::run(faults, "2024-01-01T00:00:00Z", None, |_| {})
+        .expect("the demo device runs")
+        .report
 }
 
 /// The dumped DOM cut into one piece per test `<details>` (tests are not nested, so each piece

@@ -925,6 +925,33 @@ mod tests {
     }
 
     #[test]
+    fn edge_texts_come_back_from_the_parsed_page() {
+        for reason in [
+            " ",
+            "\t",
+            "\r\n",
+            "\u{0}\u{1b}\u{7f}",
+            "]]>",
+            "&amp;",
+            "\u{FFFE}",
+            "",
+        ] {
+            let mut report = small_report();
+            report.tests[1].reason = reason.to_owned();
+            let html = render(&report);
+            let doc = parse(&html);
+            let shown = doc
+                .descendants()
+                .filter(|n| has_class(n, "reason"))
+                .nth(1)
+                .and_then(|n| n.text())
+                .unwrap_or("");
+            assert_eq!(shown, esc_text(reason), "{reason:?}");
+        }
+        assert_eq!(esc("\u{0}\u{1b}\u{7f}"), "\u{2400}\u{241b}\u{2421}");
+    }
+
+    #[test]
     fn measurements_without_finite_samples_still_get_their_plot_pair() {
         let mut report = small_report();
         report.tests[0].measurements = BTreeMap::from([
