@@ -372,6 +372,15 @@ fn write_measurement(out: &mut String, name: &str, measurement: &Measurement) {
             esc(&limits.criterion)
         );
     }
+    // Every raw sample, as the JSON report has them, for copying into other tools.
+    let raw: Vec<String> = measurement.samples.iter().map(f64::to_string).collect();
+    let _ = writeln!(
+        out,
+        "<details class=\"samples\"><summary>{} samples in {} (in the order measured)</summary><p class=\"mono\">{}</p></details>",
+        raw.len(),
+        esc(unit),
+        raw.join(", ")
+    );
     out.push_str("</figure>\n");
 }
 
