@@ -26,6 +26,13 @@ pub(crate) enum OutputFormat {
     Json,
 }
 
+/// Reads a fault name of the device fault catalogue (`sim`, `mbt`, `demo --fault`); the error lists
+/// every name.
+pub(crate) fn parse_fault(text: &str) -> Result<canopener_device::faults::Fault, String> {
+    text.parse()
+        .map_err(|e: canopener_device::faults::UnknownFault| e.to_string())
+}
+
 /// Reads an object index as CANopen tools write it: hexadecimal, with or without `0x` or `h`.
 pub(crate) fn parse_index(text: &str) -> Result<u16, String> {
     let t = text.trim();

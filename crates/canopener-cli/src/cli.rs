@@ -3,7 +3,8 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::bus::args::{BusCommand, DemoArgs};
+use crate::bus::args::BusCommand;
+use crate::demo::args::DemoArgs;
 use crate::eds::args::EdsCommand;
 use crate::master::args::{
     HeartbeatCommand, LssCommand, NmtArgs, NodeCommand, PdoCommand, SdoCommand, SyncArgs,
@@ -20,7 +21,7 @@ use crate::test::args::TestArgs;
     version,
     about,
     after_long_help = EXIT_CODES_HELP,
-    after_help = "Run `canopener demo` to watch a decoded CANopen session with no hardware.\n\
+    after_help = "Run `canopener demo` to see a simulated device tested, with HTML reports, no hardware needed.\n\
                   Use `canopener help <command>` or `<command> --help` for examples."
 )]
 pub(crate) struct Cli {
@@ -40,7 +41,7 @@ Exit codes:
   3  invalid input: a file, frame or value could not be read (the message names file:line)
   4  bus error: the CAN bus could not be opened, or the connection was lost
   5  output error: a result could not be written (file exists, disk full, permission)
-  6  check failed: the command ran and found a problem (e.g. frames lost in `demo`)
+  6  check failed: the command ran and found a problem (e.g. frames lost in `demo --monitor`)
   7  device error: the device refused a request (SDO abort, LSS error) or did not answer in time
 130  interrupted: Ctrl-C or SIGTERM while talking to a device (a running transfer is aborted on the bus)
 
@@ -53,12 +54,18 @@ Exit codes:
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum Command {
-    /// Watch a decoded CANopen session: an in-process hub, a traffic source and the bus monitor.
+    /// See the product with no hardware: a simulated CiA 401 device checked and conformance-tested, clean and
+    /// with a fault, HTML reports written; `--monitor` watches a decoded CANopen session instead.
     #[command(after_help = "Examples:
-  canopener demo                                  # hub on 127.0.0.1 (ephemeral port), real-time replay
-  canopener demo --speed 0                        # as fast as possible
-  canopener demo --bus 'virtual:demo?bitrate=500k'  # bit-accurate simulated 500 kbit/s bus, shows bus load
-  canopener demo --format json | jq .text")]
+  canopener demo                                  # the tour; reports in ./canopener-demo/ (clean.html, fault-*.html)
+  canopener demo --dir /tmp/tour --fault no-emcy  # another fault, another directory
+  canopener demo --format json | jq .runs         # one JSON summary for machines
+  canopener demo --monitor                        # replay a 4-node session through an in-process hub, decoded
+  canopener demo --monitor --speed 0              # as fast as possible
+  canopener demo --monitor --bus 'virtual:demo?bitrate=500k'  # bit-accurate simulated 500 kbit/s bus, bus load
+  canopener demo --monitor --format json | jq .text
+Exit status: 0 the clean device passed and the faulty one failed as it should (with --monitor: no frame lost
+or decoded as an anomaly), 6 otherwise, 5 a file could not be written, 130 interrupted.")]
     Demo(DemoArgs),
     /// Talk to CAN buses: serve a hub, monitor, send, replay, generate load, decode logs.
     #[command(subcommand)]
@@ -91,6 +98,7 @@ Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a 
     #[command(after_help = "Examples:
   canopener test --bus socketcan:can0 --node 5 --eds device.eds
   canopener test --bus socketcand://127.0.0.1:29536/can0 --node 0x20 --eds io.eds --format json -o report.json
+  canopener test --bus socketcan:can0 --node 5 --eds device.eds --format html -o report.html  # plots, opens offline
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --only cia301.sdo --skip cia301.sdo.15
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --tag nmt --log logs/  # candump per test
   canopener test --list --suite cia301                 # ids, titles, CiA/CCT references, preconditions

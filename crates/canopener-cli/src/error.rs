@@ -105,6 +105,15 @@ impl From<canopener_runtime::files::WriteError> for CliError {
     }
 }
 
+/// A result file or directory that could not be written, for the commands outside `eds`: an output error
+/// (exit 5) naming what and where.
+pub(crate) fn write_failed(err: canopener_runtime::files::WriteError) -> CliError {
+    CliError::output(
+        format!("cannot {} {}", err.action, err.path.display()),
+        err.source,
+    )
+}
+
 /// A failing bus is a bus error (exit 4); the simulated bus refusing a frame is a bug of ours.
 impl From<canopener_runtime::link::LinkError> for CliError {
     fn from(err: canopener_runtime::link::LinkError) -> CliError {

@@ -10,6 +10,7 @@ mod args;
 mod bus;
 mod bus_open;
 mod cli;
+mod demo;
 mod eds;
 mod error;
 mod master;
@@ -60,7 +61,13 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
-        Command::Demo(args) => bus::demo::run(args),
+        Command::Demo(args) if args.monitor => bus::demo::run(bus::args::DemoArgs {
+            bus: args.bus,
+            speed: args.speed,
+            format: args.format,
+            quiet: args.quiet,
+        }),
+        Command::Demo(args) => demo::tour::run(args),
         Command::Bus(BusCommand::Serve(args)) => bus::serve::run(args),
         Command::Bus(BusCommand::Dump(args)) => bus::dump::run(args),
         Command::Bus(BusCommand::Send(args)) => bus::send::run(args),

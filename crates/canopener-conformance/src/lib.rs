@@ -11,7 +11,8 @@
 //!   changed and leaves the device in pre-operational between tests.
 //! - [`model`]: the report every suite fills (verdicts, telegrams, measurements with raw samples and
 //!   statistics); its JSON form is version 1 of the documented report.
-//! - [`render`]: the human summary, JUnit XML and candump telegram logs.
+//! - [`render`]: the human summary, the HTML page with plots, JUnit XML and candump telegram logs.
+//! - [`demo`]: the product tour of `canopener demo` (a bundled CiA 401 device, clean and with a fault).
 //! - [`device_model`]: what the EDS says the device is; [`requirements`]: clauses and accepted abort
 //!   codes.
 //!
@@ -23,6 +24,7 @@ pub mod cia301;
 pub mod cia305;
 pub mod cia401;
 pub mod context;
+pub mod demo;
 pub mod device_model;
 pub mod finding;
 pub mod model;

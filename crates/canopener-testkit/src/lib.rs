@@ -6,6 +6,7 @@
 //!   recorded as a trace line; [`cores!`] makes one core type of several kinds.
 //! - [`frames`]: proptest strategies for frames a CANopen core meets.
 //! - [`fixture`]: the file system as tests of sans-IO crates may use it (the workspace bans it there).
+//! - [`browser`]: headless Chromium for the tests of HTML pages (DOM dumps, screenshots).
 //! - [`corpus`]: where the EDS/XDD corpus is: the files vendored in the repository, and the optional
 //!   extended corpus next to the checkout.
 
@@ -13,6 +14,7 @@
 // Test support reports on the test's own output (a corpus file skipped, and why).
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+pub mod browser;
 pub mod corpus;
 pub mod fixture;
 pub mod frames;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use crate::args::{BUS_HELP, BusArg, OutputFormat, parse_duration, parse_u8, parse_u64};
+use crate::args::{BusArg, OutputFormat, parse_duration, parse_u8, parse_u64};
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum BusCommand {
@@ -158,17 +158,14 @@ pub(crate) struct DecodeArgs {
     pub(crate) format: OutputFormat,
 }
 
-#[derive(Debug, Args)]
+/// What `canopener demo --monitor` was asked (`demo/args.rs` parses the `demo` command).
+#[derive(Debug)]
 pub(crate) struct DemoArgs {
-    /// Run the demo on this bus instead of an in-process hub.
-    #[arg(long = "bus", value_name = "SPEC", help = BUS_HELP)]
+    /// The bus instead of an in-process hub.
     pub(crate) bus: Option<String>,
     /// Replay speed factor (0 = as fast as possible).
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
     pub(crate) speed: f64,
-    #[arg(long, value_enum, default_value_t = OutputFormat::Text)]
     pub(crate) format: OutputFormat,
     /// Only print the summary, not every frame.
-    #[arg(long, short)]
     pub(crate) quiet: bool,
 }

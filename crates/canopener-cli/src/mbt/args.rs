@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::{BusArg, parse_duration, parse_node_id};
+use crate::args::{BusArg, parse_duration, parse_fault, parse_node_id};
 
 /// FFh, the node-ID of a device that has none yet (CiA 305: LSS non-configured).
 pub(crate) const NON_CONFIGURED: u8 = 0xFF;
@@ -255,11 +255,6 @@ fn parse_setting(text: &str) -> Result<(String, i64), String> {
         None => i64::try_from(parse_duration(v)?.as_micros()).map_err(|_| format!("'{v}' is too long"))?,
     };
     Ok((name.trim().to_owned(), value))
-}
-
-fn parse_fault(text: &str) -> Result<canopener_device::faults::Fault, String> {
-    text.parse()
-        .map_err(|e: canopener_device::faults::UnknownFault| e.to_string())
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::{parse_node_id, parse_u32_number};
+use crate::args::{parse_fault, parse_node_id, parse_u32_number};
 
 #[derive(Debug, Args)]
 pub(crate) struct SimArgs {
@@ -79,10 +79,4 @@ pub(crate) enum SimFormat {
     Human,
     /// One JSON object per event on stdout.
     Json,
-}
-
-/// Reads a fault name of the device fault catalogue; the error lists every name.
-fn parse_fault(text: &str) -> Result<canopener_device::faults::Fault, String> {
-    text.parse()
-        .map_err(|e: canopener_device::faults::UnknownFault| e.to_string())
 }

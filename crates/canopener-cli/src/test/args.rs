@@ -20,6 +20,9 @@ pub(crate) enum ReportFormat {
     Json,
     /// JUnit XML: one test case per test, the telegram log as system-out.
     Junit,
+    /// One self-contained HTML page (opens offline): summary, a table per suite, every test
+    /// collapsible with its analysis, telegram log and plots of its measurements; write it with -o.
+    Html,
 }
 
 #[derive(Debug, Args)]

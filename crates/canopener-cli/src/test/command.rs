@@ -1,5 +1,5 @@
 //! `canopener test`: loads the EDS, opens the bus, runs the selected tests with a progress bar, writes
-//! the report (human, JSON or JUnit) and the per-test candump logs, and ends with the documented exit
+//! the report (human, JSON, JUnit or HTML) and the per-test candump logs, and ends with the documented exit
 //! code: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
 //! answer at all, 2 usage, 3 an unreadable EDS, 130 interrupted (the partial report is still written).
 
@@ -10,16 +10,16 @@ use std::path::Path;
 use canopener_conformance::catalogue::{Selection, TestDef, catalogue};
 use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::{Report, rfc3339_utc};
-use canopener_conformance::render::{candump, human, junit};
+use canopener_conformance::render::{candump, html, human, junit};
 use canopener_conformance::runner::{self, RunSpec};
-use canopener_runtime::files::{WriteError, create_dir_all, same_file, write_atomic};
+use canopener_runtime::files::{create_dir_all, same_file, write_atomic};
 use canopener_runtime::link::{BusLink, Link};
 use canopener_runtime::simulator::simulation::Simulation;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
 use crate::bus_open::open_bus;
-use crate::error::{CliError, CliResult, exit_code};
+use crate::error::{CliError, CliResult, exit_code, write_failed};
 use crate::output::print_stdout;
 use crate::stop::StopFlag;
 use crate::test::args::{ReportFormat, TestArgs};
@@ -55,7 +55,7 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
     let eds_errors = eds_errors(eds_path)?;
     let model = DeviceModel::new(&description.eds, node);
     if let Some(dir) = &args.log {
-        create_dir_all(dir).map_err(write_error)?;
+        create_dir_all(dir).map_err(write_failed)?;
     }
     // The EDS check alone runs without a bus (an empty simulated one stands in for it).
     let needs_device = tests.iter().any(TestDef::needs_device);
@@ -98,9 +98,10 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
         ReportFormat::Human => human::render(report),
         ReportFormat::Json => report.to_json(),
         ReportFormat::Junit => junit::render(report),
+        ReportFormat::Html => html::render(report),
     };
     match &args.output {
-        Some(path) => write_atomic(path, text.as_bytes(), false).map_err(write_error)?,
+        Some(path) => write_atomic(path, text.as_bytes(), false).map_err(write_failed)?,
         None => print_stdout(&text)?,
     }
     if report.interrupted {
@@ -140,17 +141,9 @@ fn eds_errors(path: &Path) -> CliResult<Option<Vec<String>>> {
 fn write_logs(dir: &Path, report: &Report) -> CliResult {
     for test in &report.tests {
         let path = dir.join(candump::file_name(test));
-        write_atomic(&path, candump::log(test).as_bytes(), false).map_err(write_error)?;
+        write_atomic(&path, candump::log(test).as_bytes(), false).map_err(write_failed)?;
     }
     Ok(())
-}
-
-/// A file or directory that could not be written: exit 5, naming what and where.
-fn write_error(err: WriteError) -> CliError {
-    CliError::output(
-        format!("cannot {} {}", err.action, err.path.display()),
-        err.source,
-    )
 }
 
 fn progress_bar(len: usize) -> ProgressBar {

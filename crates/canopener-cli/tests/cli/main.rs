@@ -11,6 +11,7 @@
 )]
 mod support;
 
+mod demo;
 mod eds;
 mod eds_check;
 mod grammar;
@@ -23,6 +24,7 @@ mod net;
 mod net_browser;
 mod net_system;
 mod sim;
+mod test_html;
 
 use std::process::Output;
 use std::time::Duration;
@@ -214,7 +216,7 @@ fn decode_reports_bad_lines_and_still_decodes_the_rest() {
 
 #[test]
 fn demo_runs_end_to_end_and_reports_no_loss() {
-    let output = run(&["demo", "--speed", "0", "--format", "json"]);
+    let output = run(&["demo", "--monitor", "--speed", "0", "--format", "json"]);
     assert!(output.status.success(), "{}", stderr(&output));
     let lines: Vec<serde_json::Value> = stdout(&output)
         .lines()
@@ -231,6 +233,7 @@ fn demo_runs_end_to_end_and_reports_no_loss() {
 fn demo_on_a_bit_accurate_virtual_bus() {
     let output = run(&[
         "demo",
+        "--monitor",
         "--speed",
         "0",
         "--quiet",
@@ -334,7 +337,7 @@ fn send_dump_and_replay_share_a_hub_and_log_losslessly() {
 #[test]
 fn output_to_a_closed_pipe_is_not_an_error() {
     let mut child = canopener()
-        .args(["demo", "--speed", "0"])
+        .args(["demo", "--monitor", "--speed", "0"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()

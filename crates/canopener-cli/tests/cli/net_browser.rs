@@ -3,78 +3,17 @@
 //! devices. Screenshots of the two-network drawings are left in the target directory for people.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+
+use canopener_testkit::browser::{chromium, run as chromium_run};
 
 use serde_json::Value;
 
 use super::{run, stderr, stdout, temp_dir};
 
-const CHROMIUM: &str = "/usr/bin/chromium";
-const SKIP_VAR: &str = "CANOPENER_SKIP_BROWSER_TESTS";
-
-fn chromium() -> Option<&'static Path> {
-    if std::env::var(SKIP_VAR).is_ok_and(|v| v == "1") {
-        eprintln!("skipped: {SKIP_VAR}=1");
-        return None;
-    }
-    let path = Path::new(CHROMIUM);
-    assert!(
-        path.exists(),
-        "{CHROMIUM} not found: `cargo xtask setup` installs it, or set {SKIP_VAR}=1"
-    );
-    Some(path)
-}
-
 fn test_data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../canopener-network/test_data")
         .join(name)
-}
-
-fn chromium_run(browser: &Path, profile: &Path, url: &str, extra: &[&str]) -> String {
-    let mut child = Command::new(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--no-first-run",
-            "--hide-scrollbars",
-        ])
-        .args([
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .arg("--virtual-time-budget=2000")
-        .args(extra)
-        .arg(url)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start chromium");
-    // The DOM of a large drawing is more than a pipe holds: read it while Chromium runs.
-    let mut stdout = child.stdout.take().expect("stdout");
-    let reader = std::thread::spawn(move || {
-        let mut text = String::new();
-        let _ = std::io::Read::read_to_string(&mut stdout, &mut text);
-        text
-    });
-    let started = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().expect("wait") {
-            break status;
-        }
-        if started.elapsed() > Duration::from_secs(120) {
-            let _ = child.kill();
-            panic!("chromium did not finish within 120 s");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    assert!(status.success(), "chromium failed: {status}");
-    reader.join().expect("reader")
 }
 
 /// Measures the drawing in the browser: every label's box, and the device titles.

@@ -440,6 +440,19 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
     )?;
     let period = f64::from(TIMING_HEARTBEAT_MS);
     let intervals = measure_intervals(ctx, "heartbeat_interval", &frames);
+    // The same samples again, with the bound the verdict applies, so that reports can draw it.
+    ctx.measure(
+        "heartbeat_interval",
+        crate::model::Measurement::new("ms", intervals.clone()).with_limits(crate::model::Limits {
+            // As the verdict compares: |interval - period| > period × tolerance fails.
+            low: Some(period - period * HEARTBEAT_TOLERANCE),
+            high: Some(period + period * HEARTBEAT_TOLERANCE),
+            criterion: format!(
+                "every interval within ±{:.0} % of the {TIMING_HEARTBEAT_MS} ms producer time (canopener's bound)",
+                HEARTBEAT_TOLERANCE * 100.0
+            ),
+        }),
+    );
     let request = download_text((0x1017, 0), &TIMING_HEARTBEAT_MS.to_le_bytes());
     let worst = intervals
         .iter()

@@ -2,30 +2,12 @@
 //! from the URL hash, explanation anchors, and a screenshot written to `target/`.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{SystemTime, UNIX_EPOCH};
 
 use canopener_report::html;
+use canopener_testkit::browser::{chromium, png_size, run as run_chromium, tags};
 
 use crate::fixture::report;
-
-const CHROMIUM: &str = "/usr/bin/chromium";
-const SKIP_VAR: &str = "CANOPENER_SKIP_BROWSER_TESTS";
-
-/// The browser, or `None` when the tests are skipped on purpose. Fails when it is missing otherwise.
-fn chromium() -> Option<&'static Path> {
-    if std::env::var(SKIP_VAR).is_ok_and(|v| v == "1") {
-        eprintln!("skipped: {SKIP_VAR}=1");
-        return None;
-    }
-    let path = Path::new(CHROMIUM);
-    assert!(
-        path.exists(),
-        "{CHROMIUM} not found: install Debian's chromium package (`apt-get install -y chromium`), \
-         or set {SKIP_VAR}=1 to skip the browser tests"
-    );
-    Some(path)
-}
 
 /// A fresh directory under the system temp dir, removed on drop.
 struct TempDir(PathBuf);
@@ -47,69 +29,11 @@ impl Drop for TempDir {
     }
 }
 
-/// Runs Chromium headless on `url` with `extra` arguments and returns its stdout.
-fn run_chromium(browser: &Path, profile: &Path, url: &str, extra: &[&str]) -> String {
-    let mut child = Command::new(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--hide-scrollbars",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .arg("--virtual-time-budget=2000")
-        .args(extra)
-        .arg(url)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start chromium");
-    let started = Instant::now();
-    loop {
-        match child.try_wait().expect("wait for chromium") {
-            Some(_) => break,
-            None if started.elapsed() > Duration::from_secs(120) => {
-                let _ = child.kill();
-                panic!("chromium did not finish within 120 s");
-            }
-            None => std::thread::sleep(Duration::from_millis(50)),
-        }
-    }
-    let output = child.wait_with_output().expect("chromium output");
-    assert!(
-        output.status.success(),
-        "chromium failed: {}\n{}",
-        output.status,
-        String::from_utf8_lossy(&output.stderr)
-    );
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
 /// The page written into `dir`, as a file URL.
 fn write_page(dir: &Path) -> String {
     let page = dir.join("report.html");
     std::fs::write(&page, html(&report())).expect("write the page");
     format!("file://{}", page.display())
-}
-
-/// Every opening tag `<tag ...>` of the dumped DOM.
-fn tags<'a>(dom: &'a str, tag: &str) -> Vec<&'a str> {
-    let open = format!("<{tag} ");
-    let mut found = Vec::new();
-    let mut rest = dom;
-    while let Some(at) = rest.find(&open) {
-        rest = &rest[at..];
-        let end = rest.find('>').map_or(rest.len(), |e| e + 1);
-        found.push(&rest[..end]);
-        rest = &rest[end..];
-    }
-    found
 }
 
 /// The text of the element with this id (up to the next tag).
@@ -197,20 +121,6 @@ fn filters_from_the_hash_and_anchors_work_in_chromium() {
         "the linked explanation is opened: {details}"
     );
     assert_eq!(text_of(&dom, "shown-count"), "8", "an anchor is not a filter");
-}
-
-/// Checks the PNG signature and returns (width, height) from its IHDR chunk.
-fn png_size(bytes: &[u8]) -> (u32, u32) {
-    assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "not a PNG");
-    let word = |at: usize| {
-        let b: [u8; 4] = bytes
-            .get(at..at + 4)
-            .and_then(|s| s.try_into().ok())
-            .expect("IHDR");
-        u32::from_be_bytes(b)
-    };
-    assert_eq!(bytes.get(12..16), Some(&b"IHDR"[..]));
-    (word(16), word(20))
 }
 
 #[test]
