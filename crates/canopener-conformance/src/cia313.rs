@@ -320,14 +320,17 @@ fn stamps_note(ctx: &Ctx<'_, '_>, criterion: Option<&Criterion>) -> String {
     note
 }
 
-/// Sends `frame` and waits up to `wait` for the first frame `answer` accepts: the time from sending
-/// to the answer's receive stamp in ms, and the answer.
+/// One timed exchange: the time from sending to the answer's receive stamp in ms, and the answer;
+/// `None` without an answer.
+type Timed = Result<Option<(f64, CanFrame)>, Stop>;
+
+/// Sends `frame` and waits up to `wait` for the first frame `answer` accepts.
 fn exchange(
     ctx: &mut Ctx<'_, '_>,
     frame: Outgoing<'_>,
     wait: Duration,
     answer: impl Fn(&CanFrame) -> bool,
-) -> Result<Option<(f64, CanFrame)>, Stop> {
+) -> Timed {
     let sent = ctx.now();
     match frame {
         Outgoing::Data(id, data) => ctx.send(id, data)?,

@@ -274,18 +274,26 @@ fn heartbeat_faults_fail_the_deviation_test_with_the_numbers() {
     }
 }
 
+/// The whole catalogue (all four suites and the EDS check) against one simulated device: cia313
+/// takes 12.5 virtual seconds of the run's 26.6 (10 of them the heartbeat's 100 periods). Virtual
+/// time costs no wall time: `cargo test -p canopener-conformance --test cia313` reports the wall time
+/// of this test binary (under a second in a debug build), the default 1000 repetitions included.
 #[test]
-fn the_whole_catalogue_on_a_simulated_device_stays_fast_in_wall_time() {
-    // 2000 SDO exchanges, 6000 LSS exchanges, 1000 RTRs and 12 virtual seconds of cycles: virtual
-    // time costs no wall time, so the default repetitions stay. The bound is generous for a loaded
-    // machine and a debug build; the release CLI runs it in well under a second.
-    let started = std::time::Instant::now();
+fn the_performance_suite_stays_within_fifteen_virtual_seconds_at_default_repetitions() {
     let report = support::run(RTR_DEVICE, &[], &[]);
-    let took = started.elapsed();
-    assert!(report.tests.iter().any(|t| t.suite == "cia313"));
-    assert!(took < Duration::from_secs(30), "took {took:?}");
+    let performance: Vec<&TestReport> = report.tests.iter().filter(|t| t.suite == "cia313").collect();
+    assert_eq!(performance.len(), 8);
+    let virtual_s: f64 = performance.iter().map(|t| t.duration_s).sum();
+    assert!(virtual_s < 15.0, "cia313 took {virtual_s} virtual seconds");
+    let samples: usize = performance
+        .iter()
+        .flat_map(|t| t.measurements.values())
+        .map(|m| m.samples.len())
+        .sum();
+    // 1000 each: SDO read, SDO write, RTR, six LSS services; 10 boot-ups; 100 + 100 + 99 + 100 periods.
+    assert_eq!(samples, 9 * DEFAULT_REPETITIONS + 10 + 399);
     eprintln!(
-        "all suites on a simulated device: {took:?} wall, {:.1} s virtual",
+        "cia313 on a simulated PRL120: {virtual_s:.1} of {:.1} virtual seconds, {samples} samples",
         report.duration_s
     );
 }

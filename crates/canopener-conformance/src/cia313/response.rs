@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use super::{BOOT_UPS, Criterion, Judged, Outgoing, exchange, judge, standard_id, unusable};
+use super::{BOOT_UPS, Criterion, Judged, Outgoing, Timed, exchange, judge, standard_id, unusable};
 use crate::cia301::helpers::{back_to_pre_operational, download_text, u32_of, upload_text};
 use crate::cia301::nmt::BOOT_UP_WAIT;
 use crate::cia305::services::Address;
@@ -397,8 +397,13 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ));
     }
     let max = ctx.performance().criteria.lss_response_max_ms;
-    let mut findings = Vec::new();
+    let mut worst = Vec::new();
+    let mut failed = None;
     for (name, what, samples) in measured {
+        worst.push(format!(
+            "{what} {:.3}",
+            samples.iter().copied().fold(0.0, f64::max)
+        ));
         let criterion = Criterion::at_most(ctx, "lss.response_max_ms", max);
         let finding = judge(
             ctx,
@@ -412,19 +417,24 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
             samples,
             criterion,
         );
-        findings.push(finding);
+        if finding.verdict == crate::model::Verdict::Fail && failed.is_none() {
+            failed = Some(finding);
+        }
     }
-    Ok(findings
-        .iter()
-        .find(|f| f.verdict == crate::model::Verdict::Fail)
-        .cloned()
-        .unwrap_or_else(|| {
-            Finding::pass(format!(
-                "{} confirmed LSS services measured {repetitions} times each; {}",
-                findings.len(),
-                findings.first().map_or(String::new(), |f| f.reason.clone())
-            ))
-        }))
+    let judged = match max {
+        Some(max) => format!(
+            "all within ≤ {max} ms ({})",
+            ctx.performance().criteria.origin("lss.response_max_ms", false)
+        ),
+        None => "measured, no criterion".to_owned(),
+    };
+    Ok(failed.unwrap_or_else(|| {
+        Finding::pass(format!(
+            "LSS response times, {repetitions} of each service, max: {} ms; {judged}{}",
+            worst.join(", "),
+            super::stamps_note(ctx, Criterion::at_most(ctx, "lss.response_max_ms", max).as_ref())
+        ))
+    }))
 }
 
 /// The LSS request CAN-ID (CiA 305: master → slave).
@@ -434,7 +444,7 @@ const LSS_REQUEST: u16 = 0x7E5;
 fn lss_samples(
     ctx: &mut Ctx<'_, '_>,
     repetitions: usize,
-    one: &mut dyn FnMut(&mut Ctx<'_, '_>) -> Result<Option<(f64, canopener_can::CanFrame)>, Stop>,
+    one: &mut dyn FnMut(&mut Ctx<'_, '_>) -> Timed,
 ) -> Result<Result<Vec<f64>, usize>, Stop> {
     let mut samples = Vec::new();
     for _ in 0..repetitions {
@@ -448,11 +458,7 @@ fn lss_samples(
 
 /// Switch state selective with `address`, timed from the last request (43h) to the 44h answer;
 /// back to waiting first, so that each repetition switches again.
-fn selective(
-    ctx: &mut Ctx<'_, '_>,
-    address: &Address,
-    timeout: Duration,
-) -> Result<Option<(f64, canopener_can::CanFrame)>, Stop> {
+fn selective(ctx: &mut Ctx<'_, '_>, address: &Address, timeout: Duration) -> Timed {
     switch_global(ctx, false)?;
     let parts = address.parts();
     for (cs, part) in (0x40u8..0x43).zip(parts) {

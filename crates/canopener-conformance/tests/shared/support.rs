@@ -80,6 +80,7 @@ pub(crate) fn run_rewriting(
 
 /// [`run_at`], cancelling the link (as Ctrl-C does) when the tester receives a frame `on_frame`
 /// accepts: in the middle of a test.
+#[allow(dead_code)]
 pub(crate) fn run_cancelled_on(name: &str, only: &[&str], on_frame: &dyn Fn(&CanFrame) -> bool) -> Report {
     run_bytes(
         &Setup::default(),
@@ -100,6 +101,7 @@ fn vendored(name: &str) -> std::path::PathBuf {
 
 /// Runs every test against a simulated device from a file only the extended corpus holds (the
 /// vendors whose licences forbid redistribution); `None` without an extended corpus.
+#[allow(dead_code)]
 pub(crate) fn run_extended(name: &str) -> Option<Report> {
     let path = canopener_testkit::corpus::extended_file(canopener_testkit::corpus::Kind::Eds, name)?;
     Some(run_bytes(
