@@ -162,20 +162,18 @@ impl Criterion {
         max.map(|max| Criterion {
             low: None,
             high: Some(max),
-            name: format!("{} = {max} ms", ctx.performance().criteria.origin(key, false)),
+            name: format!("{} = {max} ms", ctx.performance().criteria.origin(key)),
         })
     }
 
     /// `nominal` ±`percent` %.
     fn around(ctx: &Ctx<'_, '_>, key: &str, nominal: f64, percent: f64) -> Criterion {
-        let is_default =
-            percent == criteria::DEFAULT_DEVIATION_PERCENT && ctx.performance().criteria.source.is_none();
         Criterion {
             low: Some(nominal * (1.0 - percent / 100.0)),
             high: Some(nominal * (1.0 + percent / 100.0)),
             name: format!(
                 "{} ±{percent} % of {nominal} ms",
-                ctx.performance().criteria.origin(key, is_default)
+                ctx.performance().criteria.origin(key)
             ),
         }
     }

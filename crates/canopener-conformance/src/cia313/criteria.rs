@@ -29,6 +29,8 @@ use serde::Deserialize;
 pub struct Criteria {
     /// Where they come from: `None` for the defaults, else the file as the user named it.
     pub source: Option<String>,
+    /// The keys the file set (`sdo.read_max_ms`); every other criterion is its default.
+    pub set: Vec<&'static str>,
     /// The largest deviation of a heartbeat period from 1017h, in percent.
     pub heartbeat_deviation_percent: f64,
     /// The largest deviation of an event-driven TPDO's period from its event timer, in percent.
@@ -74,6 +76,7 @@ impl Criteria {
     /// The documented defaults: ±5 % for heartbeat and event timer, no response-time limits.
     pub const DEFAULT: Criteria = Criteria {
         source: None,
+        set: Vec::new(),
         heartbeat_deviation_percent: DEFAULT_DEVIATION_PERCENT,
         event_timer_deviation_percent: DEFAULT_DEVIATION_PERCENT,
         sync_response_max_ms: None,
@@ -103,7 +106,8 @@ impl Criteria {
         let heartbeat = raw.heartbeat.unwrap_or_default();
         let pdo = raw.pdo.unwrap_or_default();
         let sdo = raw.sdo.unwrap_or_default();
-        let fields: [(&str, Option<Spanned>, Slot<'_>); 8] = [
+        let mut set = Vec::new();
+        let fields: [(&'static str, Option<Spanned>, Slot<'_>); 8] = [
             (
                 "heartbeat.deviation_percent",
                 heartbeat.deviation_percent,
@@ -152,6 +156,7 @@ impl Criteria {
             match slot {
                 Slot::Percent(target) if number.is_finite() && number > 0.0 && number < 100.0 => {
                     *target = number;
+                    set.push(key);
                 }
                 Slot::Percent(_) => {
                     return Err(at(
@@ -159,7 +164,10 @@ impl Criteria {
                         format!("{key} = {number}: give a percentage above 0 and below 100, e.g. 5.0"),
                     ));
                 }
-                Slot::Limit(target) if number.is_finite() && number > 0.0 => *target = Some(number),
+                Slot::Limit(target) if number.is_finite() && number > 0.0 => {
+                    *target = Some(number);
+                    set.push(key);
+                }
                 Slot::Limit(_) => {
                     return Err(at(
                         span,
@@ -168,13 +176,15 @@ impl Criteria {
                 }
             }
         }
+        criteria.set = set;
         Ok(criteria)
     }
 
-    /// `heartbeat.deviation_percent from crit.toml` or `... (default)`: who set a criterion.
-    pub fn origin(&self, key: &str, is_default: bool) -> String {
-        match (&self.source, is_default) {
-            (Some(file), false) => format!("{key} from {file}"),
+    /// `sdo.read_max_ms from limits.toml` or `heartbeat.deviation_percent (documented default)`: who
+    /// set the criterion `key`.
+    pub fn origin(&self, key: &str) -> String {
+        match &self.source {
+            Some(file) if self.set.contains(&key) => format!("{key} from {file}"),
             _ => format!("{key} (documented default)"),
         }
     }
@@ -270,6 +280,10 @@ mod tests {
         assert_eq!(criteria.event_timer_deviation_percent, 5.0);
         assert_eq!(criteria.sdo_read_max_ms, None);
         assert_eq!(criteria.source.as_deref(), Some("c.toml"));
+        assert_eq!(
+            criteria.origin("heartbeat.deviation_percent"),
+            "heartbeat.deviation_percent (documented default)"
+        );
     }
 
     #[test]

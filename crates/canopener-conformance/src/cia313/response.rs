@@ -424,7 +424,7 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let judged = match max {
         Some(max) => format!(
             "all within ≤ {max} ms ({})",
-            ctx.performance().criteria.origin("lss.response_max_ms", false)
+            ctx.performance().criteria.origin("lss.response_max_ms")
         ),
         None => "measured, no criterion".to_owned(),
     };
