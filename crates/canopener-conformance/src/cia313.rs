@@ -21,6 +21,8 @@ use std::time::Duration;
 use canopener_can::{CanFrame, CanId, Instant};
 use canopener_wire::NmtCommand;
 
+use canopener_runtime::link::Timestamps;
+
 use crate::catalogue::TestDef;
 use crate::context::{Ctx, Reply};
 use crate::finding::{Evidence, Finding, Stop};
@@ -298,10 +300,14 @@ fn stats_text(measurement: &Measurement) -> String {
     }
 }
 
-/// `; stamps: virtual, 0.001 µs`, with a warning when they are too coarse for `criterion`: a
-/// resolution above a tenth of the tolerance cannot tell a pass from a fail near the bound.
+/// `; stamps: virtual, 0.001 µs`, with a warning when they are too coarse for `criterion`.
 fn stamps_note(ctx: &Ctx<'_, '_>, criterion: Option<&Criterion>) -> String {
-    let stamps = ctx.timestamps();
+    note_on(ctx.timestamps(), criterion)
+}
+
+/// [`stamps_note`] for `stamps`: a resolution above a tenth of the criterion's tolerance cannot tell
+/// a pass from a fail near the bound.
+fn note_on(stamps: Timestamps, criterion: Option<&Criterion>) -> String {
     let resolution_ms = stamps.resolution.as_secs_f64() * 1000.0;
     let mut note = format!(
         "; stamps: {}, {} µs",
@@ -364,4 +370,64 @@ fn standard_id(frame: &CanFrame) -> Option<u16> {
 /// A reply that is no completed transfer, as a finding that cannot measure anything.
 fn unusable(what: &str, reply: &Reply) -> Finding {
     Finding::inconclusive(format!("{what} got {}: nothing to measure", reply.describe()))
+}
+
+#[cfg(test)]
+mod tests {
+    use canopener_runtime::link::TimestampSource;
+
+    use super::*;
+
+    fn stamps(source: TimestampSource, micros: u64) -> Timestamps {
+        Timestamps {
+            source,
+            resolution: Duration::from_micros(micros),
+        }
+    }
+
+    #[test]
+    fn stamps_too_coarse_for_a_criterion_are_warned_about() {
+        let heartbeat = Criterion {
+            low: Some(95.0),
+            high: Some(105.0),
+            name: "heartbeat.deviation_percent (documented default) ±5 % of 100 ms".to_owned(),
+        };
+        let fine = note_on(stamps(TimestampSource::Hub, 1), Some(&heartbeat));
+        assert_eq!(fine, "; stamps: hub, 1 µs");
+        // 1 ms stamps against a ±5 ms band: a tenth of the tolerance is 0.5 ms.
+        let coarse = note_on(stamps(TimestampSource::Host, 1000), Some(&heartbeat));
+        assert!(
+            coarse.starts_with("; stamps: host, 1000 µs; WARNING: a resolution of 1 ms"),
+            "{coarse}"
+        );
+        assert!(coarse.contains("(tolerance 5.000 ms)"), "{coarse}");
+        let sdo = Criterion {
+            low: None,
+            high: Some(0.5),
+            name: "sdo.read_max_ms from limits.toml = 0.5 ms".to_owned(),
+        };
+        assert!(note_on(stamps(TimestampSource::Kernel, 100), Some(&sdo)).contains("WARNING"));
+        assert!(!note_on(stamps(TimestampSource::Kernel, 10), Some(&sdo)).contains("WARNING"));
+        // Without a criterion there is nothing to be too coarse for.
+        assert!(!note_on(stamps(TimestampSource::Host, 1000), None).contains("WARNING"));
+    }
+
+    #[test]
+    fn a_criterion_admits_exactly_its_range() {
+        let band = Criterion {
+            low: Some(95.0),
+            high: Some(105.0),
+            name: String::new(),
+        };
+        assert!(band.admits(95.0) && band.admits(105.0) && band.admits(100.0));
+        assert!(!band.admits(94.999) && !band.admits(105.001));
+        assert_eq!(band.range_text(), "95.000–105.000 ms");
+        let max = Criterion {
+            low: None,
+            high: Some(2.0),
+            name: String::new(),
+        };
+        assert!(max.admits(0.0) && max.admits(2.0) && !max.admits(2.0001));
+        assert_eq!(max.range_text(), "≤ 2.000 ms");
+    }
 }
