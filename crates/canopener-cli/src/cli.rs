@@ -94,7 +94,7 @@ or decoded as an anomaly), 6 otherwise, 5 a file could not be written, 130 inter
 Logs boot-up, NMT state changes, SDO writes and aborts, EMCY and LSS (stderr, or JSON lines on stdout).
 Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error.")]
     Sim(SimArgs),
-    /// Test a device's conformance (CiA 301 device test with CCT coverage, EDS check): verdicts with evidence.
+    /// Test a device's conformance (CiA 301 device test with CCT coverage, CiA 401, LSS, CiA 313 performance, EDS check): verdicts with evidence.
     #[command(after_help = "Examples:
   canopener test --bus socketcan:can0 --node 5 --eds device.eds
   canopener test --bus socketcand://127.0.0.1:29536/can0 --node 0x20 --eds io.eds --format json -o report.json
@@ -103,9 +103,10 @@ Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a 
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --tag nmt --log logs/  # candump per test
   canopener test --list --suite cia301                 # ids, titles, CiA/CCT references, preconditions
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --suite cia305  # LSS; device alone on the bus
+  canopener test --bus socketcan:can0 --node 5 --eds device.eds --suite cia313 --criteria limits.toml --repetitions 200
 Each test resets what it changed and leaves the device pre-operational; the run starts with NMT reset node.
 Exit status: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
-answer at all, 2 bad arguments, 3 unreadable EDS, 4 bus error, 130 interrupted (partial report written).")]
+answer at all, 2 bad arguments, 3 unreadable EDS or criteria file, 4 bus error, 130 interrupted (partial report written).")]
     Test(TestArgs),
     /// Read and write objects of a device over SDO (expedited, segmented, block).
     #[command(subcommand)]

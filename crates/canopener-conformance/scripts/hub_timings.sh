@@ -23,7 +23,9 @@ for eds in \
     sleep 1
     start=$(date +%s.%N)
     code=0
-    "$bin" test --bus "$bus" --node 5 --eds "$root/corpus/eds/$eds" --format json -o "$work/report.json" || code=$?
+    # The cia313 performance suite judges the host's timing, not the device's: docs/conformance.md
+    # (CiA 313) gives its own figures.
+    "$bin" test --bus "$bus" --node 5 --eds "$root/corpus/eds/$eds" --skip cia313 --format json -o "$work/report.json" || code=$?
     end=$(date +%s.%N)
     kill $sim
     wait $sim 2>/dev/null || true

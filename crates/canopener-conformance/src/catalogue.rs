@@ -50,10 +50,11 @@ pub const GROUPS: &[(&str, &str)] = &[
     ("nmt", "NMT State and Transition Test"),
     ("io", "CiA 401 Generic I/O Test"),
     ("lss", "LSS Test (CiA 305)"),
+    ("perf", "Performance Test (CiA 313)"),
 ];
 
 /// The suites.
-pub const SUITES: &[&str] = &["eds", "cia301", "cia401", "cia305"];
+pub const SUITES: &[&str] = &["eds", "cia301", "cia401", "cia305", "cia313"];
 
 /// Every test, in catalogue order.
 pub fn catalogue() -> Vec<TestDef> {
@@ -71,6 +72,7 @@ pub fn catalogue() -> Vec<TestDef> {
     all.extend(crate::cia301::nmt::tests());
     all.extend(crate::cia401::tests());
     all.extend(crate::cia305::tests());
+    all.extend(crate::cia313::tests());
     all
 }
 

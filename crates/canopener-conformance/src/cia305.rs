@@ -137,7 +137,7 @@ pub fn tests() -> Vec<TestDef> {
 }
 
 /// The device's LSS address, or the verdict when LSS does not apply or cannot be tested.
-fn prepare(ctx: &mut Ctx<'_, '_>) -> Result<Result<Address, Finding>, Stop> {
+pub(crate) fn prepare(ctx: &mut Ctx<'_, '_>) -> Result<Result<Address, Finding>, Stop> {
     if ctx.model().lss_supported == Some(false) {
         return Ok(Err(Finding::not_applicable("the EDS says LSS_Supported=0")));
     }
@@ -616,7 +616,7 @@ fn fastscan_unconfigured(lss: &mut Lss<'_, '_, '_>, address: &Address) -> Outcom
 }
 
 /// The frame on 7E4h with command specifier `cs`.
-fn is_lss_answer(frame: &CanFrame, cs: u8) -> bool {
+pub(crate) fn is_lss_answer(frame: &CanFrame, cs: u8) -> bool {
     frame.id() == services::lss_response_id() && !frame.is_remote() && frame.data().first() == Some(&cs)
 }
 

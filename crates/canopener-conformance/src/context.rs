@@ -7,11 +7,12 @@ use std::time::Duration;
 use canopener_can::{CanFrame, CanId, Instant, StandardId};
 use canopener_master::nmt_master::NmtTarget;
 use canopener_master::sdo_client::{DownloadMode, SdoTransferError, UploadMode};
-use canopener_runtime::link::Link;
+use canopener_runtime::link::{Link, Timestamps};
 use canopener_runtime::nmt_command;
 use canopener_runtime::sdo_session::{SdoError, SdoSession};
 use canopener_wire::{NmtCommand, NodeId};
 
+use crate::cia313::Performance;
 use crate::device_model::DeviceModel;
 use crate::finding::Stop;
 use crate::model::{Direction, Measurement};
@@ -96,7 +97,11 @@ pub struct Ctx<'r, 'l> {
     eds_errors: Option<&'r [String]>,
     restores: Vec<Restore>,
     measurements: BTreeMap<String, Measurement>,
+    performance: &'r Performance,
 }
+
+/// The settings of a run that does not choose its own.
+static DEFAULT_PERFORMANCE: Performance = Performance::DEFAULT;
 
 impl std::fmt::Debug for Ctx<'_, '_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -121,7 +126,24 @@ impl<'r, 'l> Ctx<'r, 'l> {
             eds_errors,
             restores: Vec::new(),
             measurements: BTreeMap::new(),
+            performance: &DEFAULT_PERFORMANCE,
         }
+    }
+
+    /// The same context with the performance suite's criteria and repetitions.
+    pub fn with_performance(mut self, performance: &'r Performance) -> Ctx<'r, 'l> {
+        self.performance = performance;
+        self
+    }
+
+    /// The performance suite's criteria and repetitions.
+    pub fn performance(&self) -> &'r Performance {
+        self.performance
+    }
+
+    /// Who stamps received frames, and how finely.
+    pub fn timestamps(&self) -> Timestamps {
+        self.link().timestamps()
     }
 
     /// What the EDS says.

@@ -7,6 +7,8 @@
 //! - [`cia301`]: the CiA 301 device test (designed from CiA 301, covering the CCT's cases; see
 //!   `docs/conformance.md` for the mapping and what is not covered yet).
 //! - [`cia305`]: the CiA 305 (LSS) device test.
+//! - [`cia313`]: the CiA 313-style performance test (response times, cycle times, heartbeat
+//!   deviation) judged by [`cia313::criteria`].
 //! - [`runner`]: runs a selection against one node, keeps each test's telegrams, restores what a test
 //!   changed and leaves the device in pre-operational between tests.
 //! - [`model`]: the report every suite fills (verdicts, telegrams, measurements with raw samples and
@@ -22,6 +24,7 @@
 pub mod catalogue;
 pub mod cia301;
 pub mod cia305;
+pub mod cia313;
 pub mod cia401;
 pub mod context;
 pub mod demo;

@@ -10,6 +10,7 @@ use canopener_runtime::sdo_session::SdoSession;
 use canopener_wire::{Decoder, NmtCommand};
 
 use crate::catalogue::TestDef;
+use crate::cia313::Performance;
 use crate::context::{Ctx, Reply};
 use crate::device_model::DeviceModel;
 use crate::finding::{Finding, Stop};
@@ -69,10 +70,22 @@ pub struct Outcome {
     pub silent: bool,
 }
 
-/// Runs `tests` against `spec.node` on `link` (see the [module docs](self)).
+/// Runs `tests` against `spec.node` on `link` (see the [module docs](self)), the performance tests
+/// with the documented default criteria and repetitions.
 pub fn run(
     link: &mut dyn Link,
     spec: &RunSpec<'_>,
+    tests: &[TestDef],
+    on_progress: impl FnMut(Progress<'_>),
+) -> Result<Outcome, RunError> {
+    run_with(link, spec, &Performance::DEFAULT, tests, on_progress)
+}
+
+/// [`run`] with the performance tests' criteria and repetitions.
+pub fn run_with(
+    link: &mut dyn Link,
+    spec: &RunSpec<'_>,
+    performance: &Performance,
     tests: &[TestDef],
     mut on_progress: impl FnMut(Progress<'_>),
 ) -> Result<Outcome, RunError> {
@@ -122,7 +135,7 @@ pub fn run(
                 current: Some(test),
             });
             let test_start = recorder.now();
-            let (finding, measurements, left, stopped) = run_one(&mut recorder, spec, test)?;
+            let (finding, measurements, left, stopped) = run_one(&mut recorder, spec, performance, test)?;
             report.left_modified.extend(left);
             let telegrams = telegrams(recorder.since(0), start, &mut decoder);
             recorder.clear();
@@ -211,9 +224,14 @@ type OneResult = (
     bool,
 );
 
-fn run_one(recorder: &mut Recorder<'_>, spec: &RunSpec<'_>, test: &TestDef) -> Result<OneResult, RunError> {
+fn run_one(
+    recorder: &mut Recorder<'_>,
+    spec: &RunSpec<'_>,
+    performance: &Performance,
+    test: &TestDef,
+) -> Result<OneResult, RunError> {
     let session = SdoSession::new(&mut *recorder, spec.node, spec.sdo_timeout)?;
-    let mut ctx = Ctx::new(session, spec.model, spec.eds_errors.as_deref());
+    let mut ctx = Ctx::new(session, spec.model, spec.eds_errors.as_deref()).with_performance(performance);
     let (finding, mut stopped) = match (test.run)(&mut ctx) {
         Ok(finding) => (finding, false),
         Err(Stop::Cancelled) => (

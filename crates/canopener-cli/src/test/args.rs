@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::{BusArg, parse_duration, parse_node_id};
+use crate::args::{BusArg, parse_duration, parse_in_range, parse_node_id};
 
 /// How long the device may take to answer one SDO request unless `--timeout` says otherwise (CiA 301
 /// leaves it to the implementation).
@@ -35,8 +35,8 @@ pub(crate) struct TestArgs {
     /// The device's EDS/DCF (or XDD/XDC): preconditions and expected values come from it.
     #[arg(long, value_name = "FILE", required_unless_present = "list")]
     pub(crate) eds: Option<PathBuf>,
-    /// Which suite: cia301 (the device test), cia401 (generic I/O), cia305 (LSS), eds (the EDS check
-    /// only) or all.
+    /// Which suite: cia301 (the device test), cia401 (generic I/O), cia305 (LSS), cia313
+    /// (performance), eds (the EDS check only) or all.
     #[arg(long, value_name = "SUITE", default_value = "all")]
     pub(crate) suite: String,
     /// Run only this test id, or every test under an id prefix (cia301.sdo); repeatable.
@@ -60,6 +60,16 @@ pub(crate) struct TestArgs {
     /// How long to wait for each SDO answer (e.g. 500ms, 2s).
     #[arg(long, default_value = DEFAULT_TIMEOUT, value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) timeout: Duration,
+    /// Pass criteria of the cia313 performance tests (TOML, see docs/conformance.md); without it the
+    /// documented defaults apply (heartbeat and event-timer periods ±5 %, response times measured
+    /// without a limit).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) criteria: Option<PathBuf>,
+    /// How often the cia313 tests measure each response time (SDO, RTR, each LSS service; boot-up
+    /// at most 10).
+    #[arg(long, default_value = "1000", value_name = "N",
+          value_parser = |t: &str| parse_in_range(t, 1, 1_000_000, "--repetitions").map(|v| v as usize))]
+    pub(crate) repetitions: usize,
     /// List the tests (ids, titles, CiA and CCT references, preconditions) instead of running them.
     #[arg(long)]
     pub(crate) list: bool,

@@ -1,13 +1,14 @@
 //! `canopener test`: loads the EDS, opens the bus, runs the selected tests with a progress bar, writes
 //! the report (human, JSON, JUnit or HTML) and the per-test candump logs, and ends with the documented exit
 //! code: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
-//! answer at all, 2 usage, 3 an unreadable EDS, 130 interrupted (the partial report is still written).
+//! answer at all, 2 usage, 3 an unreadable EDS or criteria file, 130 interrupted (the partial report is still written).
 
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::Path;
 
 use canopener_conformance::catalogue::{Selection, TestDef, catalogue};
+use canopener_conformance::cia313::{Criteria, Performance};
 use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::{Report, rfc3339_utc};
 use canopener_conformance::render::{candump, html, human, junit};
@@ -50,6 +51,7 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
             out.display()
         )));
     }
+    let performance = performance(&args)?;
     let description = canopener_runtime::description::read_description(eds_path)
         .map_err(|err| CliError::InvalidInput(err.to_string()))?;
     let eds_errors = eds_errors(eds_path)?;
@@ -82,7 +84,7 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
         cancel: stop.as_ref().map(StopFlag::token),
     };
     let bar = progress_bar(tests.len());
-    let outcome = runner::run(link.as_mut(), &spec, &tests, |progress| {
+    let outcome = runner::run_with(link.as_mut(), &spec, &performance, &tests, |progress| {
         bar.set_position(progress.done as u64);
         if let Some(test) = progress.current {
             bar.set_message(test.id);
@@ -119,6 +121,29 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
     } else {
         Err(CliError::Exit(exit_code::CHECK_FAILED))
     }
+}
+
+/// The cia313 criteria (`--criteria`, else the defaults) and repetitions; a criteria file that
+/// cannot be read or used is exit 3 with file:line.
+fn performance(args: &TestArgs) -> CliResult<Performance> {
+    let criteria = match &args.criteria {
+        Some(path) => {
+            let bytes = canopener_runtime::files::read(path).map_err(|err| CliError::read_file(path, err))?;
+            let text = String::from_utf8(bytes).map_err(|_| {
+                CliError::InvalidInput(format!(
+                    "{}: not UTF-8 text; a criteria file is TOML",
+                    path.display()
+                ))
+            })?;
+            Criteria::parse(&text, &path.display().to_string())
+                .map_err(|err| CliError::InvalidInput(err.to_string()))?
+        }
+        None => Criteria::default(),
+    };
+    Ok(Performance {
+        criteria,
+        repetitions: args.repetitions,
+    })
 }
 
 /// The errors of canopener's EDS checks for an EDS/DCF file; `None` for XDD/XDC and JSON forms.

@@ -24,6 +24,7 @@ mod net;
 mod net_browser;
 mod net_system;
 mod sim;
+mod test_criteria;
 mod test_html;
 
 use std::process::Output;

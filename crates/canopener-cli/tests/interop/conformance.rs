@@ -90,6 +90,9 @@ fn a_clean_simulated_device_passes_and_its_logs_decode_and_replay() {
         "cia301.pdo.12",
         "--skip",
         "cia301.sync.4",
+        // The performance suite through the hub has its own test below (heartbeat deviation).
+        "--skip",
+        "cia313",
     ]);
     let report = report(&out);
     let undecided: Vec<String> = report["tests"]
@@ -321,9 +324,12 @@ fn a_foreign_device_runs_to_the_end_and_names_its_real_gaps() {
         "-o",
         out.to_str().unwrap(),
         // A Python process on a loaded, shared host is no real-time device: its heartbeat jitter
-        // would measure the host, not python canopen.
+        // would measure the host, not python canopen. For the same reason the performance suite
+        // (cia313) is not judged here.
         "--skip",
         "cia301.ec.1",
+        "--skip",
+        "cia313",
     ]);
     assert_eq!(code, Some(6), "stderr: {stderr}");
     let report = report(&out);
@@ -418,6 +424,123 @@ fn python_local_node_has_no_cia401_behaviour_and_never_passes_for_it() {
                 assert_eq!(verdict, "inconclusive", "{id}: {reason}");
                 assert!(reason.contains("no factory test registers"), "{id}: {reason}");
             }
+        }
+    }
+}
+
+/// `canopener test --only cia313.perf.8` against `canopener sim` (with `fault`) through a fresh hub:
+/// the test's JSON report entry.
+fn heartbeat_deviation(fault: Option<&str>) -> Value {
+    let hub = HubProc::start();
+    let extra: Vec<&str> = fault.map_or(Vec::new(), |f| vec!["--fault", f]);
+    let _device = sim(&hub, "can0", "5", &extra);
+    let dir = ScratchDir::new("conformance-heartbeat");
+    let out = dir.join("report.json");
+    let bus = hub.spec("can0");
+    let eds = corpus::eds(SIM_EDS);
+    let (code, _, stderr, _) = run_test(&[
+        "--bus",
+        &bus,
+        "--node",
+        "5",
+        "--eds",
+        eds.to_str().unwrap(),
+        "--only",
+        "cia313.perf.8",
+        "--format",
+        "json",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let report = report(&out);
+    assert_eq!(report["bus"]["timestamps"], "hub");
+    let test = report["tests"][0].clone();
+    let expected = if test["verdict"] == "pass" { 0 } else { 6 };
+    assert_eq!(code, Some(expected), "stderr: {stderr}");
+    let stats = &test["measurements"]["heartbeat_period"]["statistics"];
+    eprintln!(
+        "heartbeat through the hub, fault {fault:?}: {} (min {} / p50 {} / max {} ms)",
+        test["verdict"], stats["min"], stats["p50"], stats["max"]
+    );
+    test
+}
+
+/// How late this host wakes a sleeping thread: the 99th percentile of 100 sleeps of 20 ms, in ms. The
+/// simulated device and the hub are such threads: their heartbeats are sent and stamped that late.
+fn host_wakeup_lateness_p99_ms() -> f64 {
+    let mut late: Vec<f64> = (0..100)
+        .map(|_| {
+            let start = Instant::now();
+            std::thread::sleep(Duration::from_millis(20));
+            (start.elapsed().as_secs_f64() - 0.020) * 1000.0
+        })
+        .collect();
+    late.sort_by(f64::total_cmp);
+    late[98]
+}
+
+/// The heartbeat producer deviation (thesis §4.2.2: 100 periods at 100 ms, ±5 %) on the wall clock,
+/// through the hub, with the hub's stamps. The criterion stays ±5 % (5 ms). The simulated device and
+/// the hub are threads on this shared 2-core VM: at load averages of 7–10 a plain 50 ms sleep here
+/// overshoots by 4 ms at p90 and 10 ms at p99 (even at nice -15), so a period of a correct producer can
+/// leave the band by the host's doing. The clean device must therefore pass in one of three runs; only
+/// when it passes none, and this host's own wake-up lateness (p99) is measured above half the
+/// tolerance (2.5 ms), is the clean verdict left unjudged, and the test says so on stderr. A quiet
+/// host that fails the clean device three times fails the test. The faults must always fail: their
+/// periods (1 ms apart, or 40 % = 40 ms late) are far outside any such noise.
+#[test]
+fn the_heartbeat_deviation_through_the_hub_passes_clean_and_fails_with_heartbeat_faults() {
+    let runs: Vec<Value> = (0..3)
+        .scan(false, |passed, _| {
+            (!*passed).then(|| {
+                let test = heartbeat_deviation(None);
+                *passed = test["verdict"] == "pass";
+                test
+            })
+        })
+        .collect();
+    match runs.iter().find(|test| test["verdict"] == "pass") {
+        Some(clean) => assert!(
+            clean["reason"]
+                .as_str()
+                .is_some_and(|r| r.contains("all 100 within 95.000–105.000 ms")),
+            "{clean}"
+        ),
+        None => {
+            let lateness = host_wakeup_lateness_p99_ms();
+            assert!(
+                lateness > 2.5,
+                "the clean simulated device failed three runs on a host that wakes threads within {lateness:.2} ms \
+                 (p99): {:#?}",
+                runs.iter().map(|t| t["analysis"].clone()).collect::<Vec<_>>()
+            );
+            eprintln!(
+                "NOT JUDGED: the clean device's heartbeat through the hub: this host wakes sleeping threads up to \
+                 {lateness:.1} ms late (p99), more than half the ±5 ms tolerance; the three runs' figures are above"
+            );
+        }
+    }
+    for (fault, outside) in [("heartbeat-too-fast", 2.0), ("heartbeat-jitter", 130.0)] {
+        let test = heartbeat_deviation(Some(fault));
+        assert_eq!(test["verdict"], "fail", "{fault}: {test}");
+        let reason = test["reason"].as_str().unwrap_or_default();
+        assert!(reason.contains("outside 95.000–105.000 ms"), "{fault}: {reason}");
+        assert!(
+            reason.contains("heartbeat.deviation_percent (documented default) ±5 %"),
+            "{fault}: {reason}"
+        );
+        let analysis = test["analysis"].as_str().unwrap_or_default();
+        assert!(analysis.contains("Answer:   min "), "{fault}: {analysis}");
+        let stats = &test["measurements"]["heartbeat_period"]["statistics"];
+        let limits = &test["measurements"]["heartbeat_period"]["limits"];
+        assert_eq!(
+            (limits["low"].as_f64(), limits["high"].as_f64()),
+            (Some(95.0), Some(105.0))
+        );
+        // Too fast: a copy 1 ms after each heartbeat; jitter: every second one 40 ms late.
+        match fault {
+            "heartbeat-too-fast" => assert!(stats["min"].as_f64().is_some_and(|m| m < outside), "{stats}"),
+            _ => assert!(stats["max"].as_f64().is_some_and(|m| m > outside), "{stats}"),
         }
     }
 }

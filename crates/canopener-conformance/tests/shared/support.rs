@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use canopener_can::{CanFrame, Instant};
 use canopener_conformance::catalogue::{Selection, catalogue};
+use canopener_conformance::cia313::Performance;
 use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::Report;
 use canopener_conformance::runner::{self, RunSpec};
@@ -39,6 +40,7 @@ pub(crate) fn run_cancelled_at(
     cancel_at: Option<&str>,
 ) -> Report {
     run_bytes(
+        &Setup::default(),
         &read(&vendored(name)),
         name,
         node,
@@ -63,13 +65,25 @@ pub(crate) fn run_rewriting(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    run_bytes(&read(path), &name, NODE, &[], only, None, &|_| false, rewrite)
+    run_bytes(
+        &Setup::default(),
+        &read(path),
+        &name,
+        NODE,
+        &[],
+        only,
+        None,
+        &|_| false,
+        rewrite,
+    )
 }
 
 /// [`run_at`], cancelling the link (as Ctrl-C does) when the tester receives a frame `on_frame`
 /// accepts: in the middle of a test.
+#[allow(dead_code)]
 pub(crate) fn run_cancelled_on(name: &str, only: &[&str], on_frame: &dyn Fn(&CanFrame) -> bool) -> Report {
     run_bytes(
+        &Setup::default(),
         &read(&vendored(name)),
         name,
         NODE,
@@ -87,9 +101,11 @@ fn vendored(name: &str) -> std::path::PathBuf {
 
 /// Runs every test against a simulated device from a file only the extended corpus holds (the
 /// vendors whose licences forbid redistribution); `None` without an extended corpus.
+#[allow(dead_code)]
 pub(crate) fn run_extended(name: &str) -> Option<Report> {
     let path = canopener_testkit::corpus::extended_file(canopener_testkit::corpus::Kind::Eds, name)?;
     Some(run_bytes(
+        &Setup::default(),
         &read(&path),
         name,
         NODE,
@@ -110,11 +126,59 @@ fn read(path: &std::path::Path) -> Vec<u8> {
 /// file edited by the test) on node [`NODE`].
 #[allow(dead_code)]
 pub(crate) fn run_edited(bytes: &[u8], name: &str, faults: &[Fault], only: &[&str]) -> Report {
-    run_bytes(bytes, name, NODE, faults, only, None, &|_| false, &|f, _| *f)
+    run_bytes(
+        &Setup::default(),
+        bytes,
+        name,
+        NODE,
+        faults,
+        only,
+        None,
+        &|_| false,
+        &|f, _| *f,
+    )
+}
+
+/// Runs the tests `only` selects against a simulated device from the vendored EDS `name` with
+/// `faults`, as `setup` says (bus timing, SDO timeout, performance criteria).
+#[allow(dead_code)]
+pub(crate) fn run_setup(setup: &Setup, name: &str, faults: &[Fault], only: &[&str]) -> Report {
+    run_bytes(
+        setup,
+        &read(&vendored(name)),
+        name,
+        NODE,
+        faults,
+        only,
+        None,
+        &|_| false,
+        &|f, _| *f,
+    )
+}
+
+/// How a run is set up besides its device and selection.
+pub(crate) struct Setup {
+    /// The simulated bus (its devices are added by the run).
+    pub(crate) simulation: Simulation,
+    /// The tester's SDO timeout.
+    pub(crate) sdo_timeout: Duration,
+    /// The performance suite's criteria and repetitions.
+    pub(crate) performance: Performance,
+}
+
+impl Default for Setup {
+    fn default() -> Setup {
+        Setup {
+            simulation: Simulation::ideal(),
+            sdo_timeout: Duration::from_millis(500),
+            performance: Performance::default(),
+        }
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
 fn run_bytes(
+    setup: &Setup,
     bytes: &[u8],
     name: &str,
     node: u8,
@@ -129,7 +193,9 @@ fn run_bytes(
     let eds_errors = Some(canopener_conformance::cia301::eds::errors(&loaded, Some(name)));
     let eds = loaded.eds;
     let model = DeviceModel::new(&eds, node);
-    let bus = Simulation::ideal()
+    let bus = setup
+        .simulation
+        .clone()
         .device(&eds, node)
         .faults(faults.iter().copied())
         .cancel(cancel.clone())
@@ -150,13 +216,13 @@ fn run_bytes(
         node,
         model: &model,
         eds: name.to_owned(),
-        bus: "virtual (ideal)".to_owned(),
+        bus: bus.describe(),
         started: STARTED.to_owned(),
-        sdo_timeout: Duration::from_millis(500),
+        sdo_timeout: setup.sdo_timeout,
         eds_errors,
         cancel: Some(cancel.clone()),
     };
-    runner::run(&mut bus, &spec, &tests, |progress| {
+    runner::run_with(&mut bus, &spec, &setup.performance, &tests, |progress| {
         if progress.current.is_some_and(|t| Some(t.id) == cancel_at) {
             cancel.cancel();
         }

@@ -22,6 +22,14 @@ use crate::simulator::event_log::LogEntry;
 /// guard against two devices answering each other forever; the cores do not, but the bus must not hang).
 pub const MAX_FRAMES_PER_ROUND: usize = 10_000;
 
+/// How long before a device's deadline the loop stops waiting on the transport's receive timeout
+/// (longer than the coarsest kernel tick, 10 ms at HZ=100) and polls instead.
+const PRECISE_WINDOW: Duration = Duration::from_millis(12);
+
+/// How long the loop sleeps between polls within [`PRECISE_WINDOW`]: the most a timer fires late or
+/// a frame waits there.
+const PRECISE_SLICE: Duration = Duration::from_micros(200);
+
 /// What a running [`SimHost`] reports.
 #[derive(Debug, Clone, PartialEq)]
 pub enum HostReport {
@@ -121,7 +129,33 @@ impl SimHost {
             Some(due) => due.saturating_duration_since(WallClock::now()).min(MAX_WAIT),
             None => MAX_WAIT,
         };
-        match self.bus.recv(wait) {
+        // A receive timeout is rounded up to the kernel's tick (4 or 10 ms): waiting for a deadline
+        // with it makes heartbeats and event timers late by up to a tick. Far from the deadline the
+        // receive stops a window early; within the window the loop polls and sleeps in short slices,
+        // which a sleep does precisely, so a timer fires within a slice of its deadline and a frame
+        // waits at most one slice.
+        let wait = if wait > PRECISE_WINDOW {
+            wait - PRECISE_WINDOW
+        } else {
+            match self.bus.recv(Duration::ZERO) {
+                Ok(None) => {
+                    std::thread::sleep(wait.min(PRECISE_SLICE));
+                    return Ok(());
+                }
+                received => return self.received(received, on_report),
+            }
+        };
+        let received = self.bus.recv(wait);
+        self.received(received, on_report)
+    }
+
+    /// Feeds what one receive brought to the devices.
+    fn received<E: From<SimError>>(
+        &mut self,
+        received: Result<Option<canopener_transport::Received>, TransportError>,
+        on_report: &mut impl FnMut(HostReport) -> Result<(), E>,
+    ) -> Result<(), E> {
+        match received {
             Ok(Some(received)) => {
                 let now = WallClock::now();
                 for sim in &mut self.devices {

@@ -1,0 +1,480 @@
+//! Response times: SDO read and write of a type-I object, TPDO on RTR, boot-up after reset node, and
+//! the confirmed LSS services.
+
+use std::time::Duration;
+
+use canopener_wire::NmtCommand;
+
+use super::{BOOT_UPS, Criterion, Judged, Outgoing, Timed, exchange, judge, standard_id, unusable};
+use crate::cia301::helpers::{back_to_pre_operational, download_text, u32_of, upload_text};
+use crate::cia301::nmt::BOOT_UP_WAIT;
+use crate::cia305::services::Address;
+use crate::context::{Ctx, Reply};
+use crate::device_model::PdoDirection;
+use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::requirements as req;
+
+/// How long a TPDO may take to answer a remote frame before the test calls it missing (as
+/// `cia301.pdo.3` does).
+const RTR_WAIT: Duration = Duration::from_millis(100);
+
+pub(super) fn sdo_read(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((index, sub, _)) = type_one(ctx, [PdoDirection::Transmit, PdoDirection::Receive], false)? else {
+        return Ok(Finding::not_applicable(
+            "no PDO maps a readable object of at most 4 bytes (no type-I object to read)",
+        ));
+    };
+    let [lo, hi] = index.to_le_bytes();
+    let request = [0x40, lo, hi, sub, 0, 0, 0, 0];
+    let criterion = Criterion::at_most(ctx, "sdo.read_max_ms", ctx.performance().criteria.sdo_read_max_ms);
+    sdo_repeated(
+        ctx,
+        (index, sub),
+        request,
+        0x40,
+        &upload_text((index, sub)),
+        "sdo_read_response",
+        criterion,
+    )
+}
+
+pub(super) fn sdo_write(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((index, sub, size)) = type_one(ctx, [PdoDirection::Receive, PdoDirection::Transmit], true)?
+    else {
+        return Ok(Finding::not_applicable(
+            "no PDO maps a writable object of at most 4 bytes (no type-I object to write)",
+        ));
+    };
+    // The object's own value: the measurement changes nothing, and `modify` writes it back anyway.
+    let value = match ctx.read(index, sub)? {
+        Reply::Done(value) if !value.is_empty() && value.len() <= 4 => value,
+        Reply::Done(value) if size > 0 && size <= 4 => {
+            value.into_iter().chain(std::iter::repeat(0)).take(size).collect()
+        }
+        other => return Ok(unusable(&upload_text((index, sub)), &other)),
+    };
+    let reply = ctx.modify(index, sub, value.clone())?;
+    if !matches!(reply, Reply::Done(_)) {
+        return Ok(unusable(&download_text((index, sub), &value), &reply));
+    }
+    let [lo, hi] = index.to_le_bytes();
+    // Expedited download with the size indicated: 23h, 27h, 2Bh or 2Fh for 4, 3, 2 or 1 bytes.
+    let mut request = [0x23 | ((4 - value.len() as u8) << 2), lo, hi, sub, 0, 0, 0, 0];
+    request[4..4 + value.len()].copy_from_slice(&value);
+    let criterion = Criterion::at_most(
+        ctx,
+        "sdo.write_max_ms",
+        ctx.performance().criteria.sdo_write_max_ms,
+    );
+    let text = download_text((index, sub), &value);
+    sdo_repeated(
+        ctx,
+        (index, sub),
+        request,
+        0x60,
+        &text,
+        "sdo_write_response",
+        criterion,
+    )
+}
+
+/// Sends `request` to the SDO server as often as the run repeats; each answer must be the initiate
+/// response `expected` (its command specifier's upper 3 bits), an abort stops the measurement.
+fn sdo_repeated(
+    ctx: &mut Ctx<'_, '_>,
+    entry: (u16, u8),
+    request: [u8; 8],
+    expected: u8,
+    text: &str,
+    name: &str,
+    criterion: Option<Criterion>,
+) -> Outcome {
+    let node = u16::from(ctx.node());
+    let response = 0x580 + node;
+    let timeout = ctx.timeout();
+    let mut samples = Vec::new();
+    for repetition in 0..ctx.performance().repetitions.max(1) {
+        let answer = exchange(ctx, Outgoing::Data(0x600 + node, &request), timeout, |f| {
+            standard_id(f) == Some(response) && !f.is_remote()
+        })?;
+        match answer {
+            Some((ms, frame)) if frame.data().first().is_some_and(|cs| cs & 0xE0 == expected) => {
+                samples.push(ms)
+            }
+            Some((_, frame)) => {
+                return Ok(unusable(
+                    &format!("{text} (repetition {})", repetition + 1),
+                    &Reply::of_raw(Some(frame.data().to_vec())),
+                ));
+            }
+            None => {
+                return Ok(Finding::fail(
+                    format!(
+                        "no SDO response to repetition {} of {text} within {} ms",
+                        repetition + 1,
+                        timeout.as_millis()
+                    ),
+                    Evidence {
+                        request: format!("{text}, repeated; {} answered", samples.len()),
+                        requirement: format!("{}: the SDO server answers every request", req::SDO_UPLOAD),
+                        answer: format!("nothing on {response:#X} within {} ms", timeout.as_millis()),
+                        cause: "the SDO server lost a request, or answers slower than the SDO timeout"
+                            .to_owned(),
+                    },
+                ));
+            }
+        }
+    }
+    let what = format!(
+        "{} response time of {:04X}h:{:02X}",
+        if expected == 0x40 {
+            "SDO upload"
+        } else {
+            "SDO download"
+        },
+        entry.0,
+        entry.1
+    );
+    Ok(judge(
+        ctx,
+        Judged {
+            name,
+            what,
+            request: format!(
+                "{text}, {} times, each after the previous response",
+                samples.len()
+            ),
+            clause: req::SDO_UPLOAD,
+            cause: "the SDO server's turnaround is slower than the criterion",
+        },
+        samples,
+        criterion,
+    ))
+}
+
+/// The first object a PDO of `directions` (in that order) maps that the EDS makes readable (or
+/// writable) with at most 4 bytes: a type-I object (CiA 313; the thesis §4.2.2: objects mapped into
+/// PDOs define what the device is for). The mapping is read from the device.
+fn type_one(
+    ctx: &mut Ctx<'_, '_>,
+    directions: [PdoDirection; 2],
+    writable: bool,
+) -> Result<Option<(u16, u8, usize)>, Stop> {
+    for direction in directions {
+        for pdo in ctx.model().pdos(direction) {
+            let Some(mapping) = pdo.mapping else { continue };
+            let count = match ctx.read(mapping, 0)? {
+                Reply::Done(d) if d.len() == 1 => d[0].min(64),
+                _ => continue,
+            };
+            for sub in 1..=count {
+                let Some(entry) = u32_of(&ctx.read(mapping, sub)?) else {
+                    continue;
+                };
+                let (index, object_sub) = ((entry >> 16) as u16, (entry >> 8) as u8);
+                let Some(model) = ctx.model().entry(index, object_sub) else {
+                    continue;
+                };
+                let usable = if writable {
+                    model.writable()
+                } else {
+                    model.readable()
+                };
+                let size = model.size().unwrap_or(usize::from((entry & 0xFF) as u8) / 8);
+                // Dummy entries (below 1000h) map no object.
+                if index >= 0x1000 && usable && (1..=4).contains(&size) {
+                    return Ok(Some((index, object_sub, size)));
+                }
+            }
+        }
+    }
+    Ok(None)
+}
+
+pub(super) fn rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let Some((number, cob, kind)) = rtr_tpdo(ctx)? else {
+        return Ok(Finding::not_applicable(
+            "no valid TPDO that maps data allows RTR (COB-ID bit 30 set or bit 31 set on every one)",
+        ));
+    };
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    // A synchronous TPDO answers a remote request with the data sampled at the last SYNC (CiA 301
+    // §7.2.2): one SYNC first, so that there is some.
+    if kind <= 240 || kind == 252 {
+        let sync = match u32_of(&ctx.read(0x1005, 0)?) {
+            Some(sync) => (sync & 0x7FF) as u16,
+            None => 0x80,
+        };
+        ctx.send(sync, &[])?;
+    }
+    ctx.listen(Duration::from_millis(20), |_| false)?;
+    let mut samples = Vec::new();
+    let mut missing = None;
+    for repetition in 0..ctx.performance().repetitions.max(1) {
+        match exchange(ctx, Outgoing::Remote(cob), RTR_WAIT, |f| {
+            standard_id(f) == Some(cob) && !f.is_remote()
+        })? {
+            Some((ms, _)) => samples.push(ms),
+            None => {
+                missing = Some(repetition + 1);
+                break;
+            }
+        }
+    }
+    back_to_pre_operational(ctx)?;
+    let request = format!(
+        "TPDO{number} as configured (transmission type {kind:02X}h, RTR allowed); NMT start, a SYNC for synchronous types, then remote frames on {cob:#X}"
+    );
+    if let Some(repetition) = missing {
+        return Ok(Finding::fail(
+            format!("TPDO{number} ({cob:#X}) did not answer remote frame {repetition}"),
+            Evidence {
+                request,
+                requirement: format!(
+                    "{}: a TPDO whose COB-ID allows RTR (bit 30 = 0) is sent on request",
+                    req::PDO
+                ),
+                answer: format!(
+                    "{} answers, then nothing within {} ms",
+                    samples.len(),
+                    RTR_WAIT.as_millis()
+                ),
+                cause: "remote requests on TPDOs are not served although 18xxh allows them".to_owned(),
+            },
+        ));
+    }
+    let criterion = Criterion::at_most(
+        ctx,
+        "pdo.rtr_response_max_ms",
+        ctx.performance().criteria.rtr_response_max_ms,
+    );
+    Ok(judge(
+        ctx,
+        Judged {
+            name: "rtr_response",
+            what: format!("TPDO{number} RTR response time"),
+            request,
+            clause: req::PDO,
+            cause: "the device samples and sends the TPDO slower than the criterion",
+        },
+        samples,
+        criterion,
+    ))
+}
+
+pub(super) fn boot_up(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let node = ctx.node();
+    let boot = 0x700 + u16::from(node);
+    let mut samples = Vec::new();
+    for repetition in 0..ctx.performance().repetitions.clamp(1, BOOT_UPS) {
+        let answer = exchange(ctx, Outgoing::Nmt(NmtCommand::ResetNode), BOOT_UP_WAIT, |f| {
+            standard_id(f) == Some(boot) && f.data() == [0]
+        })?;
+        let Some((ms, _)) = answer else {
+            return Ok(Finding::fail(
+                format!(
+                    "no boot-up within {} s of NMT reset node {}",
+                    BOOT_UP_WAIT.as_secs(),
+                    repetition + 1
+                ),
+                Evidence {
+                    request: format!("NMT reset node {node} (000h: 81h {node:02X}h)"),
+                    requirement: format!(
+                        "{}: after reset node the device enters pre-operational and sends the boot-up message (700h + node-ID, 00h)",
+                        req::BOOT_UP
+                    ),
+                    answer: format!("{} boot-ups, then none on {boot:#X}", samples.len()),
+                    cause: "the boot-up message is not sent, or on another CAN-ID".to_owned(),
+                },
+            ));
+        };
+        samples.push(ms);
+        // What the device sends right after booting (a TPDO, a heartbeat) is not measured.
+        ctx.listen(Duration::from_millis(20), |_| false)?;
+    }
+    let criterion = Criterion::at_most(ctx, "boot_up.max_ms", ctx.performance().criteria.boot_up_max_ms);
+    Ok(judge(
+        ctx,
+        Judged {
+            name: "boot_up",
+            what: "boot-up time".to_owned(),
+            request: format!("NMT reset node {node}, {} times", samples.len()),
+            clause: req::BOOT_UP,
+            cause: "the device's initialisation is slower than the criterion",
+        },
+        samples,
+        criterion,
+    ))
+}
+
+/// The first valid TPDO (COB-ID bit 31 clear) that allows RTR (bit 30 clear, CiA 301 §7.5.2.37) and
+/// maps data, as the device is configured: (number, CAN-ID, transmission type). Nothing is changed:
+/// RTR is optional, and the test measures the device as it is set up.
+fn rtr_tpdo(ctx: &mut Ctx<'_, '_>) -> Result<Option<(u16, u16, u8)>, Stop> {
+    for pdo in ctx.model().pdos(PdoDirection::Transmit) {
+        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+            continue;
+        };
+        let Reply::Done(kind) = ctx.read(pdo.comm, 2)? else {
+            continue;
+        };
+        let mapped = match pdo.mapping {
+            Some(mapping) => {
+                matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0))
+            }
+            None => false,
+        };
+        if cob & 0xC000_0000 == 0 && cob & 0x7FF != 0 && mapped && kind.len() == 1 {
+            return Ok(Some((pdo.number, (cob & 0x7FF) as u16, kind[0])));
+        }
+    }
+    Ok(None)
+}
+
+/// The inquire services measured (CiA 305: the answer has the request's command specifier), with
+/// their measurement names.
+const LSS_SERVICES: [(u8, &str); 5] = [
+    (0x5A, "inquire_vendor_id"),
+    (0x5B, "inquire_product_code"),
+    (0x5C, "inquire_revision"),
+    (0x5D, "inquire_serial"),
+    (0x5E, "inquire_node_id"),
+];
+
+pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let address = match crate::cia305::prepare(ctx)? {
+        Ok(address) => address,
+        Err(finding) => return Ok(finding),
+    };
+    let repetitions = ctx.performance().repetitions.max(1);
+    let timeout = ctx.timeout();
+    let mut measured = Vec::new();
+    let mut failure = None;
+    switch_global(ctx, true)?;
+    for (cs, name) in LSS_SERVICES {
+        match lss_samples(ctx, repetitions, &mut |ctx| {
+            exchange(
+                ctx,
+                Outgoing::Data(LSS_REQUEST, &[cs, 0, 0, 0, 0, 0, 0, 0]),
+                timeout,
+                |f| crate::cia305::is_lss_answer(f, cs),
+            )
+        })? {
+            Ok(samples) => measured.push((name, format!("{name} ({cs:02X}h)"), samples)),
+            Err(answered) => {
+                failure = Some((format!("{name} ({cs:02X}h) in configuration state"), answered));
+                break;
+            }
+        }
+    }
+    switch_global(ctx, false)?;
+    if failure.is_none() {
+        match lss_samples(ctx, repetitions, &mut |ctx| selective(ctx, &address, timeout))? {
+            Ok(samples) => measured.push((
+                "switch_selective",
+                "switch state selective (43h → 44h)".to_owned(),
+                samples,
+            )),
+            Err(answered) => {
+                failure = Some((
+                    "switch state selective (40h–43h with the device's address)".to_owned(),
+                    answered,
+                ))
+            }
+        }
+        switch_global(ctx, false)?;
+    }
+    if let Some((service, answered)) = failure {
+        return Ok(Finding::fail(
+            format!("no answer to {service} after {answered} answers"),
+            Evidence {
+                request: format!("{service}, repeated"),
+                requirement: "CiA 305 v3.0: a confirmed LSS service is answered on 7E4h".to_owned(),
+                answer: format!("nothing on 7E4h within {} ms", timeout.as_millis()),
+                cause: "the LSS slave does not serve the service, or does not enter configuration state"
+                    .to_owned(),
+            },
+        ));
+    }
+    let max = ctx.performance().criteria.lss_response_max_ms;
+    let mut worst = Vec::new();
+    let mut failed = None;
+    for (name, what, samples) in measured {
+        worst.push(format!(
+            "{what} {:.3}",
+            samples.iter().copied().fold(0.0, f64::max)
+        ));
+        let criterion = Criterion::at_most(ctx, "lss.response_max_ms", max);
+        let finding = judge(
+            ctx,
+            Judged {
+                name: &format!("lss_{name}"),
+                what: format!("LSS {what} response time"),
+                request: format!("LSS {what}, {} times", samples.len()),
+                clause: "CiA 305 v3.0",
+                cause: "the LSS slave answers slower than the criterion",
+            },
+            samples,
+            criterion,
+        );
+        if finding.verdict == crate::model::Verdict::Fail && failed.is_none() {
+            failed = Some(finding);
+        }
+    }
+    let judged = match max {
+        Some(max) => format!(
+            "all within ≤ {max} ms ({})",
+            ctx.performance().criteria.origin("lss.response_max_ms")
+        ),
+        None => "measured, no criterion".to_owned(),
+    };
+    Ok(failed.unwrap_or_else(|| {
+        Finding::pass(format!(
+            "LSS response times, {repetitions} of each service, max: {} ms; {judged}{}",
+            worst.join(", "),
+            super::stamps_note(ctx, Criterion::at_most(ctx, "lss.response_max_ms", max).as_ref())
+        ))
+    }))
+}
+
+/// The LSS request CAN-ID (CiA 305: master → slave).
+const LSS_REQUEST: u16 = 0x7E5;
+
+/// `repetitions` samples of `one`, or how many answered before one did not.
+fn lss_samples(
+    ctx: &mut Ctx<'_, '_>,
+    repetitions: usize,
+    one: &mut dyn FnMut(&mut Ctx<'_, '_>) -> Timed,
+) -> Result<Result<Vec<f64>, usize>, Stop> {
+    let mut samples = Vec::new();
+    for _ in 0..repetitions {
+        match one(ctx)? {
+            Some((ms, _)) => samples.push(ms),
+            None => return Ok(Err(samples.len())),
+        }
+    }
+    Ok(Ok(samples))
+}
+
+/// Switch state selective with `address`, timed from the last request (43h) to the 44h answer;
+/// back to waiting first, so that each repetition switches again.
+fn selective(ctx: &mut Ctx<'_, '_>, address: &Address, timeout: Duration) -> Timed {
+    switch_global(ctx, false)?;
+    let parts = address.parts();
+    for (cs, part) in (0x40u8..0x43).zip(parts) {
+        let [a, b, c, d] = part.to_le_bytes();
+        ctx.send(LSS_REQUEST, &[cs, a, b, c, d, 0, 0, 0])?;
+    }
+    let [a, b, c, d] = parts[3].to_le_bytes();
+    exchange(
+        ctx,
+        Outgoing::Data(LSS_REQUEST, &[0x43, a, b, c, d, 0, 0, 0]),
+        timeout,
+        |f| crate::cia305::is_lss_answer(f, 0x44),
+    )
+}
+
+/// Switch state global (04h), unconfirmed.
+fn switch_global(ctx: &mut Ctx<'_, '_>, configuration: bool) -> Result<(), Stop> {
+    ctx.send(LSS_REQUEST, &[0x04, u8::from(configuration), 0, 0, 0, 0, 0, 0])
+}
