@@ -36,8 +36,8 @@ pub(crate) struct CheckGroup {
 
 /// The CiA 301 value rules of the communication objects as Markdown (`docs/cia301-value-rules.md`),
 /// generated from the same rule table the checker evaluates.
-pub(crate) fn value_rules_markdown() -> String {
-    value_rules::markdown()
+pub(crate) fn value_rules_markdown(severity_of: impl Fn(&str) -> Option<canopener_eds::Severity>) -> String {
+    value_rules::markdown(severity_of)
 }
 
 /// Every group of built-in checks, in the order they run: loading codes first, then the catalogue's

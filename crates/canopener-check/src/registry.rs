@@ -86,7 +86,7 @@ pub fn catalogue_markdown() -> String {
 /// source) as Markdown: `docs/cia301-value-rules.md`, generated from the rule table the checker
 /// evaluates, so the two cannot drift. Kept in sync by a test.
 pub fn value_rules_markdown() -> String {
-    crate::checks::value_rules_markdown()
+    crate::checks::value_rules_markdown(|code| lookup(code).map(|c| c.severity))
 }
 
 #[cfg(test)]

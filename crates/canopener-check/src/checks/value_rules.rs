@@ -10,7 +10,7 @@
 //! test on it counts only when node-IDs 1 and 127 give the same answer, so no rule guesses which
 //! node the file will be used for.
 
-use canopener_eds::{Object, Origin};
+use canopener_eds::{Object, Origin, Severity};
 
 use super::reading::{Int, entry_name, live_object, object_finding, reading};
 use crate::check_info::CheckInfo;
@@ -40,8 +40,9 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     }
 }
 
-/// The rows of the table as Markdown: `docs/cia301-value-rules.md`.
-pub(crate) fn markdown() -> String {
+/// The rows of the table as Markdown: `docs/cia301-value-rules.md`. `severity_of` gives the
+/// severity of an existing check by code (the registry knows them; this module does not).
+pub(crate) fn markdown(severity_of: impl Fn(&str) -> Option<Severity>) -> String {
     let rules = table::RULES;
     let added = rules.iter().filter(|r| matches!(r.check, Check::New(_))).count();
     let mapped = rules
@@ -97,7 +98,7 @@ pub(crate) fn markdown() -> String {
         let (severity, check) = match rule.check {
             Check::New(info) => (rule.severity.to_string(), format!("{} (new)", link(info.code))),
             Check::Existing(codes) => (
-                rule.severity.to_string(),
+                severities(codes, &severity_of),
                 codes.iter().map(|c| link(c)).collect::<Vec<_>>().join(", "),
             ),
             Check::NotChecked(reason) => ("–".to_owned(), format!("not checked: {reason}")),
@@ -110,6 +111,23 @@ pub(crate) fn markdown() -> String {
         ));
     }
     out
+}
+
+/// `error` when every code is an error, else `error (C711, C725: warning)`.
+fn severities(codes: &[&str], severity_of: &impl Fn(&str) -> Option<Severity>) -> String {
+    let first = codes.first().and_then(|c| severity_of(c));
+    let Some(main) = first else {
+        return "–".to_owned();
+    };
+    let others: Vec<String> = codes
+        .iter()
+        .filter_map(|c| severity_of(c).filter(|s| *s != main).map(|s| format!("{c}: {s}")))
+        .collect();
+    if others.is_empty() {
+        main.to_string()
+    } else {
+        format!("{main} ({})", others.join(", "))
+    }
 }
 
 /// `[C870](checks.md#c870)`.
@@ -319,13 +337,18 @@ mod tests {
     }
 
     #[test]
-    fn existing_codes_named_by_the_table_exist() {
-        let all: BTreeSet<&str> = crate::registry::builtin().iter().map(|c| c.code).collect();
+    fn existing_codes_named_by_the_table_exist_with_the_rows_severity() {
         for rule in table::RULES {
             if let Check::Existing(codes) = rule.check {
-                for code in codes {
-                    assert!(all.contains(code), "{code} named by the table is not a check");
-                }
+                let severities: Vec<Severity> = codes
+                    .iter()
+                    .map(|code| {
+                        crate::registry::lookup(code)
+                            .unwrap_or_else(|| panic!("{code} named by the table is not a check"))
+                            .severity
+                    })
+                    .collect();
+                assert!(severities.contains(&rule.severity), "{codes:?}: {}", rule.text);
             }
         }
     }
@@ -336,6 +359,21 @@ mod tests {
              [1019]\nParameterName=Synchronous counter overflow value\nObjectType=0x7\nDataType=0x0005\n\
              AccessType=rw\nDefaultValue={overflow}\n"
         )
+    }
+
+    /// Every UNSIGNED8 value, not a sample: the reserved sets are exactly the ones the notes give.
+    #[test]
+    fn reserved_unsigned8_values_are_exactly_the_documented_ones() {
+        for value in 0..=255u16 {
+            let counter = !findings(&sync_file(&value.to_string()), "C870").is_empty();
+            assert_eq!(counter, value == 1 || value >= 241, "1019h = {value}");
+            let mapping = format!(
+                "[1A00]\nParameterName=m\nObjectType=0x9\nSubNumber=1\n[1A00sub0]\nParameterName=n\n\
+                 ObjectType=0x7\nDataType=0x0005\nAccessType=rw\nDefaultValue={value}\n"
+            );
+            let count = !findings(&mapping, "C878").is_empty();
+            assert_eq!(count, (0x41..=0xFD).contains(&value), "1A00sub0 = {value}");
+        }
     }
 
     #[test]
