@@ -22,6 +22,7 @@ pub(crate) mod objects;
 mod profiles;
 mod reading;
 mod syntax;
+mod value_rules;
 mod values;
 
 /// A group of checks: what they are, and how to run them on one file.
@@ -31,6 +32,12 @@ pub(crate) struct CheckGroup {
     pub(crate) checks: &'static [CheckInfo],
     /// Runs every check of the group on one file, appending what it finds.
     pub(crate) run: fn(&Context<'_>, &mut Vec<Finding>),
+}
+
+/// The CiA 301 value rules of the communication objects as Markdown (`docs/cia301-value-rules.md`),
+/// generated from the same rule table the checker evaluates.
+pub(crate) fn value_rules_markdown(severity_of: impl Fn(&str) -> Option<canopener_eds::Severity>) -> String {
+    value_rules::markdown(severity_of)
 }
 
 /// Every group of built-in checks, in the order they run: loading codes first, then the catalogue's
@@ -71,6 +78,10 @@ pub(crate) const GROUPS: &[CheckGroup] = &[
     CheckGroup {
         checks: cia301::CHECKS,
         run: cia301::run,
+    },
+    CheckGroup {
+        checks: value_rules::CHECKS,
+        run: value_rules::run,
     },
     CheckGroup {
         checks: dcf::CHECKS,

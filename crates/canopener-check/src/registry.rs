@@ -82,6 +82,13 @@ pub fn catalogue_markdown() -> String {
     out
 }
 
+/// The table of CiA 301 value rules of the communication objects (object → rule → check code →
+/// source) as Markdown: `docs/cia301-value-rules.md`, generated from the rule table the checker
+/// evaluates, so the two cannot drift. Kept in sync by a test.
+pub fn value_rules_markdown() -> String {
+    crate::checks::value_rules_markdown(|code| lookup(code).map(|c| c.severity))
+}
+
 #[cfg(test)]
 mod tests {
     use std::collections::BTreeSet;

@@ -1,19 +1,26 @@
 //! The documents the checker's output points to: `docs/checks.md`, where SARIF `helpUri` links and
 //! the HTML report point, must list exactly the checks this build has; `docs/check-catalogue.md`,
-//! which defines the check numbers the code cites, must agree with the codes that cite them.
+//! which defines the check numbers the code cites, must agree with the codes that cite them;
+//! `docs/cia301-value-rules.md` must be the rule table the checker evaluates.
+
+/// Rewrites `docs/NAME` when `CANOPENER_UPDATE_DOCS` is set, then asserts it equals `wanted`;
+/// returns the file's text.
+fn up_to_date(name: &str, wanted: &str) -> String {
+    let path = format!("{}/../../docs/{name}", env!("CARGO_MANIFEST_DIR"));
+    if std::env::var_os("CANOPENER_UPDATE_DOCS").is_some() {
+        canopener_testkit::fixture::write(&path, wanted).unwrap_or_else(|e| panic!("write docs/{name}: {e}"));
+    }
+    let current = canopener_testkit::fixture::read_to_string(&path).unwrap_or_default();
+    assert!(
+        current == wanted,
+        "docs/{name} is stale; run `CANOPENER_UPDATE_DOCS=1 cargo test -p canopener-check --test docs`"
+    );
+    current
+}
 
 #[test]
 fn docs_checks_md_is_up_to_date() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/checks.md");
-    let wanted = canopener_check::registry::catalogue_markdown();
-    if std::env::var_os("CANOPENER_UPDATE_DOCS").is_some() {
-        canopener_testkit::fixture::write(path, &wanted).expect("write docs/checks.md");
-    }
-    let current = canopener_testkit::fixture::read_to_string(path).unwrap_or_default();
-    assert!(
-        current == wanted,
-        "docs/checks.md is stale; run `CANOPENER_UPDATE_DOCS=1 cargo test -p canopener-check --test docs`"
-    );
+    let current = up_to_date("checks.md", &canopener_check::registry::catalogue_markdown());
     for check in canopener_check::registry::builtin() {
         assert!(
             current.contains(&format!("\n## {}\n", check.code)),
@@ -73,6 +80,21 @@ fn the_check_catalogue_names_the_codes_of_every_number() {
             documented.get(number),
             Some(codes),
             "check {number}: the catalogue's codes differ from the codes that cite it"
+        );
+    }
+}
+
+/// The table of CiA 301 value rules is generated from the rule table the checker evaluates.
+#[test]
+fn docs_cia301_value_rules_md_is_up_to_date() {
+    let current = up_to_date(
+        "cia301-value-rules.md",
+        &canopener_check::registry::value_rules_markdown(),
+    );
+    for code in ["C870", "C872", "C886"] {
+        assert!(
+            current.contains(&format!("[{code}](checks.md#")),
+            "{code} is not in the table"
         );
     }
 }

@@ -104,8 +104,9 @@ In a DCF, ParameterValue is the value a configuration tool downloads to the devi
 §5.3.2). Entries with AccessType ro or const cannot be written, so a ParameterValue that differs \
 from the DefaultValue cannot be configured. This check reports such entries.
 
-Either the value was read back from a device (a serial number, a firmware revision) and the DCF now \
-describes one particular device, or the DCF is inconsistent with its EDS. A configuration manager \
+Either the value was read back from a device (a firmware revision) and the DCF now describes one \
+particular device, or the DCF is inconsistent with its EDS. The serial number (1018h sub 4) is not \
+reported: a DCF describes one device, whose serial number differs from the EDS default by design. A configuration manager \
 that compares the device with the DCF (CiA 302 boot-up checks 1F84h-1F88h) reports a mismatch, or \
 tries the download and gets SDO abort 0x06010002 (attempt to write a read-only object).
 
@@ -308,6 +309,7 @@ fn check_entry(
         }
     }
     if cx.is_dcf()
+        && kind != SERIAL_NUMBER
         && matches!(a.access_type(), Some(AccessType::Ro | AccessType::Const))
         && let (Some(default), Some(parameter)) = (get("DefaultValue"), get("ParameterValue"))
         && !same_value(default, parameter, node_id)
@@ -337,6 +339,10 @@ fn check_entry(
         );
     }
 }
+
+/// 1018h sub 4, the serial number: a DCF describes one device, so its serial number read back from
+/// that device differs from the EDS default by design (CiA 306 §5; issue 18) and is not a C604.
+const SERIAL_NUMBER: SectionKind = SectionKind::Sub(0x1018, 4);
 
 /// The value of an entry with this key, if written.
 fn find<'v, 'a>(values: &'v [Read<'a>], key: &str) -> Option<&'v Read<'a>> {
@@ -526,6 +532,20 @@ mod tests {
         assert_eq!(findings(&dcf, "C604").len(), 1);
         let writable = format!("[FileInfo]\nLastEDS=x.eds\n{}", var("0x0005", keys));
         assert!(findings(&writable, "C604").is_empty());
+    }
+
+    #[test]
+    fn a_dcf_may_carry_the_serial_number_of_its_device() {
+        let identity = |sub: u8| {
+            format!(
+                "[FileInfo]\nLastEDS=x.eds\n[1018]\nParameterName=Identity\nObjectType=0x9\nSubNumber=2\n\
+                 [1018sub0]\nParameterName=n\nObjectType=0x7\nDataType=0x0005\nAccessType=ro\nDefaultValue={sub}\n\
+                 [1018sub{sub}]\nParameterName=x\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\n\
+                 DefaultValue=0\nParameterValue=0x1234\n"
+            )
+        };
+        assert!(findings(&identity(4), "C604").is_empty(), "the serial number");
+        assert_eq!(findings(&identity(2), "C604").len(), 1, "the product code");
     }
 
     #[test]
