@@ -23,6 +23,7 @@ mod profiles;
 mod reading;
 mod syntax;
 mod values;
+mod xml;
 
 /// A group of checks: what they are, and how to run them on one file.
 #[derive(Debug, Clone, Copy)]
@@ -87,5 +88,9 @@ pub(crate) const GROUPS: &[CheckGroup] = &[
     CheckGroup {
         checks: crate::portability::CHECKS,
         run: crate::portability::run,
+    },
+    CheckGroup {
+        checks: xml::CHECKS,
+        run: xml::run,
     },
 ];

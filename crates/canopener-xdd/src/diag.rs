@@ -76,6 +76,10 @@ canopener_eds::diagnostic_codes! {
     DisabledObject = "X040", "disabled-object", Info;
     /// A canopener side-channel property that could not be applied.
     SideChannel = "X041", "side-channel", Warning;
+    /// A default or actual value outside the parameter's `allowedValues` (a `value` list or several
+    /// ranges; a single range becomes LowLimit/HighLimit, which the EDS checks cover). The `X1xx`
+    /// codes are checks only XML needs, found while reading because only the reader sees the XML.
+    ValueNotAllowed = "X101", "value-not-allowed", Error;
     }
 }
 

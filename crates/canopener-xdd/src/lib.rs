@@ -131,6 +131,7 @@ mod device;
 pub mod diag;
 mod entry;
 pub mod error;
+pub mod locations;
 mod notation;
 mod read;
 mod side_channel;
@@ -141,6 +142,7 @@ use canopener_eds::Eds;
 
 pub use diag::{XddCode, XddDiagnostic};
 pub use error::XddError;
+pub use locations::Locations;
 
 /// Whether a file describes a device (XDD) or a configured device (XDC).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -171,6 +173,9 @@ pub struct XddLoaded {
     pub version: Option<XddVersion>,
     /// Diagnostics, sorted by position.
     pub diagnostics: Vec<XddDiagnostic>,
+    /// Where each object, sub-object, device-level section and value was read from, so findings
+    /// about the model can point into the XML.
+    pub locations: Locations,
 }
 
 /// How objects are described.
@@ -205,6 +210,12 @@ impl WriteOptions {
 /// Reads an XDD, XDC or XPD (or a CANopenEditor project holding exactly one device). Never panics.
 pub fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
     read::read(bytes)
+}
+
+/// The text of an XDD file as the reader decodes it (UTF-8, UTF-16 with a byte order mark, or the
+/// encoding the XML declaration names), for showing the lines findings point at.
+pub fn decode(bytes: &[u8]) -> Result<String, XddError> {
+    read::decode(bytes)
 }
 
 /// Reads every device of a CANopenEditor project (`.nxdd`), or the one device of a plain XDD.
