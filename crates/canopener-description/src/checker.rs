@@ -13,7 +13,7 @@ use crate::format::Format;
 
 mod xml;
 
-pub use xml::applies_to_xml;
+pub use xml::{SUPERSEDED, applies_to_xml};
 
 /// A name in a selection (`--only`, `--skip`) that is neither a built-in check nor a rule.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

@@ -32,7 +32,7 @@ pub mod convert;
 mod description;
 mod format;
 
-pub use checker::{Checker, UnknownCheck, applies_to_xml};
+pub use checker::{Checker, SUPERSEDED, UnknownCheck, applies_to_xml};
 pub use description::{Description, DescriptionCode, LoadError};
 pub use format::Format;
 

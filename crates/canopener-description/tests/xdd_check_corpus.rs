@@ -50,8 +50,22 @@ fn print_some() {
         let bytes = canopener_testkit::fixture::read(&file.path).expect("readable");
         let report = checker.check(&file.name, Some(&file.name), &bytes);
         for f in &report.findings {
-            if ["C517", "C306", "C354", "C208", "C502", "P055", "C713", "C904"].contains(&f.diagnostic.code.as_str()) {
-                eprintln!("{}:{}:{}: {} {} | {}", file.name, f.diagnostic.span.line, f.diagnostic.span.column, f.diagnostic.code, f.diagnostic.message, report.source.get(&f.diagnostic.span.line).map(|s| s.trim()).unwrap_or(""));
+            if ["C517", "C306", "C354", "C208", "C502", "P055", "C713", "C904"]
+                .contains(&f.diagnostic.code.as_str())
+            {
+                eprintln!(
+                    "{}:{}:{}: {} {} | {}",
+                    file.name,
+                    f.diagnostic.span.line,
+                    f.diagnostic.span.column,
+                    f.diagnostic.code,
+                    f.diagnostic.message,
+                    report
+                        .source
+                        .get(&f.diagnostic.span.line)
+                        .map(|s| s.trim())
+                        .unwrap_or("")
+                );
             }
         }
     }

@@ -1432,13 +1432,8 @@ impl<'a, 'input> Reader<'a, 'input> {
         p.default_value = child(node, "defaultValue")
             .and_then(|v| v.attribute("value"))
             .map(str::to_owned);
-        if let Some(range) = child(node, "allowedValues").and_then(|a| child(a, "range")) {
-            p.min = child(range, "minValue")
-                .and_then(|v| v.attribute("value"))
-                .map(str::to_owned);
-            p.max = child(range, "maxValue")
-                .and_then(|v| v.attribute("value"))
-                .map(str::to_owned);
+        if let Some(allowed) = child(node, "allowedValues") {
+            (p.min, p.max) = limits(allowed);
         }
         p.properties = self.properties(node);
         for property in elements(node, "property") {
@@ -1508,6 +1503,43 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
         None
     }
+}
+
+/// LowLimit and HighLimit from `allowedValues`: the one range's bounds; with several ranges the
+/// lowest minimum and the highest maximum (CiA 306 limits can only say the hull; `X101` checks the
+/// gaps), or the first range's when a bound is not a number.
+fn limits(allowed: Node<'_, '_>) -> (Option<String>, Option<String>) {
+    let bound = |range: Node<'_, '_>, name: &str| {
+        child(range, name)
+            .and_then(|v| v.attribute("value"))
+            .map(str::to_owned)
+    };
+    let ranges: Vec<(Option<String>, Option<String>)> = elements(allowed, "range")
+        .map(|r| (bound(r, "minValue"), bound(r, "maxValue")))
+        .collect();
+    let first = ranges.first().cloned().unwrap_or_default();
+    if ranges.len() < 2 {
+        return first;
+    }
+    let numbers: Option<Vec<(i128, i128)>> = ranges
+        .iter()
+        .map(|(lo, hi)| Some((int_of(lo.as_deref()?)?, int_of(hi.as_deref()?)?)))
+        .collect();
+    let Some(numbers) = numbers else {
+        return first;
+    };
+    let lowest = numbers.iter().map(|r| r.0).min();
+    let highest = numbers.iter().map(|r| r.1).max();
+    let text = |n: Option<i128>, pick: fn(&(Option<String>, Option<String>)) -> &Option<String>| {
+        let n = n?;
+        ranges
+            .iter()
+            .map(pick)
+            .find(|b| b.as_deref().and_then(int_of) == Some(n))
+            .cloned()
+            .flatten()
+    };
+    (text(lowest, |r| &r.0), text(highest, |r| &r.1))
 }
 
 /// Whether `value` is one of `listed` or inside one of `ranges`; `None` when that cannot be told

@@ -13,14 +13,17 @@ use canopener_check::{Context, Finding, Selection, registry};
 use canopener_eds::Span;
 use canopener_report::FileReport;
 use canopener_rules::RulePack;
-use canopener_xdd::{XddCode, XddKind, XddLoaded};
+use canopener_xdd::{XddKind, XddLoaded};
+
+/// Reader codes `eds check` leaves to a check that says the same with the severity of its rule:
+/// the code and the checks that report it instead. (`eds show` still reports them.)
+pub const SUPERSEDED: &[(&str, &[&str])] = &[("X035", &["C802", "C803"])];
 
 /// The portability note every XML file gets (what other tools do with it).
 const XML_READERS: &str = "X102";
 
-/// Checks an XML description: `packs` and `selection` as for EDS text. The reader's `X035`
-/// (unusable deviceCommissioning values) is left out: C802 and C803, the DCF commissioning rules,
-/// say the same about the same attributes with the DCF severity.
+/// Checks an XML description: `packs` and `selection` as for EDS text. The reader's codes in
+/// [`SUPERSEDED`] are left out.
 pub(super) fn check(
     packs: &[RulePack],
     selection: &Selection,
@@ -44,7 +47,10 @@ pub(super) fn check(
         loaded
             .diagnostics
             .iter()
-            .filter(|d| d.code != XddCode::Commissioning && selected(selection, d.code.as_str()))
+            .filter(|d| {
+                let code = d.code.as_str();
+                !SUPERSEDED.iter().any(|(superseded, _)| *superseded == code) && selected(selection, code)
+            })
             .map(|d| Finding::from_diagnostic(d, false)),
     );
     if selected(selection, XML_READERS)
