@@ -38,7 +38,9 @@ pub(super) fn check(
                 path: path.to_owned(),
                 findings: Vec::new(),
                 source: BTreeMap::new(),
-                problem: Some(format!("not a readable CiA 311 device description: {error}")),
+                // The reader's message names line:column where the XML breaks, or what the file
+                // is instead (POWERLINK, another dialect).
+                problem: Some(error.to_string()),
             };
         }
     };
@@ -212,7 +214,152 @@ impl Places {
 
 #[cfg(test)]
 mod tests {
+    use canopener_check::Group;
+    use canopener_eds::Severity;
+    use canopener_xdd::XddCode;
+
     use super::*;
+
+    /// An EDS whose 2000h default lies outside its limits (C602), written as XDD.
+    const EDS: &str = "[FileInfo]\nFileName=t.eds\n[DeviceInfo]\nVendorName=v\n[1000]\n\
+        ParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0\n\
+        PDOMapping=0\n[2000]\nParameterName=Filter time\nObjectType=0x7\nDataType=0x0006\n\
+        AccessType=rw\nDefaultValue=2000\nLowLimit=1\nHighLimit=1000\nPDOMapping=0\n";
+
+    const PACK: &str = r#"
+[pack]
+name = "test"
+
+[[rule]]
+id = "test/no-blank-names"
+description = "names have no blanks"
+severity = "warning"
+select = "objects"
+assert = "!item.name.contains(' ')"
+message = "ParameterName '{item.name}' contains blanks"
+"#;
+
+    fn xml() -> String {
+        let eds = canopener_eds::load(EDS.as_bytes()).eds;
+        canopener_xdd::write(&eds, &canopener_xdd::WriteOptions::CANOPEN_EDITOR)
+    }
+
+    /// The 1-based line and column of the first occurrence of `needle` in `text`.
+    fn position(text: &str, needle: &str) -> (u32, u32) {
+        let (index, line) = text
+            .lines()
+            .enumerate()
+            .find(|(_, l)| l.contains(needle))
+            .unwrap_or_else(|| panic!("{needle} not in the XML"));
+        let column = line.find(needle).map_or(0, |c| c + 1);
+        (
+            u32::try_from(index + 1).unwrap_or(u32::MAX),
+            u32::try_from(column).unwrap_or(u32::MAX),
+        )
+    }
+
+    #[test]
+    fn the_x_entries_of_the_registry_are_the_readers_codes() {
+        for code in XddCode::ALL {
+            let info = registry::lookup(code.as_str())
+                .unwrap_or_else(|| panic!("{} has no registry entry", code.as_str()));
+            assert_eq!(
+                (info.slug, info.severity, info.group),
+                (code.slug(), code.severity(), Group::Xml),
+                "{}",
+                code.as_str()
+            );
+        }
+        let x_entries = registry::builtin()
+            .iter()
+            .filter(|c| c.group == Group::Xml)
+            .count();
+        assert_eq!(x_entries, XddCode::ALL.len() + 1, "X0xx, X101 and X102");
+        assert!(registry::lookup(XML_READERS).is_some_and(|c| c.severity == Severity::Info));
+    }
+
+    #[test]
+    fn model_findings_point_at_the_xml_that_gave_the_value() {
+        let xml = xml();
+        let report = check(&[], &Selection::default(), "t.xdd", Some("t.xdd"), xml.as_bytes());
+        assert_eq!(report.problem, None);
+        let c602 = report
+            .findings
+            .iter()
+            .find(|f| f.diagnostic.code == "C602")
+            .expect("the default 2000 is above HighLimit 1000");
+        let parameter = position(&xml, r#"uniqueID="UID_OBJ_2000""#).0;
+        let default = xml
+            .lines()
+            .enumerate()
+            .skip(usize::try_from(parameter).unwrap_or(0))
+            .find(|(_, l)| l.contains("defaultValue"))
+            .map(|(i, l)| (i + 1, l.find('<').map_or(0, |c| c + 1)));
+        let span = c602.diagnostic.span;
+        assert_eq!(
+            Some((
+                usize::try_from(span.line).unwrap_or(0),
+                usize::try_from(span.column).unwrap_or(0)
+            )),
+            default,
+            "{report:?}"
+        );
+        assert_eq!(
+            report
+                .source
+                .get(&span.line)
+                .map(|l| l.trim_start().starts_with("<q1:defaultValue")),
+            Some(true)
+        );
+        assert!(report.findings.iter().all(|f| applies_to_xml(&f.diagnostic.code)));
+        assert!(report.findings.iter().any(|f| f.diagnostic.code == XML_READERS));
+    }
+
+    #[test]
+    fn rule_packs_see_the_model_and_report_at_the_xml_element() {
+        let xml = xml();
+        let pack = canopener_rules::parse_pack(PACK, "test.toml").expect("the test pack parses");
+        let report = check(&[pack], &Selection::default(), "t.xdd", None, xml.as_bytes());
+        let rule: Vec<(u32, u32)> = report
+            .findings
+            .iter()
+            .filter(|f| f.diagnostic.code == "test/no-blank-names")
+            .map(|f| (f.diagnostic.span.line, f.diagnostic.span.column))
+            .collect();
+        let at = |index: &str| position(&xml, &format!(r#"<CANopenObject index="{index}""#));
+        assert_eq!(rule, [at("1000"), at("2000")]);
+    }
+
+    #[test]
+    fn the_selection_applies_to_x_codes_and_unreadable_xml_is_a_problem() {
+        let skip = Selection {
+            skip: vec![XML_READERS.to_owned(), "C602".to_owned()],
+            ..Selection::default()
+        };
+        let report = check(&[], &skip, "t.xdd", None, xml().as_bytes());
+        assert!(
+            report
+                .findings
+                .iter()
+                .all(|f| f.diagnostic.code != XML_READERS && f.diagnostic.code != "C602")
+        );
+        let broken = check(
+            &[],
+            &Selection::default(),
+            "b.xdd",
+            None,
+            b"<ISO15745ProfileContainer><x",
+        );
+        assert!(broken.findings.is_empty());
+        assert!(
+            broken
+                .problem
+                .as_deref()
+                .is_some_and(|p| p.starts_with("1:") && p.contains("malformed XML")),
+            "names where the XML breaks: {:?}",
+            broken.problem
+        );
+    }
 
     #[test]
     fn series_that_concern_eds_text_do_not_apply() {
