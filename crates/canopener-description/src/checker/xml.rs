@@ -7,7 +7,7 @@
 //! finding names a section and key of that text, which [`canopener_xdd::Locations`] maps back into
 //! the XML. Checks whose subject CiA 311 has no place for are not reported ([`applies_to_xml`]).
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashSet};
 
 use canopener_check::{Context, Finding, Selection, registry};
 use canopener_eds::Span;
@@ -45,17 +45,27 @@ pub(super) fn check(
         }
     };
     let mut findings = model_findings(&loaded, packs, selection, file_name);
+    // Looked up once: a file can have hundreds of reader diagnostics.
+    let dropped: HashSet<&str> = if *selection == Selection::default() {
+        HashSet::new()
+    } else {
+        registry::builtin()
+            .into_iter()
+            .filter(|info| !selection.selects_builtin(info))
+            .map(|info| info.code)
+            .collect()
+    };
     findings.extend(
         loaded
             .diagnostics
             .iter()
             .filter(|d| {
                 let code = d.code.as_str();
-                !SUPERSEDED.iter().any(|(superseded, _)| *superseded == code) && selected(selection, code)
+                !SUPERSEDED.iter().any(|(superseded, _)| *superseded == code) && !dropped.contains(code)
             })
             .map(|d| Finding::from_diagnostic(d, false)),
     );
-    if selected(selection, XML_READERS)
+    if !dropped.contains(XML_READERS)
         && let Some(info) = registry::lookup(XML_READERS)
     {
         let kind = match loaded.kind {
@@ -129,10 +139,6 @@ pub fn applies_to_xml(code: &str) -> bool {
         Some('C') => !code.starts_with("C1") && !NOT_IN_XML.contains(&code),
         _ => true,
     }
-}
-
-fn selected(selection: &Selection, code: &str) -> bool {
-    registry::lookup(code).is_none_or(|info| selection.selects_builtin(info))
 }
 
 /// The built-in checks and rule packs on the model, placed in the XML.
