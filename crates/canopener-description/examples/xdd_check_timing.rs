@@ -31,7 +31,11 @@ fn main() -> ExitCode {
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         if arg == "--repeat" {
-            match args.next().and_then(|n| n.parse().ok()).filter(|&n: &usize| n > 0) {
+            match args
+                .next()
+                .and_then(|n| n.parse().ok())
+                .filter(|&n: &usize| n > 0)
+            {
                 Some(n) => repeat = n,
                 None => {
                     eprintln!("xdd_check_timing: --repeat needs a positive whole number\n{USAGE}");
@@ -82,7 +86,10 @@ fn main() -> ExitCode {
             "refused": outcome.1,
         }));
     }
-    println!("{}", json!({ "tool": "canopener", "repeat": repeat, "files": results }));
+    println!(
+        "{}",
+        json!({ "tool": "canopener", "repeat": repeat, "files": results })
+    );
     ExitCode::SUCCESS
 }
 

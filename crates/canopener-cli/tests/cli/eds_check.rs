@@ -144,7 +144,7 @@ fn check_walks_directories_and_globs_and_counts_unreadable_files_as_trouble() {
         "an empty directory is not a clean result"
     );
     assert!(
-        stdout(&nothing).contains("no .eds or .dcf file"),
+        stdout(&nothing).contains("no .eds, .dcf, .xdd, .xdc or .xpd file"),
         "{}",
         stdout(&nothing)
     );
