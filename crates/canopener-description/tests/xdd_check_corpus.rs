@@ -84,9 +84,18 @@ const ERRORS: &[(&str, &[(&str, usize)])] = &[
     ),
 ];
 
+/// Per file, the error counts by code; and over the corpus, per code and severity, how many
+/// findings in how many files.
+type Counts = BTreeMap<(String, String), (usize, usize)>;
+
 fn errors_by_file() -> BTreeMap<String, BTreeMap<String, usize>> {
+    check_corpus().0
+}
+
+fn check_corpus() -> (BTreeMap<String, BTreeMap<String, usize>>, Counts) {
     let checker = Checker::new(Vec::new(), Selection::default()).expect("no names to check");
     let mut found = BTreeMap::new();
+    let mut counts = Counts::new();
     for file in corpus::files(Kind::Xdd) {
         let bytes = canopener_testkit::fixture::read(&file.path).expect("a corpus file is readable");
         let report = checker.check(&file.name, Some(&file.name), &bytes);
@@ -98,6 +107,16 @@ fn errors_by_file() -> BTreeMap<String, BTreeMap<String, usize>> {
                 file.name
             );
             continue;
+        }
+        let mut in_file: BTreeMap<(String, String), usize> = BTreeMap::new();
+        for f in &report.findings {
+            let key = (f.diagnostic.code.clone(), f.diagnostic.severity.to_string());
+            *in_file.entry(key).or_default() += 1;
+        }
+        for (key, n) in in_file {
+            let entry = counts.entry(key).or_default();
+            entry.0 += n;
+            entry.1 += 1;
         }
         let mut errors: BTreeMap<String, usize> = BTreeMap::new();
         for f in report
@@ -111,7 +130,7 @@ fn errors_by_file() -> BTreeMap<String, BTreeMap<String, usize>> {
             found.insert(file.name.clone(), errors);
         }
     }
-    found
+    (found, counts)
 }
 
 #[test]
@@ -143,4 +162,42 @@ fn every_corpus_xml_file_is_checked_and_its_errors_are_the_reviewed_ones() {
     }
     differences.dedup();
     assert!(differences.is_empty(), "{}", differences.join("\n"));
+}
+
+/// `docs/xdd-check.md` shows the findings per code on the whole corpus between these markers; the
+/// table is this test's, regenerated with `CANOPENER_UPDATE_DOCS=1` (and only comparable when the
+/// extended corpus is present, as in CI).
+#[test]
+fn the_counts_per_code_in_the_docs_are_this_corpus_run() {
+    const START: &str = "<!-- counts:start -->\n";
+    const END: &str = "<!-- counts:end -->";
+    let files = corpus::files(Kind::Xdd);
+    if files.len() != Kind::Xdd.full_count() {
+        return;
+    }
+    let (_, counts) = check_corpus();
+    let mut table = format!(
+        "{} files, {} refused. Findings per code (all severities) on the whole corpus:\n\n\
+         | code | severity | findings | files |\n|---|---|---:|---:|\n",
+        files.len(),
+        REFUSED.len()
+    );
+    for ((code, severity), (findings, in_files)) in &counts {
+        table.push_str(&format!("| {code} | {severity} | {findings} | {in_files} |\n"));
+    }
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/xdd-check.md");
+    let current = canopener_testkit::fixture::read_to_string(path).expect("docs/xdd-check.md");
+    let (Some(start), Some(end)) = (current.find(START), current.find(END)) else {
+        panic!("docs/xdd-check.md lacks the counts markers");
+    };
+    let wanted = format!("{}{START}{table}{}", &current[..start], &current[end..]);
+    if std::env::var_os("CANOPENER_UPDATE_DOCS").is_some() {
+        canopener_testkit::fixture::write(path, &wanted).expect("write docs/xdd-check.md");
+    }
+    let current = canopener_testkit::fixture::read_to_string(path).unwrap_or_default();
+    assert!(
+        current == wanted,
+        "docs/xdd-check.md's counts are stale; run \
+         `CANOPENER_UPDATE_DOCS=1 cargo test -p canopener-description --test xdd_check_corpus`"
+    );
 }
