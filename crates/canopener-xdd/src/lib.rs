@@ -28,8 +28,10 @@
 //!   reads the device inside when there is exactly one (`X002`) and refuses several;
 //!   [`read_project`] reads them all.
 //! - **uniqueIDRef** is followed into the ApplicationProcess `parameter`: data type (IEC element, or a
-//!   `dataTypeIDRef` through `enum`/`derived`), `access`, `defaultValue`, the first
-//!   `allowedValues/range`, `actualValue`, `denotation`, the first label. When the object also carries
+//!   `dataTypeIDRef` through `enum`/`derived`), `access`, `defaultValue`, `allowedValues/range` as
+//!   LowLimit/HighLimit (several ranges: their hull), `actualValue`, `denotation`, the first label.
+//!   A default or actual value outside `allowedValues` that the limits cannot express (a `value`
+//!   list, the gaps between ranges) is reported (`X101`). When the object also carries
 //!   the value inline, the object wins and a disagreement is reported (`X021`, P18).
 //! - **Schema defaults are applied explicitly** (P2): a parameter without `access` is `read` (`ro`);
 //!   with a `CANopenGeneralFeatures` element every general-feature key is written (`0` for absent
@@ -68,6 +70,10 @@
 //! - **CANopenNode properties.** `CO_*` `property` elements have no EDS key (`X039`). Objects marked
 //!   `CO_disabled` are kept, as CiA 311 describes them, and reported (`X040`): CANopenEditor leaves them
 //!   out of the device and of its EDS export.
+//!
+//! - **Locations.** [`XddLoaded::locations`] records where every object, sub-object and
+//!   device-level section was read from, and per CiA 306 key the attribute or parameter element that
+//!   gave its value, so `eds check` can place a finding about the model in the XML.
 //!
 //! # Writing
 //!
