@@ -99,7 +99,21 @@ pub fn entry_of(section: &str) -> Option<(u16, Option<u8>)> {
 
 #[cfg(test)]
 mod tests {
+    use proptest::prelude::*;
+
     use super::*;
+
+    proptest! {
+        /// Every object and sub-object section name, in any case and padding, names its entry.
+        #[test]
+        fn section_names_round_trip(index: u16, sub: u8, upper: bool, padded: bool) {
+            let object = if padded { format!("{index:04X}") } else { format!("{index:X}") };
+            let name = format!("{object}sub{sub:X}");
+            let name = if upper { name.to_ascii_uppercase() } else { name.to_ascii_lowercase() };
+            prop_assert_eq!(entry_of(&name), Some((index, Some(sub))));
+            prop_assert_eq!(entry_of(&object), Some((index, None)));
+        }
+    }
 
     #[test]
     fn sections_name_entries_in_any_case() {

@@ -1836,6 +1836,80 @@ mod tests {
     }
 
     #[test]
+    fn locations_name_the_attribute_or_parameter_element_of_each_value() {
+        let eds = canopener_eds::load(
+            b"[DeviceInfo]\nVendorNumber=5\n[1017]\nParameterName=Producer heartbeat time\nObjectType=0x7\n\
+              DataType=0x0006\nAccessType=rw\nDefaultValue=1000\nPDOMapping=0\n",
+        )
+        .eds;
+        let text = crate::write(&eds, &crate::WriteOptions::CANOPEN_EDITOR);
+        let loaded = read_ok(&text);
+        let line_of = |needle: &str| {
+            text.lines()
+                .position(|l| l.contains(needle))
+                .and_then(|i| u32::try_from(i + 1).ok())
+                .unwrap_or_else(|| panic!("{needle} not written"))
+        };
+        let at = |section: &str, key: Option<&str>| loaded.locations.find(Some(section), key).line;
+        assert_eq!(
+            at("1017", Some("DefaultValue")),
+            line_of("<q1:defaultValue value=\"1000\"")
+        );
+        assert_eq!(
+            at("1017", Some("AccessType")),
+            line_of(r#"uniqueID="UID_OBJ_1017""#)
+        );
+        assert_eq!(
+            at("1017", Some("PDOMapping")),
+            line_of(r#"<CANopenObject index="1017""#)
+        );
+        assert_eq!(at("1017sub3", None), line_of(r#"<CANopenObject index="1017""#));
+        assert_eq!(at("DeviceInfo", Some("VendorNumber")), line_of("<q1:vendorID>"));
+        assert_eq!(loaded.locations.find(None, None), loaded.locations.file);
+        assert_eq!(loaded.locations.file.line, line_of("ProfileBody_Device_CANopen"));
+    }
+
+    #[test]
+    fn values_outside_allowed_values_are_reported_and_ranges_give_their_hull() {
+        let text = r#"<ISO15745ProfileContainer xmlns="http://www.canopen.org/xml/1.1"><ISO15745Profile>
+<ProfileBody xsi:type="ProfileBody_Device_CANopen" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"><ApplicationProcess><parameterList>
+<parameter uniqueID="P1" access="readWrite"><UINT/><defaultValue value="50"/>
+<allowedValues><range><minValue value="1"/><maxValue value="10"/></range><range><minValue value="100"/><maxValue value="0x3E8"/></range></allowedValues></parameter>
+<parameter uniqueID="P2" access="readWrite"><USINT/><defaultValue value="3"/>
+<allowedValues><value value="1"/><value value="0x3"/></allowedValues></parameter>
+</parameterList></ApplicationProcess></ProfileBody></ISO15745Profile><ISO15745Profile>
+<ProfileBody xsi:type="ProfileBody_CommunicationNetwork_CANopen" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"><ApplicationLayers><CANopenObjectList>
+<CANopenObject index="2000" name="a" objectType="7" uniqueIDRef="P1"/>
+<CANopenObject index="2001" name="b" objectType="7" uniqueIDRef="P2"/>
+<CANopenObject index="2002" name="c" objectType="7" uniqueIDRef="P2" defaultValue="2"/>
+</CANopenObjectList></ApplicationLayers></ProfileBody></ISO15745Profile></ISO15745ProfileContainer>"#;
+        let loaded = read_ok(text);
+        let not_allowed: Vec<u32> = loaded
+            .diagnostics
+            .iter()
+            .filter(|d| d.code == XddCode::ValueNotAllowed)
+            .map(|d| d.span.line)
+            .collect();
+        // 2000: 50 lies between the ranges; 2001: 3 is listed as 0x3; 2002: its own 2 is not listed.
+        assert_eq!(not_allowed, [3, 11], "{:?}", loaded.diagnostics);
+        let a = &loaded.eds.objects[&0x2000].attributes;
+        assert_eq!(
+            (a.low_limit.as_deref(), a.high_limit.as_deref()),
+            (Some("1"), Some("0x3E8"))
+        );
+        assert_eq!(allowed_verdict("$NODEID+1", &["1"], &[]), None);
+        assert_eq!(
+            allowed_verdict("5", &[], &[(Some("x"), Some("9")), (Some("20"), None)]),
+            None
+        );
+        assert_eq!(
+            allowed_verdict("25", &[], &[(Some("x"), Some("9")), (Some("20"), None)]),
+            Some(true)
+        );
+        assert_eq!(allowed_verdict("abc", &["abc"], &[]), Some(true));
+    }
+
+    #[test]
     fn configured_values_make_an_xdc() {
         let text = V11
             .replace(r#"<q1:defaultValue value="1000" />"#, r#"<q1:denotation><label lang="en">hb</label></q1:denotation><q1:actualValue value="500" /><q1:defaultValue value="1000" />"#)
