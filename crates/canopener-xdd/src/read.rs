@@ -1505,6 +1505,9 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 }
 
+/// A range bound as a number and as written.
+type Bound<'a> = (i128, &'a String);
+
 /// LowLimit and HighLimit from `allowedValues`: the one range's bounds; with several ranges the
 /// lowest minimum and the highest maximum (CiA 306 limits can only say the hull; `X101` checks the
 /// gaps), or the first range's when a bound is not a number.
@@ -1521,25 +1524,20 @@ fn limits(allowed: Node<'_, '_>) -> (Option<String>, Option<String>) {
     if ranges.len() < 2 {
         return first;
     }
-    let numbers: Option<Vec<(i128, i128)>> = ranges
+    // Each bound with its number; the hull is the written text of the lowest and highest.
+    let numbered: Option<Vec<(Bound<'_>, Bound<'_>)>> = ranges
         .iter()
-        .map(|(lo, hi)| Some((int_of(lo.as_deref()?)?, int_of(hi.as_deref()?)?)))
+        .map(|(lo, hi)| {
+            let (lo, hi) = (lo.as_ref()?, hi.as_ref()?);
+            Some(((int_of(lo)?, lo), (int_of(hi)?, hi)))
+        })
         .collect();
-    let Some(numbers) = numbers else {
+    let Some(numbered) = numbered else {
         return first;
     };
-    let lowest = numbers.iter().map(|r| r.0).min();
-    let highest = numbers.iter().map(|r| r.1).max();
-    let text = |n: Option<i128>, pick: fn(&(Option<String>, Option<String>)) -> &Option<String>| {
-        let n = n?;
-        ranges
-            .iter()
-            .map(pick)
-            .find(|b| b.as_deref().and_then(int_of) == Some(n))
-            .cloned()
-            .flatten()
-    };
-    (text(lowest, |r| &r.0), text(highest, |r| &r.1))
+    let lowest = numbered.iter().map(|r| r.0).min_by_key(|b| b.0);
+    let highest = numbered.iter().map(|r| r.1).max_by_key(|b| b.0);
+    (lowest.map(|b| b.1.clone()), highest.map(|b| b.1.clone()))
 }
 
 /// Whether `value` is one of `listed` or inside one of `ranges`; `None` when that cannot be told

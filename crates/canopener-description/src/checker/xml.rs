@@ -394,7 +394,7 @@ message = "ParameterName '{item.name}' contains blanks"
         let at = |line: u32, section: Option<&str>, key: Option<&str>| {
             let d = canopener_eds::Diagnostic::from_parts(
                 "C000".to_owned(),
-                canopener_eds::Severity::Info,
+                Severity::Info,
                 Span::new(line, 1, 0),
                 "m",
             )
