@@ -110,11 +110,11 @@ pub(super) fn check(
 /// user's file; the XML reader's `X0xx` say that), and the checks listed here, whose subject the
 /// XML has no place for or which the reader fills in itself.
 pub fn applies_to_xml(code: &str) -> bool {
-    /// Loader codes about the model rather than the text: values for their type, object codes,
+    /// Loader codes about the model rather than the text: values readable for their type, object codes,
     /// data types, PDO pairs (P073, the keys an object type requires, would repeat X014, X015,
     /// X020 and X022).
     const MODEL_LOADER_CODES: &[&str] = &[
-        "P054", "P055", "P057", "P059", "P060", "P061", "P070", "P071", "P080",
+        "P050", "P054", "P055", "P057", "P059", "P060", "P061", "P070", "P071", "P080",
     ];
     const NOT_IN_XML: &[&str] = &[
         // [FileInfo] keys CiA 311 has no attribute for or the reader writes itself (FileRevision,
@@ -369,7 +369,7 @@ message = "ParameterName '{item.name}' contains blanks"
 
     #[test]
     fn series_that_concern_eds_text_do_not_apply() {
-        for code in ["P020", "P050", "C101", "C199", "T004", "C201", "C301", "C401"] {
+        for code in ["P020", "P051", "C101", "C199", "T004", "C201", "C301", "C401"] {
             assert!(!applies_to_xml(code), "{code}");
         }
         for code in [
