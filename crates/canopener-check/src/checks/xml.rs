@@ -161,7 +161,7 @@ Fix: write `1018`, `01`, `0007`, `0001` without prefix.",
     },
     CheckInfo {
         code: "X013",
-        slug: "sub-number-mismatch",
+        slug: "xml-sub-number-mismatch",
         severity: Severity::Warning,
         group: Group::Xml,
         title: "subNumber equals the number of CANopenSubObject elements",
