@@ -19,6 +19,10 @@ use canopener_xdd::{XddKind, XddLoaded};
 /// the code and the checks that report it instead. (`eds show` still reports them.)
 pub const SUPERSEDED: &[(&str, &[&str])] = &[("X035", &["C802", "C803"])];
 
+/// How the help of a model-level check starts on XML.
+const EDS_TERMS: &str =
+    "in the EDS form of this file (the XML attribute or element is at the position shown): ";
+
 /// The portability note every XML file gets (what other tools do with it).
 const XML_READERS: &str = "X102";
 
@@ -163,6 +167,11 @@ fn model_findings(
     for finding in &mut findings {
         let (section, key) = places.of(&finding.diagnostic);
         finding.diagnostic.span = loaded.locations.find(section.as_deref(), key.as_deref());
+        // The checks' advice names CiA 306 sections and keys (`set DefaultValue=2 in [1400sub0]`);
+        // say so, since the position is the XML's.
+        if let Some(help) = finding.diagnostic.help.take() {
+            finding.diagnostic.help = Some(format!("{EDS_TERMS}{help}"));
+        }
     }
     findings
 }
@@ -318,6 +327,14 @@ message = "ParameterName '{item.name}' contains blanks"
             Some(true)
         );
         assert!(report.findings.iter().all(|f| applies_to_xml(&f.diagnostic.code)));
+        assert!(
+            c602.diagnostic
+                .help
+                .as_deref()
+                .is_none_or(|h| h.starts_with(EDS_TERMS)),
+            "help in CiA 306 terms says so: {:?}",
+            c602.diagnostic.help
+        );
         assert!(report.findings.iter().any(|f| f.diagnostic.code == XML_READERS));
     }
 
