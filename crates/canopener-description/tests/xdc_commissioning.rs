@@ -40,7 +40,7 @@ fn at(text: &str, needle: &str) -> (u32, u32) {
         .unwrap_or_else(|| panic!("{needle} not in the fixture"))
 }
 
-fn located<'a>(found: &'a [(String, u32, u32)], code: &str) -> Option<(u32, u32)> {
+fn located(found: &[(String, u32, u32)], code: &str) -> Option<(u32, u32)> {
     found.iter().find(|f| f.0 == code).map(|f| (f.1, f.2))
 }
 
