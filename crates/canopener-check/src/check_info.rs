@@ -8,7 +8,9 @@
 //!   catalogue (`docs/check-catalogue.md`) (1 = A syntax, 2 = B FileInfo, 3 = C DeviceInfo and
 //!   D DummyUsage, 4 = E object lists, 5 = F object sections, 6 = G values, 7 = H CiA 301 semantics,
 //!   8 = I DCF and J modules, 9 = K reference profiles);
-//! - `T0xx`: portability, how other tools misread the file.
+//! - `T0xx`: portability, how other tools misread the file;
+//! - `X0xx`: found while reading CiA 311 XML (`canopener_xdd::XddCode`), `X1xx`: checks only XML
+//!   files need (both reported by the XML check pipeline of `canopener-description`).
 
 use std::fmt;
 
@@ -42,6 +44,8 @@ pub enum Group {
     Profiles,
     /// How python canopen, Lely and CANopenEditor misread the file.
     Portability,
+    /// CiA 311 XDD/XDC: what the XML reader found and the checks only XML needs.
+    Xml,
     /// A check from a user rule pack.
     Rules,
 }
@@ -62,6 +66,7 @@ impl Group {
             Self::Modules => "modules",
             Self::Profiles => "profiles",
             Self::Portability => "portability",
+            Self::Xml => "xml",
             Self::Rules => "rules",
         }
     }

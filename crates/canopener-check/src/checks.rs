@@ -24,6 +24,7 @@ mod reading;
 mod syntax;
 mod value_rules;
 mod values;
+mod xml;
 
 /// A group of checks: what they are, and how to run them on one file.
 #[derive(Debug, Clone, Copy)]
@@ -98,5 +99,9 @@ pub(crate) const GROUPS: &[CheckGroup] = &[
     CheckGroup {
         checks: crate::portability::CHECKS,
         run: crate::portability::run,
+    },
+    CheckGroup {
+        checks: xml::CHECKS,
+        run: xml::run,
     },
 ];

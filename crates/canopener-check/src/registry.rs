@@ -33,7 +33,8 @@ pub fn catalogue_markdown() -> String {
          `canopener eds explain CODE` prints the same page on a terminal.\n\n\
          Series: `P` found while loading, `C1xx`-`C9xx` checks by group of the [check catalogue](check-catalogue.md)\n\
          (1 syntax, 2 FileInfo, 3 DeviceInfo and DummyUsage, 4 object lists, 5 object sections, 6 values,\n\
-         7 CiA 301, 8 DCF and modules, 9 reference profiles), `T` portability (how other tools misread a file).\n\n",
+         7 CiA 301, 8 DCF and modules, 9 reference profiles), `T` portability (how other tools misread a file),\n\
+         `X0xx` found while reading CiA 311 XDD/XDC, `X1xx` checks only XML files need.\n\n",
     );
     out.push_str(&format!(
         "{} checks.\n\n| code | severity | group | fix | title |\n|---|---|---|---|---|\n",
@@ -136,6 +137,7 @@ mod tests {
             );
             let series_ok = match check.group {
                 Group::Portability => check.code.starts_with('T'),
+                Group::Xml => check.code.starts_with('X'),
                 _ => check.code.starts_with('P') || check.code.starts_with('C'),
             };
             assert!(

@@ -9,6 +9,12 @@ use canopener_eds::Loaded;
 use canopener_report::FileReport;
 use canopener_rules::RulePack;
 
+use crate::format::Format;
+
+mod xml;
+
+pub use xml::{SUPERSEDED, applies_to_xml};
+
 /// A name in a selection (`--only`, `--skip`) that is neither a built-in check nor a rule.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("unknown check '{name}'")]
@@ -78,10 +84,15 @@ impl Checker {
             .find(|c| c.code.eq_ignore_ascii_case(name) || c.slug == name)
     }
 
-    /// Checks a file's bytes as EDS/DCF text: the selected built-in checks and rules, findings
-    /// sorted by position, with the source lines they point at. `path` is how the report names the
-    /// file; `file_name` (without directories) is what the `FileName` check compares with.
+    /// Checks a file's bytes: the selected built-in checks and rules, findings sorted by position,
+    /// with the source lines they point at. `path` is how the report names the file; `file_name`
+    /// (without directories) is what the `FileName` check compares with. CiA 311 XML
+    /// ([`Format::is_xml`]) is read by the XDD reader and its findings point into the XML; anything
+    /// else is read as EDS/DCF text.
     pub fn check(&self, path: &str, file_name: Option<&str>, bytes: &[u8]) -> FileReport {
+        if Format::is_xml(file_name.and_then(extension), bytes) {
+            return xml::check(&self.packs, &self.selection, path, file_name, bytes);
+        }
         self.check_loaded(path, file_name, &canopener_eds::load(bytes))
     }
 
@@ -124,6 +135,11 @@ impl Checker {
         };
         fix::fix_file(bytes, file_name, &self.selection, &rule_fixes)
     }
+}
+
+/// The extension of a file name, if it has one.
+fn extension(file_name: &str) -> Option<&str> {
+    file_name.rsplit_once('.').map(|(_, extension)| extension)
 }
 
 #[cfg(test)]

@@ -31,6 +31,22 @@ impl Format {
         }
     }
 
+    /// Whether a file is CiA 311 XML (XDD, XDC, XPD, a CANopenEditor project), by content first:
+    /// XML whatever its extension when, after a UTF-8 byte order mark and white space, it starts
+    /// with `<`, or when it starts with a UTF-16 byte order mark; otherwise by an XML extension.
+    /// EDS text cannot start with `<`, so a mislabelled file is read as what it is.
+    pub fn is_xml(extension: Option<&str>, bytes: &[u8]) -> bool {
+        if bytes.starts_with(b"\xFF\xFE") || bytes.starts_with(b"\xFE\xFF") {
+            return true;
+        }
+        let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+        match body.iter().find(|b| !b.is_ascii_whitespace()) {
+            Some(b'<') => true,
+            Some(_) => false,
+            None => Self::detect(extension, bytes) == Format::Xdd,
+        }
+    }
+
     /// The short name reports use: `eds`, `xdd` or `json`.
     pub fn name(self) -> &'static str {
         match self {
@@ -63,6 +79,19 @@ mod tests {
         assert_eq!(Format::detect(Some(""), b"[FileInfo]\n"), Format::Eds);
         assert_eq!(Format::detect(None, b""), Format::Eds);
         assert_eq!(Format::detect(None, b"\xFF\xFE<"), Format::Eds);
+    }
+
+    #[test]
+    fn xml_is_recognised_by_content_before_extension() {
+        assert!(Format::is_xml(
+            Some("eds"),
+            b"\xEF\xBB\xBF\r\n<?xml version=\"1.0\"?>"
+        ));
+        assert!(Format::is_xml(None, b"\xFF\xFE<\0"));
+        assert!(Format::is_xml(Some("XDC"), b""));
+        assert!(!Format::is_xml(Some("xdd"), b"[FileInfo]\n"));
+        assert!(!Format::is_xml(Some("eds"), b""));
+        assert!(!Format::is_xml(None, b"{\"format\": 1}"));
     }
 
     #[test]

@@ -8,7 +8,10 @@
 //!   EDS/DCF, and what loading found, in the shared diagnostic shape with [`DescriptionCode`]);
 //! - [`convert`]: canonical EDS, DCF for a node, XDD/XDC and JSON from a loaded description;
 //! - [`Checker`]: the built-in checks and rule packs in force, turning a file's bytes into a
-//!   [`canopener_report::FileReport`] and applying safe fixes.
+//!   [`canopener_report::FileReport`] and applying safe fixes. CiA 311 XML ([`Format::is_xml`],
+//!   by content first) is read by the XDD reader: its `X` findings, the model-level checks that
+//!   [`applies_to_xml`] keeps and the rule packs, each placed at the XML element or attribute that
+//!   gave the value (`docs/xdd-check.md`).
 //!
 //! This crate performs no IO: callers pass bytes in and get descriptions, bytes and reports out.
 //! Reading files, expanding directories and checking many files in parallel is
@@ -32,7 +35,7 @@ pub mod convert;
 mod description;
 mod format;
 
-pub use checker::{Checker, UnknownCheck};
+pub use checker::{Checker, SUPERSEDED, UnknownCheck, applies_to_xml};
 pub use description::{Description, DescriptionCode, LoadError};
 pub use format::Format;
 

@@ -18,7 +18,8 @@ pub struct Target {
     pub problem: Option<String>,
 }
 
-/// Expands files, directories (every `.eds`/`.dcf` below, case-insensitive, sorted) and glob
+/// Expands files, directories (every `.eds`, `.dcf`, `.xdd`, `.xdc` and `.xpd` below, case-insensitive,
+/// sorted) and glob
 /// patterns the shell did not expand, without duplicates, in the order given. A name that matches
 /// nothing becomes a problem target: checking nothing must not look like a clean result.
 pub fn expand(inputs: &[String]) -> Vec<Target> {
@@ -36,7 +37,7 @@ pub fn expand(inputs: &[String]) -> Vec<Target> {
             if found.is_empty() {
                 push(
                     path,
-                    Some("no .eds or .dcf file below this directory".to_owned()),
+                    Some("no .eds, .dcf, .xdd, .xdc or .xpd file below this directory".to_owned()),
                     &mut targets,
                 );
             }
@@ -126,7 +127,7 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
             let path = entry.path();
             if path.is_dir() {
                 pending.push(path);
-            } else if is_eds_or_dcf(&path) {
+            } else if is_description(&path) {
                 found.push(path);
             }
         }
@@ -135,10 +136,14 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
     found
 }
 
-fn is_eds_or_dcf(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("eds") || e.eq_ignore_ascii_case("dcf"))
+/// A description file a directory walk checks: CiA 306 text or CiA 311 XML (CANopenEditor projects,
+/// `.nxdd`, are left to be named explicitly: they may hold several devices).
+fn is_description(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+        ["eds", "dcf", "xdd", "xdc", "xpd"]
+            .iter()
+            .any(|x| e.eq_ignore_ascii_case(x))
+    })
 }
 
 #[cfg(test)]
@@ -153,7 +158,15 @@ mod tests {
     #[test]
     fn expands_directories_globs_and_reports_missing_names() {
         let dir = ScratchDir::new("expand");
-        for name in ["a.eds", "b.DCF", "notes.txt", "sub/c.eds"] {
+        for name in [
+            "a.eds",
+            "b.DCF",
+            "notes.txt",
+            "p.nxdd",
+            "sub/c.eds",
+            "sub/d.XDD",
+            "x.xdc",
+        ] {
             dir.write(name, b"");
         }
         let d = dir.path().display().to_string();
@@ -176,6 +189,8 @@ mod tests {
                 ("a.eds".to_owned(), false),
                 ("b.DCF".to_owned(), false),
                 ("sub/c.eds".to_owned(), false),
+                ("sub/d.XDD".to_owned(), false),
+                ("x.xdc".to_owned(), false),
                 ("nothing*.eds".to_owned(), true),
                 ("gone.eds".to_owned(), true),
             ]
@@ -184,7 +199,7 @@ mod tests {
         let none = expand(&[empty.path().display().to_string()]);
         assert_eq!(
             none.first().and_then(|t| t.problem.as_deref()),
-            Some("no .eds or .dcf file below this directory")
+            Some("no .eds, .dcf, .xdd, .xdc or .xpd file below this directory")
         );
     }
 

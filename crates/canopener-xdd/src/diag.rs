@@ -30,8 +30,9 @@ canopener_eds::diagnostic_codes! {
     DuplicateEntry = "X011", "duplicate-entry", Error;
     /// A hexBinary value with `0x`, an odd number of digits or an unusual width; read leniently.
     HexNotation = "X012", "hex-notation", Info;
-    /// `subNumber` disagrees with the `CANopenSubObject` children; the children count.
-    SubNumberMismatch = "X013", "sub-number-mismatch", Warning;
+    /// `subNumber` disagrees with the `CANopenSubObject` children; the children count. (The slug says
+    /// `xml-` because the checker's registry already has P045 `sub-number-mismatch`.)
+    SubNumberMismatch = "X013", "xml-sub-number-mismatch", Warning;
     /// A `CANopenObject` or `CANopenSubObject` without the required `name`.
     MissingName = "X014", "missing-name", Warning;
     /// A missing or unreadable `objectType`.
@@ -76,6 +77,10 @@ canopener_eds::diagnostic_codes! {
     DisabledObject = "X040", "disabled-object", Info;
     /// A canopener side-channel property that could not be applied.
     SideChannel = "X041", "side-channel", Warning;
+    /// A default or actual value outside the parameter's `allowedValues` (a `value` list or several
+    /// ranges; a single range becomes LowLimit/HighLimit, which the EDS checks cover). The `X1xx`
+    /// codes are checks only XML needs, found while reading because only the reader sees the XML.
+    ValueNotAllowed = "X101", "value-not-allowed", Error;
     }
 }
 

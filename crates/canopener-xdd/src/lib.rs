@@ -28,8 +28,10 @@
 //!   reads the device inside when there is exactly one (`X002`) and refuses several;
 //!   [`read_project`] reads them all.
 //! - **uniqueIDRef** is followed into the ApplicationProcess `parameter`: data type (IEC element, or a
-//!   `dataTypeIDRef` through `enum`/`derived`), `access`, `defaultValue`, the first
-//!   `allowedValues/range`, `actualValue`, `denotation`, the first label. When the object also carries
+//!   `dataTypeIDRef` through `enum`/`derived`), `access`, `defaultValue`, `allowedValues/range` as
+//!   LowLimit/HighLimit (several ranges: their hull), `actualValue`, `denotation`, the first label.
+//!   A default or actual value outside `allowedValues` that the limits cannot express (a `value`
+//!   list, the gaps between ranges) is reported (`X101`). When the object also carries
 //!   the value inline, the object wins and a disagreement is reported (`X021`, P18).
 //! - **Schema defaults are applied explicitly** (P2): a parameter without `access` is `read` (`ro`);
 //!   with a `CANopenGeneralFeatures` element every general-feature key is written (`0` for absent
@@ -68,6 +70,10 @@
 //! - **CANopenNode properties.** `CO_*` `property` elements have no EDS key (`X039`). Objects marked
 //!   `CO_disabled` are kept, as CiA 311 describes them, and reported (`X040`): CANopenEditor leaves them
 //!   out of the device and of its EDS export.
+//!
+//! - **Locations.** [`XddLoaded::locations`] records where every object, sub-object and
+//!   device-level section was read from, and per CiA 306 key the attribute or parameter element that
+//!   gave its value, so `eds check` can place a finding about the model in the XML.
 //!
 //! # Writing
 //!
@@ -131,6 +137,7 @@ mod device;
 pub mod diag;
 mod entry;
 pub mod error;
+pub mod locations;
 mod notation;
 mod read;
 mod side_channel;
@@ -141,6 +148,7 @@ use canopener_eds::Eds;
 
 pub use diag::{XddCode, XddDiagnostic};
 pub use error::XddError;
+pub use locations::Locations;
 
 /// Whether a file describes a device (XDD) or a configured device (XDC).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -171,6 +179,9 @@ pub struct XddLoaded {
     pub version: Option<XddVersion>,
     /// Diagnostics, sorted by position.
     pub diagnostics: Vec<XddDiagnostic>,
+    /// Where each object, sub-object, device-level section and value was read from, so findings
+    /// about the model can point into the XML.
+    pub locations: Locations,
 }
 
 /// How objects are described.
@@ -205,6 +216,12 @@ impl WriteOptions {
 /// Reads an XDD, XDC or XPD (or a CANopenEditor project holding exactly one device). Never panics.
 pub fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
     read::read(bytes)
+}
+
+/// The text of an XDD file as the reader decodes it (UTF-8, UTF-16 with a byte order mark, or the
+/// encoding the XML declaration names), for showing the lines findings point at.
+pub fn decode(bytes: &[u8]) -> Result<String, XddError> {
+    read::decode(bytes)
 }
 
 /// Reads every device of a CANopenEditor project (`.nxdd`), or the one device of a plain XDD.

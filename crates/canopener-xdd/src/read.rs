@@ -7,7 +7,7 @@
 use std::collections::{BTreeMap, HashMap};
 
 use canopener_eds::dcf::BITRATES_KBIT;
-use canopener_eds::model::Properties;
+use canopener_eds::model::{Properties, int_of};
 use canopener_eds::{AccessType, Eds, Object, Origin, Span, SubObject};
 use roxmltree::{Document, Node};
 
@@ -17,6 +17,7 @@ use crate::device::{
 use crate::diag::{Note, XddCode, XddDiagnostic};
 use crate::entry::{self, Param, XmlEntry};
 use crate::error::XddError;
+use crate::locations::{Locations, SectionLocation};
 use crate::notation::{
     BaudRate, Hex, Iec, ParamAccess, PdoMapping, hex_remark, parse_baud_rate, parse_bool, parse_hex,
     parse_unsigned,
@@ -32,6 +33,64 @@ const CANOPEN_1_1: &str = "http://www.canopen.org/xml/1.1";
 const PROJECT_WRAPPERS: [&str; 2] = ["CanOpenProject_1_1", "OpenEDSProject"];
 /// How deep `dataTypeIDRef` chains are followed (a loop must not hang the reader).
 const MAX_TYPE_DEPTH: usize = 8;
+/// CANopenObject/CANopenSubObject attributes and the CiA 306 keys read from them.
+const ENTRY_KEYS: &[(&str, &str)] = &[
+    ("name", "ParameterName"),
+    ("objectType", "ObjectType"),
+    ("dataType", "DataType"),
+    ("lowLimit", "LowLimit"),
+    ("highLimit", "HighLimit"),
+    ("accessType", "AccessType"),
+    ("defaultValue", "DefaultValue"),
+    ("actualValue", "ParameterValue"),
+    ("denotation", "Denotation"),
+    ("PDOmapping", "PDOMapping"),
+    ("objFlags", "ObjFlags"),
+    ("subNumber", "SubNumber"),
+];
+/// ProfileBody attributes and the `[FileInfo]` keys read from them.
+const FILE_INFO_KEYS: &[(&str, &str)] = &[
+    ("fileName", "FileName"),
+    ("fileVersion", "FileVersion"),
+    ("fileCreator", "CreatedBy"),
+    ("fileCreationDate", "CreationDate"),
+    ("fileCreationTime", "CreationTime"),
+    ("fileModificationDate", "ModificationDate"),
+    ("fileModificationTime", "ModificationTime"),
+    ("fileModifiedBy", "ModifiedBy"),
+];
+/// DeviceIdentity elements and the `[DeviceInfo]` keys read from them.
+const DEVICE_IDENTITY_KEYS: &[(&str, &str)] = &[
+    ("vendorName", "VendorName"),
+    ("vendorID", "VendorNumber"),
+    ("productName", "ProductName"),
+    ("productID", "ProductNumber"),
+    ("orderNumber", "OrderCode"),
+    ("productText", "Description"),
+];
+/// CANopenGeneralFeatures attributes and the `[DeviceInfo]` keys read from them.
+const GENERAL_FEATURE_KEYS: &[(&str, &str)] = &[
+    ("granularity", "Granularity"),
+    ("nrOfRxPDO", "NrOfRXPDO"),
+    ("nrOfTxPDO", "NrOfTXPDO"),
+    ("bootUpSlave", "SimpleBootUpSlave"),
+    ("layerSettingServiceSlave", "LSS_Supported"),
+    ("groupMessaging", "GroupMessaging"),
+    ("dynamicChannels", "DynamicChannelsSupported"),
+    ("ngSlave", "NG_Slave"),
+    ("ngMaster", "NG_Master"),
+    ("NrOfNG_MonitoredNodes", "NrOfNG_MonitoredNodes"),
+];
+/// deviceCommissioning attributes and the `[DeviceComissioning]` keys read from them.
+const COMMISSIONING_KEYS: &[(&str, &str)] = &[
+    ("nodeID", "NodeID"),
+    ("NodeID", "NodeID"),
+    ("nodeName", "NodeName"),
+    ("actualBaudRate", "Baudrate"),
+    ("networkNumber", "NetNumber"),
+    ("networkName", "NetworkName"),
+    ("CANopenManager", "CANopenManager"),
+];
 
 /// Reads one device. A CANopenEditor project wrapper with exactly one device is read too.
 pub(crate) fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
@@ -92,7 +151,7 @@ pub(crate) fn read_project(bytes: &[u8]) -> Result<Vec<XddLoaded>, XddError> {
 
 /// Decodes the bytes: UTF-8 (with or without BOM), UTF-16 with BOM, or Latin-1/Windows-1252 when
 /// the XML declaration says so.
-fn decode(bytes: &[u8]) -> Result<String, XddError> {
+pub(crate) fn decode(bytes: &[u8]) -> Result<String, XddError> {
     if let Some(rest) = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]) {
         return utf8(rest, "UTF-8");
     }
@@ -222,6 +281,8 @@ struct Reader<'a, 'input> {
     unknown_attributes: BTreeMap<(String, String), (usize, usize)>,
     /// `property` names without a CiA 306 key: count each, and the first offset of any.
     unmapped_properties: (BTreeMap<String, usize>, usize),
+    /// Where each part of the model came from.
+    locations: Locations,
 }
 
 fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<XddLoaded, XddError> {
@@ -246,6 +307,7 @@ fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<
         diagnostics: Vec::new(),
         unknown_attributes: BTreeMap::new(),
         unmapped_properties: (BTreeMap::new(), 0),
+        locations: Locations::default(),
     };
     if version.is_none() {
         reader.push(
@@ -255,6 +317,7 @@ fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<
         );
     }
     let Bodies { device, network } = reader.profiles(container)?;
+    reader.locations.file = reader.span(device.or(network).unwrap_or(container).range().start);
     reader.index_ids(container);
     let xml_device = reader.device(device, network);
     let mut notes = Vec::new();
@@ -308,10 +371,31 @@ fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<
         kind,
         version,
         diagnostics,
+        locations: reader.locations,
     })
 }
 
 impl<'a, 'input> Reader<'a, 'input> {
+    fn span(&self, offset: usize) -> Span {
+        let (line, column) = self.positions.at(offset);
+        Span::new(line, column, 0)
+    }
+
+    /// Records the element a device-level section was read from, and the attributes its keys were.
+    fn locate_section(&mut self, section: &str, node: Node<'a, 'input>, keys: &[(&str, &str)]) {
+        let element = self.span(node.range().start);
+        let spans: Vec<(&str, Span)> = keys
+            .iter()
+            .filter_map(|&(attribute, key)| {
+                Some((key, self.span(node.attribute_node(attribute)?.range().start)))
+            })
+            .collect();
+        let location = self.locations.section(section, element);
+        for (key, span) in spans {
+            location.key(key, span);
+        }
+    }
+
     fn push(&mut self, offset: usize, code: XddCode, message: String) {
         let (line, column) = self.positions.at(offset);
         self.diagnostics
@@ -446,6 +530,9 @@ impl<'a, 'input> Reader<'a, 'input> {
         d.file_version = body_attr("fileVersion").map(str::to_owned);
         d.file_creator = body_attr("fileCreator").map(str::to_owned);
         d.file_modified_by = body_attr("fileModifiedBy").map(str::to_owned);
+        for body in [device, network].into_iter().flatten() {
+            self.locate_section("fileinfo", body, FILE_INFO_KEYS);
+        }
         for (name, is_date) in [
             ("fileCreationDate", true),
             ("fileCreationTime", false),
@@ -469,6 +556,15 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
         }
         if let Some(identity) = device.and_then(|b| child(b, "DeviceIdentity")) {
+            let element = self.span(identity.range().start);
+            let spans: Vec<(&str, Span)> = DEVICE_IDENTITY_KEYS
+                .iter()
+                .filter_map(|&(name, key)| Some((key, self.span(child(identity, name)?.range().start))))
+                .collect();
+            let location = self.locations.section("deviceinfo", element);
+            for (key, span) in spans {
+                location.key(key, span);
+            }
             let text = |name: &str| child(identity, name).map(text_of);
             d.vendor_name = text("vendorName");
             d.vendor_id = text("vendorID");
@@ -500,6 +596,14 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
         }
         if let Some(layers) = layers {
+            for (name, section) in [
+                ("dummyUsage", "dummyusage"),
+                ("dynamicChannels", "dynamicchannels"),
+            ] {
+                if let Some(node) = child(layers, name) {
+                    self.locate_section(section, node, &[]);
+                }
+            }
             d.dummies = child(layers, "dummyUsage").map(|u| self.dummies(u));
             d.dynamic_channels = child(layers, "dynamicChannels").map(|c| self.dynamic_channels(c));
         }
@@ -507,12 +611,20 @@ impl<'a, 'input> Reader<'a, 'input> {
             .and_then(|n| child(n, "TransportLayers"))
             .and_then(|t| child(t, "PhysicalLayer"));
         if let Some(baud) = physical.and_then(|p| child(p, "baudRate")) {
+            let at = self.span(baud.range().start);
+            let location = self.locations.section("deviceinfo", at);
+            for kbit in BITRATES_KBIT {
+                location.key(&format!("BaudRate_{kbit}"), at);
+            }
             d.baud_rates = Some(self.baud_rates(baud));
         }
         if let Some(management) = network.and_then(|n| child(n, "NetworkManagement")) {
             d.network_management = true;
             match child(management, "CANopenGeneralFeatures") {
-                Some(g) => d.general = Some(self.general_features(g)),
+                Some(g) => {
+                    self.locate_section("deviceinfo", g, GENERAL_FEATURE_KEYS);
+                    d.general = Some(self.general_features(g));
+                }
                 None => self.push(
                     management.range().start,
                     XddCode::MissingPart,
@@ -523,6 +635,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 boot_up_master: self.boolean(m, "bootUpMaster"),
             });
             if let Some(m) = child(management, "CANopenMasterFeatures") {
+                self.locate_section("deviceinfo", m, &[("bootUpMaster", "SimpleBootUpMaster")]);
                 self.note_attributes(
                     m,
                     &[
@@ -533,6 +646,9 @@ impl<'a, 'input> Reader<'a, 'input> {
                         "layerSettingServiceMaster",
                     ],
                 );
+            }
+            if let Some(c) = child(management, "deviceCommissioning") {
+                self.locate_section("devicecomissioning", c, COMMISSIONING_KEYS);
             }
             d.commissioning = child(management, "deviceCommissioning").map(|c| self.commissioning(c));
         }
@@ -903,6 +1019,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             "rangeSelector",
         ];
         self.note_attributes(node, &KNOWN);
+        self.locate_entry((index, None), node);
         let xml = self.entry(node, &format!("{index:04X}"));
         let disabled = xml.param.as_ref().is_some_and(|p| {
             p.properties
@@ -950,6 +1067,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 );
                 continue;
             }
+            self.locate_entry((index, Some(sub)), sub_node);
             let xml = self.entry(sub_node, &format!("{index:04X}sub{sub:X}"));
             let mut notes = Vec::new();
             let mapped = entry::to_eds(&xml, &mut notes);
@@ -988,6 +1106,52 @@ impl<'a, 'input> Reader<'a, 'input> {
             },
             ..Object::default()
         }
+    }
+
+    /// Records where an object's or sub-object's values come from: its own attributes first (they
+    /// win, as in [`Self::entry`]), then the elements of the parameter it references.
+    fn locate_entry(&mut self, at: (u16, Option<u8>), node: Node<'a, 'input>) {
+        let mut location = SectionLocation {
+            element: self.span(node.range().start),
+            ..SectionLocation::default()
+        };
+        for &(attribute, key) in ENTRY_KEYS {
+            if let Some(a) = node.attribute_node(attribute) {
+                location.key(key, self.span(a.range().start));
+            }
+        }
+        let param = node
+            .attribute("uniqueIDRef")
+            .and_then(|id| self.ids.get(id).copied())
+            .filter(|p| p.tag_name().name() == "parameter");
+        if let Some(param) = param {
+            if let Some(a) = param.attribute_node("access") {
+                location.key("AccessType", self.span(a.range().start));
+            }
+            let range = child(param, "allowedValues").and_then(|a| child(a, "range"));
+            let elements = [
+                (child(param, "defaultValue"), "DefaultValue"),
+                (child(param, "actualValue"), "ParameterValue"),
+                (child(param, "denotation"), "Denotation"),
+                (range.and_then(|r| child(r, "minValue")), "LowLimit"),
+                (range.and_then(|r| child(r, "maxValue")), "HighLimit"),
+                (
+                    param.children().find(|c| {
+                        c.is_element()
+                            && (Iec::from_name(c.tag_name().name()).is_some()
+                                || c.tag_name().name() == "dataTypeIDRef")
+                    }),
+                    "DataType",
+                ),
+            ];
+            for (element, key) in elements {
+                if let Some(e) = element {
+                    location.key(key, self.span(e.range().start));
+                }
+            }
+            location.key("ParameterName", self.span(param.range().start));
+        }
+        self.locations.entries.insert(at, location);
     }
 
     /// Reads an `index`/`subIndex` hexBinary; `None` (reported) when missing or out of range.
@@ -1157,7 +1321,8 @@ impl<'a, 'input> Reader<'a, 'input> {
             let id = attr.value();
             match self.ids.get(id).copied() {
                 Some(param) if param.tag_name().name() == "parameter" => {
-                    e.param = Some(self.parameter(param))
+                    e.param = Some(self.parameter(param));
+                    self.check_allowed_values(node, param, what);
                 }
                 Some(other) => self.push(
                     attr.range().start,
@@ -1175,6 +1340,60 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
         }
         e
+    }
+
+    /// `X101`: the default and actual values against a parameter's `allowedValues`, when those are
+    /// more than the one range the model carries as LowLimit/HighLimit. The object's own attribute
+    /// wins over the parameter's element, as when reading.
+    fn check_allowed_values(&mut self, node: Node<'a, 'input>, param: Node<'a, 'input>, what: &str) {
+        let Some(allowed) = child(param, "allowedValues") else {
+            return;
+        };
+        let listed: Vec<&str> = elements(allowed, "value")
+            .filter_map(|v| v.attribute("value"))
+            .collect();
+        let ranges: Vec<(Option<&str>, Option<&str>)> = elements(allowed, "range")
+            .map(|r| {
+                let bound = |name: &str| child(r, name).and_then(|v| v.attribute("value"));
+                (bound("minValue"), bound("maxValue"))
+            })
+            .collect();
+        if listed.is_empty() && ranges.len() < 2 {
+            return;
+        }
+        for (attribute, element, role) in [
+            ("defaultValue", "defaultValue", "default"),
+            ("actualValue", "actualValue", "actual"),
+        ] {
+            let source = node
+                .attribute_node(attribute)
+                .map(|a| (a.value(), a.range().start))
+                .or_else(|| {
+                    let e = child(param, element)?;
+                    Some((e.attribute("value")?, e.range().start))
+                });
+            let Some((value, offset)) = source else {
+                continue;
+            };
+            if let Some(verdict) = allowed_verdict(value, &listed, &ranges)
+                && !verdict
+            {
+                let mut parts: Vec<String> = listed.iter().map(|v| format!("`{v}`")).collect();
+                parts.extend(
+                    ranges
+                        .iter()
+                        .map(|(lo, hi)| format!("{}..{}", lo.unwrap_or(""), hi.unwrap_or(""))),
+                );
+                self.push(
+                    offset,
+                    XddCode::ValueNotAllowed,
+                    format!(
+                        "{role} value `{value}` of {what} is not among the allowedValues of its parameter ({})",
+                        parts.join(", ")
+                    ),
+                );
+            }
+        }
     }
 
     fn parameter(&mut self, node: Node<'a, 'input>) -> Param {
@@ -1213,13 +1432,8 @@ impl<'a, 'input> Reader<'a, 'input> {
         p.default_value = child(node, "defaultValue")
             .and_then(|v| v.attribute("value"))
             .map(str::to_owned);
-        if let Some(range) = child(node, "allowedValues").and_then(|a| child(a, "range")) {
-            p.min = child(range, "minValue")
-                .and_then(|v| v.attribute("value"))
-                .map(str::to_owned);
-            p.max = child(range, "maxValue")
-                .and_then(|v| v.attribute("value"))
-                .map(str::to_owned);
+        if let Some(allowed) = child(node, "allowedValues") {
+            (p.min, p.max) = limits(allowed);
         }
         p.properties = self.properties(node);
         for property in elements(node, "property") {
@@ -1291,9 +1505,84 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 }
 
+/// A range bound as a number and as written.
+type Bound<'a> = (i128, &'a String);
+
+/// LowLimit and HighLimit from `allowedValues`: the one range's bounds; with several ranges the
+/// lowest minimum and the highest maximum (CiA 306 limits can only say the hull; `X101` checks the
+/// gaps), or the first range's when a bound is not a number.
+fn limits(allowed: Node<'_, '_>) -> (Option<String>, Option<String>) {
+    let bound = |range: Node<'_, '_>, name: &str| {
+        child(range, name)
+            .and_then(|v| v.attribute("value"))
+            .map(str::to_owned)
+    };
+    let ranges: Vec<(Option<String>, Option<String>)> = elements(allowed, "range")
+        .map(|r| (bound(r, "minValue"), bound(r, "maxValue")))
+        .collect();
+    let first = ranges.first().cloned().unwrap_or_default();
+    if ranges.len() < 2 {
+        return first;
+    }
+    // Each bound with its number; the hull is the written text of the lowest and highest.
+    let numbered: Option<Vec<(Bound<'_>, Bound<'_>)>> = ranges
+        .iter()
+        .map(|(lo, hi)| {
+            let (lo, hi) = (lo.as_ref()?, hi.as_ref()?);
+            Some(((int_of(lo)?, lo), (int_of(hi)?, hi)))
+        })
+        .collect();
+    let Some(numbered) = numbered else {
+        return first;
+    };
+    let lowest = numbered.iter().map(|r| r.0).min_by_key(|b| b.0);
+    let highest = numbered.iter().map(|r| r.1).max_by_key(|b| b.0);
+    (lowest.map(|b| b.1.clone()), highest.map(|b| b.1.clone()))
+}
+
+/// Whether `value` is one of `listed` or inside one of `ranges`; `None` when that cannot be told
+/// (a `$NODEID` formula, or a value or bound that is not a number where a number is needed).
+fn allowed_verdict(value: &str, listed: &[&str], ranges: &[(Option<&str>, Option<&str>)]) -> Option<bool> {
+    let value = value.trim();
+    if value.is_empty() || value.to_ascii_uppercase().contains("$NODEID") {
+        return None;
+    }
+    let number = |t: &str| -> Option<f64> {
+        match int_of(t.trim()) {
+            // Above 2^53 neighbouring integers compare equal; allowedValues of such width are
+            // not seen in the corpus, and a bound rounds the same way as the value.
+            Some(i) => Some(i as f64),
+            None => t.trim().parse::<f64>().ok().filter(|f| f.is_finite()),
+        }
+    };
+    let own = number(value);
+    let same = |v: &str| v.trim() == value || matches!((own, number(v)), (Some(a), Some(b)) if a == b);
+    if listed.iter().any(|v| same(v)) {
+        return Some(true);
+    }
+    if ranges.is_empty() {
+        return Some(false);
+    }
+    let own = own?;
+    let mut undecided = false;
+    for (lo, hi) in ranges {
+        let bound = |b: &Option<&str>| b.map(number);
+        match (bound(lo), bound(hi)) {
+            (Some(None), _) | (_, Some(None)) => undecided = true,
+            (lo, hi) => {
+                let above = lo.flatten().is_none_or(|l| own >= l);
+                let below = hi.flatten().is_none_or(|h| own <= h);
+                if above && below {
+                    return Some(true);
+                }
+            }
+        }
+    }
+    (!undecided).then_some(false)
+}
+
 fn same_id(a: &str, b: &str) -> bool {
-    let read =
-        |t: &str| canopener_eds::model::int_of(t).or_else(|| parse_hex(t).map(|h| i128::from(h.value)));
+    let read = |t: &str| int_of(t).or_else(|| parse_hex(t).map(|h| i128::from(h.value)));
     a == b || matches!((read(a), read(b)), (Some(x), Some(y)) if x == y)
 }
 
@@ -1542,6 +1831,80 @@ mod tests {
         assert_eq!(count(XddCode::HexNotation), 5, "{:#?}", loaded.diagnostics);
         assert_eq!(count(XddCode::SubNumberMismatch), 1);
         assert!(loaded.eds.commissioning.is_none());
+    }
+
+    #[test]
+    fn locations_name_the_attribute_or_parameter_element_of_each_value() {
+        let eds = canopener_eds::load(
+            b"[DeviceInfo]\nVendorNumber=5\n[1017]\nParameterName=Producer heartbeat time\nObjectType=0x7\n\
+              DataType=0x0006\nAccessType=rw\nDefaultValue=1000\nPDOMapping=0\n",
+        )
+        .eds;
+        let text = crate::write(&eds, &crate::WriteOptions::CANOPEN_EDITOR);
+        let loaded = read_ok(&text);
+        let line_of = |needle: &str| {
+            text.lines()
+                .position(|l| l.contains(needle))
+                .and_then(|i| u32::try_from(i + 1).ok())
+                .unwrap_or_else(|| panic!("{needle} not written"))
+        };
+        let at = |section: &str, key: Option<&str>| loaded.locations.find(Some(section), key).line;
+        assert_eq!(
+            at("1017", Some("DefaultValue")),
+            line_of("<q1:defaultValue value=\"1000\"")
+        );
+        assert_eq!(
+            at("1017", Some("AccessType")),
+            line_of(r#"uniqueID="UID_OBJ_1017""#)
+        );
+        assert_eq!(
+            at("1017", Some("PDOMapping")),
+            line_of(r#"<CANopenObject index="1017""#)
+        );
+        assert_eq!(at("1017sub3", None), line_of(r#"<CANopenObject index="1017""#));
+        assert_eq!(at("DeviceInfo", Some("VendorNumber")), line_of("<q1:vendorID>"));
+        assert_eq!(loaded.locations.find(None, None), loaded.locations.file);
+        assert_eq!(loaded.locations.file.line, line_of("ProfileBody_Device_CANopen"));
+    }
+
+    #[test]
+    fn values_outside_allowed_values_are_reported_and_ranges_give_their_hull() {
+        let text = r#"<ISO15745ProfileContainer xmlns="http://www.canopen.org/xml/1.1"><ISO15745Profile>
+<ProfileBody xsi:type="ProfileBody_Device_CANopen" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"><ApplicationProcess><parameterList>
+<parameter uniqueID="P1" access="readWrite"><UINT/><defaultValue value="50"/>
+<allowedValues><range><minValue value="1"/><maxValue value="10"/></range><range><minValue value="100"/><maxValue value="0x3E8"/></range></allowedValues></parameter>
+<parameter uniqueID="P2" access="readWrite"><USINT/><defaultValue value="3"/>
+<allowedValues><value value="1"/><value value="0x3"/></allowedValues></parameter>
+</parameterList></ApplicationProcess></ProfileBody></ISO15745Profile><ISO15745Profile>
+<ProfileBody xsi:type="ProfileBody_CommunicationNetwork_CANopen" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"><ApplicationLayers><CANopenObjectList>
+<CANopenObject index="2000" name="a" objectType="7" uniqueIDRef="P1"/>
+<CANopenObject index="2001" name="b" objectType="7" uniqueIDRef="P2"/>
+<CANopenObject index="2002" name="c" objectType="7" uniqueIDRef="P2" defaultValue="2"/>
+</CANopenObjectList></ApplicationLayers></ProfileBody></ISO15745Profile></ISO15745ProfileContainer>"#;
+        let loaded = read_ok(text);
+        let not_allowed: Vec<u32> = loaded
+            .diagnostics
+            .iter()
+            .filter(|d| d.code == XddCode::ValueNotAllowed)
+            .map(|d| d.span.line)
+            .collect();
+        // 2000: 50 lies between the ranges; 2001: 3 is listed as 0x3; 2002: its own 2 is not listed.
+        assert_eq!(not_allowed, [3, 11], "{:?}", loaded.diagnostics);
+        let a = &loaded.eds.objects[&0x2000].attributes;
+        assert_eq!(
+            (a.low_limit.as_deref(), a.high_limit.as_deref()),
+            (Some("1"), Some("0x3E8"))
+        );
+        assert_eq!(allowed_verdict("$NODEID+1", &["1"], &[]), None);
+        assert_eq!(
+            allowed_verdict("5", &[], &[(Some("x"), Some("9")), (Some("20"), None)]),
+            None
+        );
+        assert_eq!(
+            allowed_verdict("25", &[], &[(Some("x"), Some("9")), (Some("20"), None)]),
+            Some(true)
+        );
+        assert_eq!(allowed_verdict("abc", &["abc"], &[]), Some(true));
     }
 
     #[test]

@@ -37,9 +37,10 @@ pub(crate) enum EdsCommand {
   canopener eds diff a.eds b.eds --format json | jq '.changes[] | select(.significant)'
 Exit status: 0 same device and object dictionary ([FileInfo] metadata may differ), 1 different, 2 trouble.")]
     Diff(EdsDiffArgs),
-    /// Check EDS/DCF files against CiA 306/301, reference profiles, tool portability and rule packs.
+    /// Check EDS/DCF and CiA 311 XDD/XDC/XPD files against CiA 306/311/301, reference profiles, tool portability and rule packs.
     #[command(after_help = "Examples:
   canopener eds check device.eds
+  canopener eds check device.xdd                  # XML is recognised by its content; findings point into the XML
   canopener eds check vendor/ 'more/*.dcf' --format sarif -o eds.sarif   # directories and globs, in parallel
   canopener eds check device.eds --deny warnings                  # CI: warnings fail too
   canopener eds check device.eds --rules project.toml --tag naming   # your own rules, only one tag
@@ -65,8 +66,9 @@ or bad arguments.")]
   canopener eds fix device.eds --in-place --only P045,P044
   canopener eds fix device.eds --rules seed-paper.toml --dry-run
 Every untouched line stays byte-identical. Fixes that change what the file says about the device
-(e.g. a sub-index 0 default) are marked as such. Exit status: 0 no errors remain, 1 errors remain
-(or warnings with --deny warnings), 2 trouble.")]
+(e.g. a sub-index 0 default) are marked as such. XDD/XDC files are refused (exit 2): fixes are
+EDS/DCF text edits. Exit status: 0 no errors remain, 1 errors remain (or warnings with --deny
+warnings), 2 trouble.")]
     Fix(EdsFixArgs),
 }
 

@@ -1,6 +1,7 @@
 //! `canopener eds fix`: apply the safe fixes, say what each one did, and re-check the result.
 
 use canopener_check::fix;
+use canopener_description::Format;
 use canopener_eds::Severity;
 use canopener_runtime::batch::display_path;
 use canopener_runtime::files::{backup_path, same_file, write_atomic};
@@ -22,6 +23,16 @@ pub(crate) fn run(args: EdsFixArgs) -> CliResult {
     let checker = checker(&args.selection)?;
     let bytes = read_bytes(&args.file)?;
     let name = args.file.file_name().and_then(|n| n.to_str());
+    let extension = args.file.extension().and_then(|e| e.to_str());
+    if Format::is_xml(extension, &bytes) {
+        // The fixes are line edits on CiA 306 text; an XML file is checked, not fixed.
+        return Err(CliError::EdsTrouble(format!(
+            "{}: is CiA 311 XML (XDD/XDC); `eds fix` fixes EDS/DCF text only. \
+             `canopener eds check` reports what to change; edit the XML, or convert it with \
+             `canopener eds convert` and fix the EDS",
+            args.file.display()
+        )));
+    }
     let outcome = checker.fix(name, &bytes);
     let path = args.file.display();
     for applied in &outcome.fixes {

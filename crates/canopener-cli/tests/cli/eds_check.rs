@@ -144,7 +144,7 @@ fn check_walks_directories_and_globs_and_counts_unreadable_files_as_trouble() {
         "an empty directory is not a clean result"
     );
     assert!(
-        stdout(&nothing).contains("no .eds or .dcf file"),
+        stdout(&nothing).contains("no .eds, .dcf, .xdd, .xdc or .xpd file"),
         "{}",
         stdout(&nothing)
     );
@@ -264,4 +264,89 @@ fn fix_in_place_keeps_a_backup_and_changes_only_the_fixed_line() {
     assert!(stderr(&again).contains("nothing to fix"), "{}", stderr(&again));
     let refused = run(&["eds", "fix", arg(&file), "-o", arg(&file)]);
     assert_eq!(refused.status.code(), Some(2));
+}
+
+/// base.xdd with its vendor ID changed in DeviceIdentity (C304 against 1018sub1) and a dangling
+/// `uniqueIDRef` (X006), saved as `device.eds`: XML is recognised by content, not by extension.
+fn broken_xdd(dir: &Path) -> PathBuf {
+    let xdd = base().with_file_name("base.xdd");
+    let text = std::fs::read_to_string(xdd).expect("base.xdd");
+    let text = text
+        .replacen(
+            "<q1:vendorID>0x00000ABC</q1:vendorID>",
+            "<q1:vendorID>0x00000ABD</q1:vendorID>",
+            1,
+        )
+        .replacen(
+            r#"uniqueIDRef="UID_OBJ_2000""#,
+            r#"uniqueIDRef="UID_OBJ_2001""#,
+            1,
+        );
+    let path = dir.join("device.eds");
+    std::fs::write(&path, text).expect("write fixture");
+    path
+}
+
+#[test]
+fn check_reads_xml_by_content_and_points_into_the_xml_in_every_format() {
+    let dir = temp_dir("check-xdd");
+    let file = broken_xdd(&dir);
+    let text = std::fs::read_to_string(&file).expect("fixture");
+    let line_of = |needle: &str| {
+        text.lines()
+            .position(|l| l.contains(needle))
+            .map(|i| i + 1)
+            .expect("needle in the fixture")
+    };
+    let output = run(&["eds", "check", arg(&file), "--format", "json"]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&output)).expect("JSON report");
+    let findings = json["files"][0]["findings"].as_array().expect("findings").clone();
+    let at = |code: &str| {
+        findings
+            .iter()
+            .find(|f| f["code"] == code)
+            .and_then(|f| f["line"].as_u64())
+            .unwrap_or_else(|| panic!("{code} not reported: {findings:?}"))
+    };
+    assert_eq!(at("C304"), line_of("<q1:vendorID>") as u64);
+    assert_eq!(at("X006"), line_of("UID_OBJ_2001") as u64);
+    assert!(
+        findings.iter().all(|f| {
+            let code = f["code"].as_str().unwrap_or("");
+            !code.starts_with('P') && !code.starts_with("C1") && !code.starts_with('T')
+        }),
+        "no CiA 306 text findings on XML: {findings:?}"
+    );
+    for (format, marker) in [
+        ("sarif", "\"2.1.0\""),
+        ("junit", "<testsuites"),
+        ("html", "<!DOCTYPE html>"),
+    ] {
+        let out = dir.join(format!("report.{format}"));
+        let output = run(&["eds", "check", arg(&file), "--format", format, "-o", arg(&out)]);
+        assert_eq!(output.status.code(), Some(1), "{format}: {}", stderr(&output));
+        let written = std::fs::read_to_string(&out).expect("report written");
+        assert!(written.contains(marker) && written.contains("X006"), "{format}");
+    }
+    let clean = run(&["eds", "check", arg(&base().with_file_name("base.xdd"))]);
+    assert_eq!(clean.status.code(), Some(0), "{}", stdout(&clean));
+}
+
+#[test]
+fn fix_refuses_xml_and_explain_knows_the_x_codes() {
+    let dir = temp_dir("fix-xdd");
+    let file = broken_xdd(&dir);
+    let before = std::fs::read(&file).expect("fixture");
+    let output = run(&["eds", "fix", arg(&file), "--in-place"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("CiA 311 XML"), "{}", stderr(&output));
+    assert_eq!(
+        std::fs::read(&file).expect("still there"),
+        before,
+        "the file is untouched"
+    );
+    let page = run(&["eds", "explain", "X101"]);
+    assert_eq!(page.status.code(), Some(0));
+    assert!(stdout(&page).contains("allowedValues"), "{}", stdout(&page));
 }
