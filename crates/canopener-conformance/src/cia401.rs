@@ -5,8 +5,12 @@
 //! Inputs are driven through the factory test registers of the thesis (2000h BOOLEAN "factory
 //! test config", 2001h UNSIGNED8 digital inputs, 2002h:n INTEGER16 analogue inputs). They are no
 //! part of CiA 401, so an EDS rarely lists them: the tests ask the device itself (an SDO upload of
-//! each) and are `inconclusive` when it does not have them, since nothing else can change an input
-//! from the bus. Every value changed is written back when the test ends.
+//! each). A device without them has its inputs applied by the user's stimulus hook
+//! ([`crate::stimulus`], `--stimulus CMD`) when one is given, each change followed by the hook's
+//! settle time; with neither the tests are `inconclusive`, since nothing else can change an input
+//! from the bus. A hook that fails makes the test `inconclusive` with its reason, never a pass.
+//! Every value changed over SDO is written back when the test ends; the hook is asked to bring
+//! the inputs back to 00h (digital) and 0 (analogue) when a test that applied them ends.
 
 use std::time::Duration;
 
@@ -19,6 +23,7 @@ use crate::cia301::helpers::{
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::PdoDirection;
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::stimulus::InputChange;
 
 /// CiA 401 device type and I/O functionality bits of 1000h.
 pub const DEVICE_TYPE: &str = "CiA 401 (device type 1000h: 0191h, I/O functionality bits 16..23)";
@@ -228,8 +233,78 @@ fn has_factory_registers(ctx: &mut Ctx<'_, '_>, analog: bool) -> Result<bool, St
 fn no_stimulus(analog: bool) -> Finding {
     let registers = if analog { "2000h/2002h:01" } else { "2000h/2001h" };
     Finding::inconclusive(format!(
-        "the device has no factory test registers {registers} (thesis §5.2), so the tester cannot change its inputs"
+        "the device has no factory test registers {registers} (thesis §5.2) and no --stimulus hook was given, so the tester cannot change its inputs; give --stimulus CMD, a program that applies them (docs/conformance.md)"
     ))
+}
+
+/// How a test changes the device's inputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Driver {
+    /// SDO writes to the factory test registers 2001h/2002h (with 2000h TRUE).
+    Factory,
+    /// The user's stimulus hook.
+    Hook,
+}
+
+/// The factory test registers when the device has them, else the stimulus hook when given, else
+/// the `inconclusive` finding.
+fn driver(ctx: &mut Ctx<'_, '_>, analog: bool) -> Result<Result<Driver, Finding>, Stop> {
+    if has_factory_registers(ctx, analog)? {
+        Ok(Ok(Driver::Factory))
+    } else if ctx.has_stimulus() {
+        Ok(Ok(Driver::Hook))
+    } else {
+        Ok(Err(no_stimulus(analog)))
+    }
+}
+
+/// Applies `change`; the `inconclusive` finding when the hook could not.
+fn apply(ctx: &mut Ctx<'_, '_>, driver: Driver, change: InputChange) -> Result<Option<Finding>, Stop> {
+    match (driver, change) {
+        (Driver::Factory, InputChange::Digital { value, .. }) => {
+            ctx.write(0x2001, 0, vec![value])?;
+        }
+        (Driver::Factory, InputChange::Analog { channel, value }) => {
+            ctx.write(0x2002, channel, value.to_le_bytes().to_vec())?;
+        }
+        (Driver::Hook, change) => {
+            if let Err(reason) = ctx.stimulate(&change)? {
+                return Ok(Some(Finding::inconclusive(format!(
+                    "the stimulus hook could not apply {change}: {reason}"
+                ))));
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// How the log names applying `change`.
+fn applied_text(driver: Driver, change: InputChange) -> String {
+    match (driver, change) {
+        (Driver::Factory, InputChange::Digital { value, .. }) => {
+            format!("SDO download 2001h:00 = {value:02X}")
+        }
+        (Driver::Factory, InputChange::Analog { channel, value }) => {
+            format!("SDO download 2002h:{channel:02X} = {}", hex(&value.to_le_bytes()))
+        }
+        (Driver::Hook, change) => format!("the stimulus hook applied {change}"),
+    }
+}
+
+/// What a failure blames besides the device: the hook may have reported an input it did not apply.
+fn hook_caveat(driver: Driver) -> &'static str {
+    match driver {
+        Driver::Factory => "",
+        Driver::Hook => " (or the stimulus hook reported an input it did not apply)",
+    }
+}
+
+const fn digital(value: u8) -> InputChange {
+    InputChange::Digital { block: 1, value }
+}
+
+const fn analog(value: i16) -> InputChange {
+    InputChange::Analog { channel: 1, value }
 }
 
 /// Turns the factory test on; `false` if the device refused.
@@ -244,7 +319,11 @@ fn digital_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if ctx.model().entry(0x6000, 1).is_none() {
         return Ok(Finding::not_applicable("the EDS has no 6000h:01"));
     }
-    if !has_factory_registers(ctx, false)? || !factory_on(ctx)? {
+    let driver = match driver(ctx, false)? {
+        Ok(driver) => driver,
+        Err(finding) => return Ok(finding),
+    };
+    if driver == Driver::Factory && !factory_on(ctx)? {
         return Ok(no_stimulus(false));
     }
     let mut checks = vec![(0x5Au8, 0x5Au8, "polarity 00h")];
@@ -262,7 +341,10 @@ fn digital_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ));
         }
     }
-    let original = ctx.read(0x2001, 0)?;
+    let original = match driver {
+        Driver::Factory => ctx.read(0x2001, 0)?,
+        Driver::Hook => Reply::Done(vec![0]),
+    };
     for (input, expected, setting) in checks {
         if setting == "polarity FFh" {
             let reply = ctx.write(0x6002, 1, vec![0xFF])?;
@@ -275,10 +357,12 @@ fn digital_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 ));
             }
         }
-        ctx.write(0x2001, 0, vec![input])?;
+        if let Some(inconclusive) = apply(ctx, driver, digital(input))? {
+            return Ok(inconclusive);
+        }
         let reply = ctx.read(0x6000, 1)?;
         if reply != Reply::Done(vec![expected]) {
-            restore_input(ctx, &original)?;
+            restore_input(ctx, driver, &original)?;
             return Ok(Finding::fail(
                 format!(
                     "input {input:02X}h with {setting}: 6000h:01 gave {}, expected {expected:02X}h",
@@ -286,29 +370,54 @@ fn digital_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 ),
                 Evidence {
                     request: format!(
-                        "SDO download 2001h:00 = {input:02X} ({setting}), then {}",
+                        "{} ({setting}), then {}",
+                        applied_text(driver, digital(input)),
                         upload_text((0x6000, 1))
                     ),
                     requirement: format!(
                         "{DIGITAL_INPUTS}: 6000h:01 is the input with the bits set in 6002h:01 inverted"
                     ),
                     answer: reply.describe(),
-                    cause: "the input is not read, or polarity is not applied (or applied twice)".to_owned(),
+                    cause: format!(
+                        "the input is not read, or polarity is not applied (or applied twice){}",
+                        hook_caveat(driver)
+                    ),
                 },
             ));
         }
     }
-    restore_input(ctx, &original)?;
-    Ok(Finding::pass(if polarity {
-        "6000h:01 followed the input, inverted exactly while 6002h:01 = FFh"
-    } else {
-        "6000h:01 followed the input (the EDS has no writable 6002h:01)"
-    }))
+    restore_input(ctx, driver, &original)?;
+    Ok(Finding::pass(format!(
+        "{}{}",
+        if polarity {
+            "6000h:01 followed the input, inverted exactly while 6002h:01 = FFh"
+        } else {
+            "6000h:01 followed the input (the EDS has no writable 6002h:01)"
+        },
+        driven_by(driver)
+    )))
 }
 
-fn restore_input(ctx: &mut Ctx<'_, '_>, original: &Reply) -> Result<(), Stop> {
+/// How a pass says the inputs were applied.
+fn driven_by(driver: Driver) -> &'static str {
+    match driver {
+        Driver::Factory => "",
+        Driver::Hook => "; inputs applied by the stimulus hook",
+    }
+}
+
+/// Puts the digital input back: 2001h's old value, or 00h through the hook (whose failure now
+/// changes no verdict).
+fn restore_input(ctx: &mut Ctx<'_, '_>, driver: Driver, original: &Reply) -> Result<(), Stop> {
     if let Reply::Done(data) = original {
-        ctx.write(0x2001, 0, data.clone())?;
+        match driver {
+            Driver::Factory => {
+                ctx.write(0x2001, 0, data.clone())?;
+            }
+            Driver::Hook => {
+                apply(ctx, driver, digital(data.first().copied().unwrap_or(0)))?;
+            }
+        }
     }
     Ok(())
 }
@@ -443,9 +552,10 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
     if needs_enable && !enable {
         return Ok(Finding::not_applicable("the EDS has no writable 6005h"));
     }
-    if !has_factory_registers(ctx, false)? {
-        return Ok(no_stimulus(false));
-    }
+    let driver = match driver(ctx, false)? {
+        Ok(driver) => driver,
+        Err(finding) => return Ok(finding),
+    };
     let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6000_0108)? else {
         return Ok(Finding::not_applicable("no valid TPDO maps 6000h:01"));
     };
@@ -462,7 +572,9 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
         writes.push((0x6005, 0, 1));
     }
     // The input goes to 00h before the factory test feeds it, so no step starts from a stale value.
-    writes.push((0x2001, 0, 0));
+    if driver == Driver::Factory {
+        writes.push((0x2001, 0, 0));
+    }
     for (index, sub, value) in writes {
         let reply = ctx.modify(index, sub, vec![value])?;
         if !matches!(reply, Reply::Done(_)) {
@@ -474,8 +586,15 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
             ));
         }
     }
-    if !factory_on(ctx)? {
-        return Ok(no_stimulus(false));
+    match driver {
+        Driver::Factory if !factory_on(ctx)? => return Ok(no_stimulus(false)),
+        Driver::Factory => {}
+        Driver::Hook => {
+            // Still pre-operational: the change to 00h sends no TPDO.
+            if let Some(inconclusive) = apply(ctx, driver, digital(0))? {
+                return Ok(inconclusive);
+            }
+        }
     }
     let id = ctx.id(pdo.cob);
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
@@ -503,7 +622,10 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
             Step::Input(input, expect) => (input, expect),
         };
         let mark = ctx.mark();
-        ctx.write(0x2001, 0, vec![input])?;
+        if let Some(inconclusive) = apply(ctx, driver, digital(input))? {
+            back_to_pre_operational(ctx)?;
+            return Ok(inconclusive);
+        }
         ctx.listen(EVENT_WAIT, |_| false)?;
         let pdos: Vec<_> = ctx
             .received_since(mark)
@@ -532,7 +654,12 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
         masks[0], masks[1], masks[2]
     );
     match wrong {
-        None => Ok(Finding::pass(format!("{what}: TPDO{} came exactly on the enabled edges ({})", pdo.number, log.join("; ")))),
+        None => Ok(Finding::pass(format!(
+            "{what}: TPDO{} came exactly on the enabled edges ({}){}",
+            pdo.number,
+            log.join("; "),
+            driven_by(driver)
+        ))),
         Some((input, expect, seen)) => Ok(Finding::fail(
             format!(
                 "{what}: input {input:02X}h should {}give a TPDO{}, got {seen}",
@@ -540,12 +667,19 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
                 pdo.number
             ),
             Evidence {
-                request: format!("{masks_text}, TPDO{} event-driven, operational; steps: {}", pdo.number, log.join("; ")),
+                request: format!(
+                    "{masks_text}, TPDO{} event-driven, operational; steps: {}",
+                    pdo.number,
+                    log.join("; ")
+                ),
                 requirement: format!(
                     "{INTERRUPTS}: while 6005h is TRUE, a change triggers the TPDO mapping 6000h:01 iff (changed & 6006h) | (rose & 6007h) | (fell & 6008h) != 0, once, carrying the new value"
                 ),
                 answer: seen,
-                cause: "the interrupt masks or the global interrupt enable are not evaluated as CiA 401 defines them".to_owned(),
+                cause: format!(
+                    "the interrupt masks or the global interrupt enable are not evaluated as CiA 401 defines them{}",
+                    hook_caveat(driver)
+                ),
             },
         )),
     }
@@ -750,9 +884,10 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if ctx.model().entry(0x6401, 1).is_none() {
         return Ok(Finding::not_applicable("the EDS has no 6401h:01"));
     }
-    if !has_factory_registers(ctx, true)? {
-        return Ok(no_stimulus(true));
-    }
+    let driver = match driver(ctx, true)? {
+        Ok(driver) => driver,
+        Err(finding) => return Ok(finding),
+    };
     let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6401_0110)? else {
         return Ok(Finding::not_applicable("no valid TPDO maps 6401h:01"));
     };
@@ -767,9 +902,18 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     let first: i16 = 1000;
     let second: i16 = -1234;
-    ctx.modify(0x2002, 1, first.to_le_bytes().to_vec())?;
-    if !factory_on(ctx)? {
-        return Ok(no_stimulus(true));
+    match driver {
+        Driver::Factory => {
+            ctx.modify(0x2002, 1, first.to_le_bytes().to_vec())?;
+            if !factory_on(ctx)? {
+                return Ok(no_stimulus(true));
+            }
+        }
+        Driver::Hook => {
+            if let Some(inconclusive) = apply(ctx, driver, analog(first))? {
+                return Ok(inconclusive);
+            }
+        }
     }
     let read = ctx.read(0x6401, 1)?;
     if read != Reply::Done(first.to_le_bytes().to_vec()) {
@@ -777,13 +921,16 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
             format!("with 2002h:01 = {first}, 6401h:01 gave {}", read.describe()),
             Evidence {
                 request: format!(
-                    "SDO download 2002h:01 = {}, then {}",
-                    hex(&first.to_le_bytes()),
+                    "{}, then {}",
+                    applied_text(driver, analog(first)),
                     upload_text((0x6401, 1))
                 ),
                 requirement: format!("{ANALOG_INPUTS}: 6401h:01 is the value of analogue input 1"),
                 answer: read.describe(),
-                cause: "the analogue input is not read into 6401h:01".to_owned(),
+                cause: format!(
+                    "the analogue input is not read into 6401h:01{}",
+                    hook_caveat(driver)
+                ),
             },
         ));
     }
@@ -796,7 +943,10 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let period = Duration::from_millis(u64::from(ANALOG_PERIOD_MS));
     let cyclic = ctx.listen(period * 7 / 2, |f| f.id() == id && !f.is_remote())?;
     let mark = ctx.mark();
-    ctx.write(0x2002, 1, second.to_le_bytes().to_vec())?;
+    if let Some(inconclusive) = apply(ctx, driver, analog(second))? {
+        back_to_pre_operational(ctx)?;
+        return Ok(inconclusive);
+    }
     ctx.listen(period * 5 / 2, |_| false)?;
     let after: Vec<_> = ctx
         .received_since(mark)
@@ -804,6 +954,10 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .filter(|l| l.frame.id() == id && !l.frame.is_remote())
         .collect();
     back_to_pre_operational(ctx)?;
+    if driver == Driver::Hook {
+        // Back to 0, as the module docs promise; a failure here changes no verdict.
+        apply(ctx, driver, analog(0))?;
+    }
     let cyclic_values: Vec<_> = cyclic.iter().map(|l| value_of(l.frame.data())).collect();
     let after_values: Vec<_> = after.iter().map(|l| value_of(l.frame.data())).collect();
     let text = |values: &[Option<i16>]| {
@@ -822,22 +976,26 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let cyclic_ok = cyclic_values.len() >= 3 && cyclic_values.iter().all(|v| *v == Some(first));
     let after_ok = after_values.len() >= 2 && after_values.iter().all(|v| *v == Some(second));
     if cyclic_ok && after_ok {
-        return Ok(Finding::pass(seen));
+        return Ok(Finding::pass(format!("{seen}{}", driven_by(driver))));
     }
     Ok(Finding::fail(
         seen.clone(),
         Evidence {
             request: format!(
-                "TPDO{} event-driven with event timer {ANALOG_PERIOD_MS} ms, operational for {} ms at {first}, then 2002h:01 = {second} for {} ms",
+                "TPDO{} event-driven with event timer {ANALOG_PERIOD_MS} ms, operational for {} ms at {first}, then {} for {} ms",
                 pdo.number,
                 ANALOG_PERIOD_MS * 7 / 2,
+                applied_text(driver, analog(second)),
                 ANALOG_PERIOD_MS * 5 / 2
             ),
             requirement: format!(
                 "{ANALOG_INPUTS}; CiA 301 §7.5.2.35: the event timer sends the TPDO every {ANALOG_PERIOD_MS} ms, each carrying the current 6401h:01"
             ),
             answer: seen,
-            cause: "the TPDO is not sent on its event timer, or carries a stale analogue value".to_owned(),
+            cause: format!(
+                "the TPDO is not sent on its event timer, or carries a stale analogue value{}",
+                hook_caveat(driver)
+            ),
         },
     ))
 }
