@@ -36,6 +36,8 @@ pub const DIGITAL_OUTPUTS: &str =
     "CiA 401 (6200h write output 8-bit, 6202h change polarity, 6206h/6207h error mode and value)";
 /// Analogue inputs.
 pub const ANALOG_INPUTS: &str = "CiA 401 (6401h read analogue input 16-bit)";
+/// The analogue input interrupt objects.
+pub const ANALOG_INTERRUPTS: &str = "CiA 401 (6421h analogue input interrupt trigger selection: bit 0 upper limit exceeded, bit 1 below lower limit, bit 2 changed by more than delta; 6423h analogue input global interrupt enable; 6424h/6425h/6426h interrupt upper limit, lower limit, delta)";
 /// The default PDOs of a CiA 401 device.
 pub const DEFAULT_PDOS: &str =
     "CiA 401 (default PDO mapping: TPDO1 digital inputs, TPDO2 analogue inputs, RPDO1 digital outputs)";
@@ -124,6 +126,14 @@ pub fn tests() -> Vec<TestDef> {
             "a CiA 401 EDS with 6401h:01 and a TPDO mapping it with a writable event timer; the factory test registers 2000h/2002h:01 (else inconclusive)",
             &["cia401", "pdo", "timing", "writes", "nmt"],
             analog_inputs,
+        ),
+        def(
+            "cia401.io.9",
+            "Analogue interrupts: TPDO2 goes exactly when a condition 6421h:01 selects holds (upper limit 6424h, lower limit 6425h, delta 6426h), never while 6423h is FALSE",
+            &[ANALOG_INTERRUPTS, ANALOG_INPUTS, DEFAULT_PDOS, FACTORY_REGISTERS],
+            "a CiA 401 EDS with 6401h:01, writable 6421h:01, 6423h and 6426h:01 and a TPDO mapping 6401h:01 (the limit steps need writable 6424h:01 and 6425h:01); the factory test registers 2000h/2002h:01 or --stimulus (else inconclusive)",
+            &["cia401", "pdo", "writes", "nmt"],
+            analog_interrupts,
         ),
     ]
 }
@@ -512,6 +522,33 @@ fn event_driven(ctx: &mut Ctx<'_, '_>, pdo: &Mapped, event_timer: u16) -> Result
     Ok(None)
 }
 
+/// Brings the input `zero` names to zero while the device is still pre-operational (so the change
+/// sends no TPDO and no step starts from a stale value), turns the factory test on (whose register
+/// the caller has already zeroed), starts the node and lets the TPDOs a device may send on entering
+/// operational pass. Returns `pdo`'s CAN-ID, or the `inconclusive` finding.
+fn zero_then_operational(
+    ctx: &mut Ctx<'_, '_>,
+    driver: Driver,
+    zero: InputChange,
+    pdo: &Mapped,
+) -> Result<Result<canopener_can::CanId, Finding>, Stop> {
+    match driver {
+        Driver::Factory if !factory_on(ctx)? => {
+            return Ok(Err(no_stimulus(matches!(zero, InputChange::Analog { .. }))));
+        }
+        Driver::Factory => {}
+        Driver::Hook => {
+            if let Some(inconclusive) = apply(ctx, driver, zero)? {
+                return Ok(Err(inconclusive));
+            }
+        }
+    }
+    let id = ctx.id(pdo.cob);
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(EVENT_WAIT, |_| false)?;
+    Ok(Ok(id))
+}
+
 /// One step of an interrupt test.
 #[derive(Clone, Copy)]
 enum Step {
@@ -586,20 +623,10 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
             ));
         }
     }
-    match driver {
-        Driver::Factory if !factory_on(ctx)? => return Ok(no_stimulus(false)),
-        Driver::Factory => {}
-        Driver::Hook => {
-            // Still pre-operational: the change to 00h sends no TPDO.
-            if let Some(inconclusive) = apply(ctx, driver, digital(0))? {
-                return Ok(inconclusive);
-            }
-        }
-    }
-    let id = ctx.id(pdo.cob);
-    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
-    // A device may send its TPDOs once on entering operational: let them pass.
-    ctx.listen(EVENT_WAIT, |_| false)?;
+    let id = match zero_then_operational(ctx, driver, digital(0), &pdo)? {
+        Ok(id) => id,
+        Err(finding) => return Ok(finding),
+    };
     let mut log = Vec::new();
     let mut wrong = None;
     for step in steps {
@@ -998,4 +1025,225 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ),
         },
     ))
+}
+
+/// One setting of the analogue interrupt objects and the values applied under it, each with
+/// whether a TPDO must follow.
+struct AnalogPhase {
+    what: &'static str,
+    enable: bool,
+    selection: u8,
+    /// (index, value) of 6424h/6425h/6426h:01 to set first.
+    limits: &'static [(u16, i64)],
+    steps: &'static [(i16, bool)],
+}
+
+/// The phases of `cia401.io.9`. Every value stays clear of its limit (no test of `>` against `≥`),
+/// and in the delta phase the previous value is always the last transmitted one, so a device that
+/// measures delta either way (the reference leaves it open) gets the same verdict.
+const ANALOG_PHASES: &[AnalogPhase] = &[
+    AnalogPhase {
+        what: "6423h FALSE, 6421h:01 = 04h, delta 0",
+        enable: false,
+        selection: 0x04,
+        limits: &[(0x6426, 0)],
+        steps: &[(300, false), (-300, false)],
+    },
+    AnalogPhase {
+        what: "6423h TRUE, 6421h:01 = 04h, delta 0",
+        enable: true,
+        selection: 0x04,
+        limits: &[(0x6426, 0)],
+        steps: &[(600, true)],
+    },
+    AnalogPhase {
+        what: "6421h:01 = 01h, upper limit 6424h:01 = 1000",
+        enable: true,
+        selection: 0x01,
+        limits: &[(0x6424, 1000)],
+        steps: &[(500, false), (1500, true), (500, false)],
+    },
+    AnalogPhase {
+        what: "6421h:01 = 02h, lower limit 6425h:01 = -1000",
+        enable: true,
+        selection: 0x02,
+        limits: &[(0x6425, -1000)],
+        steps: &[(0, false), (-1500, true), (0, false)],
+    },
+    AnalogPhase {
+        what: "6421h:01 = 04h, delta 6426h:01 = 100",
+        enable: true,
+        selection: 0x04,
+        limits: &[(0x6426, 100)],
+        steps: &[(400, true), (450, false), (600, true), (650, false), (480, true)],
+    },
+];
+
+/// `value` in the little-endian size of `index`:`sub` as the EDS declares it (4 bytes if unknown).
+fn sized(ctx: &Ctx<'_, '_>, index: u16, sub: u8, value: i64) -> Vec<u8> {
+    let size = ctx
+        .model()
+        .entry(index, sub)
+        .and_then(|e| e.size())
+        .filter(|&n| (1..=8).contains(&n))
+        .unwrap_or(4);
+    value.to_le_bytes()[..size].to_vec()
+}
+
+fn analog_interrupts(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !is_cia401(ctx) {
+        return Ok(Finding::not_applicable(NOT_401));
+    }
+    if ctx.model().entry(0x6401, 1).is_none() {
+        return Ok(Finding::not_applicable("the EDS has no 6401h:01"));
+    }
+    let writable =
+        |ctx: &Ctx<'_, '_>, index: u16, sub: u8| ctx.model().entry(index, sub).is_some_and(|e| e.writable());
+    for (index, sub) in [(0x6421u16, 1u8), (0x6423, 0), (0x6426, 1)] {
+        if !writable(ctx, index, sub) {
+            return Ok(Finding::not_applicable(format!(
+                "the EDS has no writable {index:04X}h:{sub:02X}"
+            )));
+        }
+    }
+    let phases: Vec<&AnalogPhase> = ANALOG_PHASES
+        .iter()
+        .filter(|p| p.limits.iter().all(|&(index, _)| writable(ctx, index, 1)))
+        .collect();
+    let skipped: Vec<&str> = ANALOG_PHASES
+        .iter()
+        .filter(|p| !phases.iter().any(|q| std::ptr::eq(*q, *p)))
+        .map(|p| p.what)
+        .collect();
+    let driver = match driver(ctx, true)? {
+        Ok(driver) => driver,
+        Err(finding) => return Ok(finding),
+    };
+    let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6401_0110)? else {
+        return Ok(Finding::not_applicable("no valid TPDO maps 6401h:01"));
+    };
+    if let Some(refused) = event_driven(ctx, &pdo, 0)? {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} cannot be made event-driven: {refused}",
+            pdo.number
+        )));
+    }
+    // The input starts at 0 while the device is pre-operational, so no step starts from a stale value.
+    if driver == Driver::Factory {
+        ctx.modify(0x2002, 1, vec![0, 0])?;
+    }
+    let id = match zero_then_operational(ctx, driver, analog(0), &pdo)? {
+        Ok(id) => id,
+        Err(finding) => return Ok(finding),
+    };
+    let mut log = Vec::new();
+    let mut wrong = None;
+    for phase in &phases {
+        let mut settings = vec![
+            (0x6423u16, 0u8, vec![u8::from(phase.enable)]),
+            (0x6421, 1, vec![phase.selection]),
+        ];
+        for &(index, value) in phase.limits {
+            settings.push((index, 1, sized(ctx, index, 1, value)));
+        }
+        for (index, sub, data) in settings {
+            let reply = ctx.modify(index, sub, data.clone())?;
+            if !matches!(reply, Reply::Done(_)) {
+                back_to_pre_operational(ctx)?;
+                return Ok(refused_unexpectedly(
+                    &download_text((index, sub), &data),
+                    &reply,
+                    ANALOG_INTERRUPTS,
+                    "the object is writable in the EDS",
+                ));
+            }
+        }
+        log.push(format!("[{}]", phase.what));
+        for &(value, expect) in phase.steps {
+            let mark = ctx.mark();
+            if let Some(inconclusive) = apply(ctx, driver, analog(value))? {
+                back_to_pre_operational(ctx)?;
+                return Ok(inconclusive);
+            }
+            ctx.listen(EVENT_WAIT, |_| false)?;
+            let carried: Vec<Option<i16>> = ctx
+                .received_since(mark)
+                .into_iter()
+                .filter(|l| l.frame.id() == id && !l.frame.is_remote())
+                .map(|l| {
+                    l.frame
+                        .data()
+                        .get(pdo.offset..pdo.offset + 2)
+                        .map(|b| i16::from_le_bytes([b[0], b[1]]))
+                })
+                .collect();
+            let seen = match carried.as_slice() {
+                [] => "no TPDO".to_owned(),
+                values => format!(
+                    "{} TPDO{} carrying {}",
+                    values.len(),
+                    if values.len() > 1 { "s" } else { "" },
+                    values
+                        .iter()
+                        .map(|v| v.map_or("(too short)".to_owned(), |v| v.to_string()))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            };
+            log.push(format!("{value}: {seen}"));
+            // A device that repeats a limit interrupt while the value stays beyond it sends more
+            // than one TPDO; each must carry the new value.
+            let right = if expect {
+                !carried.is_empty() && carried.iter().all(|v| *v == Some(value))
+            } else {
+                carried.is_empty()
+            };
+            if !right && wrong.is_none() {
+                wrong = Some((phase.what, value, expect, seen));
+            }
+        }
+    }
+    back_to_pre_operational(ctx)?;
+    if driver == Driver::Hook {
+        // Back to 0, as the module docs promise; a failure here changes no verdict.
+        apply(ctx, driver, analog(0))?;
+    }
+    let not_run = if skipped.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; not run (objects not writable in the EDS): {}",
+            skipped.join("; ")
+        )
+    };
+    match wrong {
+        None => Ok(Finding::pass(format!(
+            "TPDO{} came exactly on the selected conditions ({}){not_run}{}",
+            pdo.number,
+            log.join("; "),
+            driven_by(driver)
+        ))),
+        Some((what, value, expect, seen)) => Ok(Finding::fail(
+            format!(
+                "with {what}: value {value} should {}give a TPDO{} carrying it, got {seen}",
+                if expect { "" } else { "not " },
+                pdo.number
+            ),
+            Evidence {
+                request: format!(
+                    "TPDO{} event-driven (inhibit time and event timer 0), operational; {}",
+                    pdo.number,
+                    log.join("; ")
+                ),
+                requirement: format!(
+                    "{ANALOG_INTERRUPTS}: while 6423h is TRUE, a new value of channel 1 triggers the TPDO mapping 6401h:01 iff a condition 6421h:01 selects holds (above 6424h:01, below 6425h:01, changed by at least 6426h:01); while 6423h is FALSE, none does"
+                ),
+                answer: seen,
+                cause: format!(
+                    "the analogue trigger selection, limits or global interrupt enable are not evaluated as CiA 401 defines them{}",
+                    hook_caveat(driver)
+                ),
+            },
+        )),
+    }
 }

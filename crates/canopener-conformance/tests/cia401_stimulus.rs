@@ -1,6 +1,6 @@
 //! The CiA 401 input tests through the user's stimulus hook: a simulated device whose factory test
 //! registers the tester cannot reach (a device without them, as most are) is `inconclusive`
-//! without a hook, passes io.2–io.6 and io.8 with a hook that really applies the inputs, and is
+//! without a hook, passes io.2–io.6, io.8 and io.9 with a hook that really applies the inputs, and is
 //! never passed by a hook that fails or only claims to apply them.
 //!
 //! The rig: a link between the tester and the simulated bus that answers the tester's SDO requests
@@ -207,13 +207,14 @@ fn verdict<'r>(report: &'r Report, id: &str) -> (Verdict, &'r str) {
     (test.verdict, &test.reason)
 }
 
-const INPUT_TESTS: [&str; 6] = [
+const INPUT_TESTS: [&str; 7] = [
     "cia401.io.2",
     "cia401.io.3",
     "cia401.io.4",
     "cia401.io.5",
     "cia401.io.6",
     "cia401.io.8",
+    "cia401.io.9",
 ];
 
 #[test]
