@@ -1205,6 +1205,28 @@ mod tests {
         assert_eq!(analog_steps(&mut io, &mut od, &[3, 9]), [false, true]);
     }
 
+    proptest! {
+        /// With 6421h's defaults (07h, limits and delta 0) every new value triggers and a repeated
+        /// one does not; with no condition selected (00h) nothing does, whatever the values.
+        #[test]
+        fn analog_defaults_send_every_change_and_no_selection_sends_none(
+            values in proptest::collection::vec(any::<i16>(), 1..24)
+        ) {
+            let (mut io, mut od) = analog_interrupt_device();
+            let mut previous = 0i16;
+            for &value in &values {
+                let sent = !io.set_analog_input(T0, 1, value, &mut od).unwrap().changed.is_empty();
+                prop_assert_eq!(sent, value != previous, "{} after {}", value, previous);
+                previous = value;
+            }
+            analog_settings(&mut od, 0x00, 0, 0, 0);
+            for &value in &values {
+                let changes = io.set_analog_input(T0, 1, value.wrapping_add(1), &mut od).unwrap();
+                prop_assert!(changes.changed.is_empty());
+            }
+        }
+    }
+
     #[test]
     fn analog_global_interrupt_enable_gates_the_trigger_conditions() {
         let (mut io, mut od) = analog_interrupt_device();
