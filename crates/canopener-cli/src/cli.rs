@@ -104,6 +104,7 @@ Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a 
   canopener test --list --suite cia301                 # ids, titles, CiA/CCT references, preconditions
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --suite cia305  # LSS; device alone on the bus
   canopener test --bus socketcan:can0 --node 5 --eds device.eds --suite cia313 --criteria limits.toml --repetitions 200
+  canopener test --bus socketcan:can0 --node 5 --eds io.eds --suite cia401 --stimulus ./set-input.sh --stimulus-settle 20ms
 Each test resets what it changed and leaves the device pre-operational; the run starts with NMT reset node.
 Exit status: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
 answer at all, 2 bad arguments, 3 unreadable EDS or criteria file, 4 bus error, 130 interrupted (partial report written).")]

@@ -5,8 +5,12 @@
 //! Inputs are driven through the factory test registers of the thesis (2000h BOOLEAN "factory
 //! test config", 2001h UNSIGNED8 digital inputs, 2002h:n INTEGER16 analogue inputs). They are no
 //! part of CiA 401, so an EDS rarely lists them: the tests ask the device itself (an SDO upload of
-//! each) and are `inconclusive` when it does not have them, since nothing else can change an input
-//! from the bus. Every value changed is written back when the test ends.
+//! each). A device without them has its inputs applied by the user's stimulus hook
+//! ([`crate::stimulus`], `--stimulus CMD`) when one is given, each change followed by the hook's
+//! settle time; with neither the tests are `inconclusive`, since nothing else can change an input
+//! from the bus. A hook that fails makes the test `inconclusive` with its reason, never a pass.
+//! Every value changed over SDO is written back when the test ends; the hook is asked to bring
+//! the inputs back to 00h (digital) and 0 (analogue) when a test that applied them ends.
 
 use std::time::Duration;
 
@@ -19,6 +23,7 @@ use crate::cia301::helpers::{
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::PdoDirection;
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::stimulus::InputChange;
 
 /// CiA 401 device type and I/O functionality bits of 1000h.
 pub const DEVICE_TYPE: &str = "CiA 401 (device type 1000h: 0191h, I/O functionality bits 16..23)";
@@ -31,6 +36,8 @@ pub const DIGITAL_OUTPUTS: &str =
     "CiA 401 (6200h write output 8-bit, 6202h change polarity, 6206h/6207h error mode and value)";
 /// Analogue inputs.
 pub const ANALOG_INPUTS: &str = "CiA 401 (6401h read analogue input 16-bit)";
+/// The analogue input interrupt objects.
+pub const ANALOG_INTERRUPTS: &str = "CiA 401 (6421h analogue input interrupt trigger selection: bit 0 upper limit exceeded, bit 1 below lower limit, bit 2 changed by more than delta; 6423h analogue input global interrupt enable; 6424h/6425h/6426h interrupt upper limit, lower limit, delta)";
 /// The default PDOs of a CiA 401 device.
 pub const DEFAULT_PDOS: &str =
     "CiA 401 (default PDO mapping: TPDO1 digital inputs, TPDO2 analogue inputs, RPDO1 digital outputs)";
@@ -119,6 +126,14 @@ pub fn tests() -> Vec<TestDef> {
             "a CiA 401 EDS with 6401h:01 and a TPDO mapping it with a writable event timer; the factory test registers 2000h/2002h:01 (else inconclusive)",
             &["cia401", "pdo", "timing", "writes", "nmt"],
             analog_inputs,
+        ),
+        def(
+            "cia401.io.9",
+            "Analogue interrupts: TPDO2 goes exactly when a condition 6421h:01 selects holds (upper limit 6424h, lower limit 6425h, delta 6426h), never while 6423h is FALSE",
+            &[ANALOG_INTERRUPTS, ANALOG_INPUTS, DEFAULT_PDOS, FACTORY_REGISTERS],
+            "a CiA 401 EDS with 6401h:01, writable 6421h:01, 6423h and 6426h:01 and a TPDO mapping 6401h:01 (the limit steps need writable 6424h:01 and 6425h:01); the factory test registers 2000h/2002h:01 or --stimulus (else inconclusive)",
+            &["cia401", "pdo", "writes", "nmt"],
+            analog_interrupts,
         ),
     ]
 }
@@ -228,8 +243,78 @@ fn has_factory_registers(ctx: &mut Ctx<'_, '_>, analog: bool) -> Result<bool, St
 fn no_stimulus(analog: bool) -> Finding {
     let registers = if analog { "2000h/2002h:01" } else { "2000h/2001h" };
     Finding::inconclusive(format!(
-        "the device has no factory test registers {registers} (thesis §5.2), so the tester cannot change its inputs"
+        "the device has no factory test registers {registers} (thesis §5.2) and no --stimulus hook was given, so the tester cannot change its inputs; give --stimulus CMD, a program that applies them (docs/conformance.md)"
     ))
+}
+
+/// How a test changes the device's inputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Driver {
+    /// SDO writes to the factory test registers 2001h/2002h (with 2000h TRUE).
+    Factory,
+    /// The user's stimulus hook.
+    Hook,
+}
+
+/// The factory test registers when the device has them, else the stimulus hook when given, else
+/// the `inconclusive` finding.
+fn driver(ctx: &mut Ctx<'_, '_>, analog: bool) -> Result<Result<Driver, Finding>, Stop> {
+    if has_factory_registers(ctx, analog)? {
+        Ok(Ok(Driver::Factory))
+    } else if ctx.has_stimulus() {
+        Ok(Ok(Driver::Hook))
+    } else {
+        Ok(Err(no_stimulus(analog)))
+    }
+}
+
+/// Applies `change`; the `inconclusive` finding when the hook could not.
+fn apply(ctx: &mut Ctx<'_, '_>, driver: Driver, change: InputChange) -> Result<Option<Finding>, Stop> {
+    match (driver, change) {
+        (Driver::Factory, InputChange::Digital { value, .. }) => {
+            ctx.write(0x2001, 0, vec![value])?;
+        }
+        (Driver::Factory, InputChange::Analog { channel, value }) => {
+            ctx.write(0x2002, channel, value.to_le_bytes().to_vec())?;
+        }
+        (Driver::Hook, change) => {
+            if let Err(reason) = ctx.stimulate(&change)? {
+                return Ok(Some(Finding::inconclusive(format!(
+                    "the stimulus hook could not apply {change}: {reason}"
+                ))));
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// How the log names applying `change`.
+fn applied_text(driver: Driver, change: InputChange) -> String {
+    match (driver, change) {
+        (Driver::Factory, InputChange::Digital { value, .. }) => {
+            format!("SDO download 2001h:00 = {value:02X}")
+        }
+        (Driver::Factory, InputChange::Analog { channel, value }) => {
+            format!("SDO download 2002h:{channel:02X} = {}", hex(&value.to_le_bytes()))
+        }
+        (Driver::Hook, change) => format!("the stimulus hook applied {change}"),
+    }
+}
+
+/// What a failure blames besides the device: the hook may have reported an input it did not apply.
+fn hook_caveat(driver: Driver) -> &'static str {
+    match driver {
+        Driver::Factory => "",
+        Driver::Hook => " (or the stimulus hook reported an input it did not apply)",
+    }
+}
+
+const fn digital(value: u8) -> InputChange {
+    InputChange::Digital { block: 1, value }
+}
+
+const fn analog(value: i16) -> InputChange {
+    InputChange::Analog { channel: 1, value }
 }
 
 /// Turns the factory test on; `false` if the device refused.
@@ -244,7 +329,11 @@ fn digital_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if ctx.model().entry(0x6000, 1).is_none() {
         return Ok(Finding::not_applicable("the EDS has no 6000h:01"));
     }
-    if !has_factory_registers(ctx, false)? || !factory_on(ctx)? {
+    let driver = match driver(ctx, false)? {
+        Ok(driver) => driver,
+        Err(finding) => return Ok(finding),
+    };
+    if driver == Driver::Factory && !factory_on(ctx)? {
         return Ok(no_stimulus(false));
     }
     let mut checks = vec![(0x5Au8, 0x5Au8, "polarity 00h")];
@@ -262,7 +351,10 @@ fn digital_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ));
         }
     }
-    let original = ctx.read(0x2001, 0)?;
+    let original = match driver {
+        Driver::Factory => ctx.read(0x2001, 0)?,
+        Driver::Hook => Reply::Done(vec![0]),
+    };
     for (input, expected, setting) in checks {
         if setting == "polarity FFh" {
             let reply = ctx.write(0x6002, 1, vec![0xFF])?;
@@ -275,10 +367,12 @@ fn digital_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 ));
             }
         }
-        ctx.write(0x2001, 0, vec![input])?;
+        if let Some(inconclusive) = apply(ctx, driver, digital(input))? {
+            return Ok(inconclusive);
+        }
         let reply = ctx.read(0x6000, 1)?;
         if reply != Reply::Done(vec![expected]) {
-            restore_input(ctx, &original)?;
+            restore_input(ctx, driver, &original)?;
             return Ok(Finding::fail(
                 format!(
                     "input {input:02X}h with {setting}: 6000h:01 gave {}, expected {expected:02X}h",
@@ -286,29 +380,54 @@ fn digital_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 ),
                 Evidence {
                     request: format!(
-                        "SDO download 2001h:00 = {input:02X} ({setting}), then {}",
+                        "{} ({setting}), then {}",
+                        applied_text(driver, digital(input)),
                         upload_text((0x6000, 1))
                     ),
                     requirement: format!(
                         "{DIGITAL_INPUTS}: 6000h:01 is the input with the bits set in 6002h:01 inverted"
                     ),
                     answer: reply.describe(),
-                    cause: "the input is not read, or polarity is not applied (or applied twice)".to_owned(),
+                    cause: format!(
+                        "the input is not read, or polarity is not applied (or applied twice){}",
+                        hook_caveat(driver)
+                    ),
                 },
             ));
         }
     }
-    restore_input(ctx, &original)?;
-    Ok(Finding::pass(if polarity {
-        "6000h:01 followed the input, inverted exactly while 6002h:01 = FFh"
-    } else {
-        "6000h:01 followed the input (the EDS has no writable 6002h:01)"
-    }))
+    restore_input(ctx, driver, &original)?;
+    Ok(Finding::pass(format!(
+        "{}{}",
+        if polarity {
+            "6000h:01 followed the input, inverted exactly while 6002h:01 = FFh"
+        } else {
+            "6000h:01 followed the input (the EDS has no writable 6002h:01)"
+        },
+        driven_by(driver)
+    )))
 }
 
-fn restore_input(ctx: &mut Ctx<'_, '_>, original: &Reply) -> Result<(), Stop> {
+/// How a pass says the inputs were applied.
+fn driven_by(driver: Driver) -> &'static str {
+    match driver {
+        Driver::Factory => "",
+        Driver::Hook => "; inputs applied by the stimulus hook",
+    }
+}
+
+/// Puts the digital input back: 2001h's old value, or 00h through the hook (whose failure now
+/// changes no verdict).
+fn restore_input(ctx: &mut Ctx<'_, '_>, driver: Driver, original: &Reply) -> Result<(), Stop> {
     if let Reply::Done(data) = original {
-        ctx.write(0x2001, 0, data.clone())?;
+        match driver {
+            Driver::Factory => {
+                ctx.write(0x2001, 0, data.clone())?;
+            }
+            Driver::Hook => {
+                apply(ctx, driver, digital(data.first().copied().unwrap_or(0)))?;
+            }
+        }
     }
     Ok(())
 }
@@ -403,6 +522,33 @@ fn event_driven(ctx: &mut Ctx<'_, '_>, pdo: &Mapped, event_timer: u16) -> Result
     Ok(None)
 }
 
+/// Brings the input `zero` names to zero while the device is still pre-operational (so the change
+/// sends no TPDO and no step starts from a stale value), turns the factory test on (whose register
+/// the caller has already zeroed), starts the node and lets the TPDOs a device may send on entering
+/// operational pass. Returns `pdo`'s CAN-ID, or the `inconclusive` finding.
+fn zero_then_operational(
+    ctx: &mut Ctx<'_, '_>,
+    driver: Driver,
+    zero: InputChange,
+    pdo: &Mapped,
+) -> Result<Result<canopener_can::CanId, Finding>, Stop> {
+    match driver {
+        Driver::Factory if !factory_on(ctx)? => {
+            return Ok(Err(no_stimulus(matches!(zero, InputChange::Analog { .. }))));
+        }
+        Driver::Factory => {}
+        Driver::Hook => {
+            if let Some(inconclusive) = apply(ctx, driver, zero)? {
+                return Ok(Err(inconclusive));
+            }
+        }
+    }
+    let id = ctx.id(pdo.cob);
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    ctx.listen(EVENT_WAIT, |_| false)?;
+    Ok(Ok(id))
+}
+
 /// One step of an interrupt test.
 #[derive(Clone, Copy)]
 enum Step {
@@ -443,9 +589,10 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
     if needs_enable && !enable {
         return Ok(Finding::not_applicable("the EDS has no writable 6005h"));
     }
-    if !has_factory_registers(ctx, false)? {
-        return Ok(no_stimulus(false));
-    }
+    let driver = match driver(ctx, false)? {
+        Ok(driver) => driver,
+        Err(finding) => return Ok(finding),
+    };
     let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6000_0108)? else {
         return Ok(Finding::not_applicable("no valid TPDO maps 6000h:01"));
     };
@@ -462,7 +609,9 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
         writes.push((0x6005, 0, 1));
     }
     // The input goes to 00h before the factory test feeds it, so no step starts from a stale value.
-    writes.push((0x2001, 0, 0));
+    if driver == Driver::Factory {
+        writes.push((0x2001, 0, 0));
+    }
     for (index, sub, value) in writes {
         let reply = ctx.modify(index, sub, vec![value])?;
         if !matches!(reply, Reply::Done(_)) {
@@ -474,13 +623,10 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
             ));
         }
     }
-    if !factory_on(ctx)? {
-        return Ok(no_stimulus(false));
-    }
-    let id = ctx.id(pdo.cob);
-    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
-    // A device may send its TPDOs once on entering operational: let them pass.
-    ctx.listen(EVENT_WAIT, |_| false)?;
+    let id = match zero_then_operational(ctx, driver, digital(0), &pdo)? {
+        Ok(id) => id,
+        Err(finding) => return Ok(finding),
+    };
     let mut log = Vec::new();
     let mut wrong = None;
     for step in steps {
@@ -503,7 +649,10 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
             Step::Input(input, expect) => (input, expect),
         };
         let mark = ctx.mark();
-        ctx.write(0x2001, 0, vec![input])?;
+        if let Some(inconclusive) = apply(ctx, driver, digital(input))? {
+            back_to_pre_operational(ctx)?;
+            return Ok(inconclusive);
+        }
         ctx.listen(EVENT_WAIT, |_| false)?;
         let pdos: Vec<_> = ctx
             .received_since(mark)
@@ -532,7 +681,12 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
         masks[0], masks[1], masks[2]
     );
     match wrong {
-        None => Ok(Finding::pass(format!("{what}: TPDO{} came exactly on the enabled edges ({})", pdo.number, log.join("; ")))),
+        None => Ok(Finding::pass(format!(
+            "{what}: TPDO{} came exactly on the enabled edges ({}){}",
+            pdo.number,
+            log.join("; "),
+            driven_by(driver)
+        ))),
         Some((input, expect, seen)) => Ok(Finding::fail(
             format!(
                 "{what}: input {input:02X}h should {}give a TPDO{}, got {seen}",
@@ -540,12 +694,19 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
                 pdo.number
             ),
             Evidence {
-                request: format!("{masks_text}, TPDO{} event-driven, operational; steps: {}", pdo.number, log.join("; ")),
+                request: format!(
+                    "{masks_text}, TPDO{} event-driven, operational; steps: {}",
+                    pdo.number,
+                    log.join("; ")
+                ),
                 requirement: format!(
                     "{INTERRUPTS}: while 6005h is TRUE, a change triggers the TPDO mapping 6000h:01 iff (changed & 6006h) | (rose & 6007h) | (fell & 6008h) != 0, once, carrying the new value"
                 ),
                 answer: seen,
-                cause: "the interrupt masks or the global interrupt enable are not evaluated as CiA 401 defines them".to_owned(),
+                cause: format!(
+                    "the interrupt masks or the global interrupt enable are not evaluated as CiA 401 defines them{}",
+                    hook_caveat(driver)
+                ),
             },
         )),
     }
@@ -750,9 +911,10 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if ctx.model().entry(0x6401, 1).is_none() {
         return Ok(Finding::not_applicable("the EDS has no 6401h:01"));
     }
-    if !has_factory_registers(ctx, true)? {
-        return Ok(no_stimulus(true));
-    }
+    let driver = match driver(ctx, true)? {
+        Ok(driver) => driver,
+        Err(finding) => return Ok(finding),
+    };
     let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6401_0110)? else {
         return Ok(Finding::not_applicable("no valid TPDO maps 6401h:01"));
     };
@@ -767,9 +929,18 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     let first: i16 = 1000;
     let second: i16 = -1234;
-    ctx.modify(0x2002, 1, first.to_le_bytes().to_vec())?;
-    if !factory_on(ctx)? {
-        return Ok(no_stimulus(true));
+    match driver {
+        Driver::Factory => {
+            ctx.modify(0x2002, 1, first.to_le_bytes().to_vec())?;
+            if !factory_on(ctx)? {
+                return Ok(no_stimulus(true));
+            }
+        }
+        Driver::Hook => {
+            if let Some(inconclusive) = apply(ctx, driver, analog(first))? {
+                return Ok(inconclusive);
+            }
+        }
     }
     let read = ctx.read(0x6401, 1)?;
     if read != Reply::Done(first.to_le_bytes().to_vec()) {
@@ -777,13 +948,16 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
             format!("with 2002h:01 = {first}, 6401h:01 gave {}", read.describe()),
             Evidence {
                 request: format!(
-                    "SDO download 2002h:01 = {}, then {}",
-                    hex(&first.to_le_bytes()),
+                    "{}, then {}",
+                    applied_text(driver, analog(first)),
                     upload_text((0x6401, 1))
                 ),
                 requirement: format!("{ANALOG_INPUTS}: 6401h:01 is the value of analogue input 1"),
                 answer: read.describe(),
-                cause: "the analogue input is not read into 6401h:01".to_owned(),
+                cause: format!(
+                    "the analogue input is not read into 6401h:01{}",
+                    hook_caveat(driver)
+                ),
             },
         ));
     }
@@ -796,7 +970,10 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let period = Duration::from_millis(u64::from(ANALOG_PERIOD_MS));
     let cyclic = ctx.listen(period * 7 / 2, |f| f.id() == id && !f.is_remote())?;
     let mark = ctx.mark();
-    ctx.write(0x2002, 1, second.to_le_bytes().to_vec())?;
+    if let Some(inconclusive) = apply(ctx, driver, analog(second))? {
+        back_to_pre_operational(ctx)?;
+        return Ok(inconclusive);
+    }
     ctx.listen(period * 5 / 2, |_| false)?;
     let after: Vec<_> = ctx
         .received_since(mark)
@@ -804,6 +981,10 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .filter(|l| l.frame.id() == id && !l.frame.is_remote())
         .collect();
     back_to_pre_operational(ctx)?;
+    if driver == Driver::Hook {
+        // Back to 0, as the module docs promise; a failure here changes no verdict.
+        apply(ctx, driver, analog(0))?;
+    }
     let cyclic_values: Vec<_> = cyclic.iter().map(|l| value_of(l.frame.data())).collect();
     let after_values: Vec<_> = after.iter().map(|l| value_of(l.frame.data())).collect();
     let text = |values: &[Option<i16>]| {
@@ -822,22 +1003,247 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let cyclic_ok = cyclic_values.len() >= 3 && cyclic_values.iter().all(|v| *v == Some(first));
     let after_ok = after_values.len() >= 2 && after_values.iter().all(|v| *v == Some(second));
     if cyclic_ok && after_ok {
-        return Ok(Finding::pass(seen));
+        return Ok(Finding::pass(format!("{seen}{}", driven_by(driver))));
     }
     Ok(Finding::fail(
         seen.clone(),
         Evidence {
             request: format!(
-                "TPDO{} event-driven with event timer {ANALOG_PERIOD_MS} ms, operational for {} ms at {first}, then 2002h:01 = {second} for {} ms",
+                "TPDO{} event-driven with event timer {ANALOG_PERIOD_MS} ms, operational for {} ms at {first}, then {} for {} ms",
                 pdo.number,
                 ANALOG_PERIOD_MS * 7 / 2,
+                applied_text(driver, analog(second)),
                 ANALOG_PERIOD_MS * 5 / 2
             ),
             requirement: format!(
                 "{ANALOG_INPUTS}; CiA 301 §7.5.2.35: the event timer sends the TPDO every {ANALOG_PERIOD_MS} ms, each carrying the current 6401h:01"
             ),
             answer: seen,
-            cause: "the TPDO is not sent on its event timer, or carries a stale analogue value".to_owned(),
+            cause: format!(
+                "the TPDO is not sent on its event timer, or carries a stale analogue value{}",
+                hook_caveat(driver)
+            ),
         },
     ))
+}
+
+/// One setting of the analogue interrupt objects and the values applied under it, each with
+/// whether a TPDO must follow.
+struct AnalogPhase {
+    what: &'static str,
+    enable: bool,
+    selection: u8,
+    /// (index, value) of 6424h/6425h/6426h:01 to set first.
+    limits: &'static [(u16, i64)],
+    steps: &'static [(i16, bool)],
+}
+
+/// The phases of `cia401.io.9`. Every value stays clear of its limit (no test of `>` against `≥`),
+/// and in the delta phase the previous value is always the last transmitted one, so a device that
+/// measures delta either way (the reference leaves it open) gets the same verdict.
+const ANALOG_PHASES: &[AnalogPhase] = &[
+    AnalogPhase {
+        what: "6423h FALSE, 6421h:01 = 04h, delta 0",
+        enable: false,
+        selection: 0x04,
+        limits: &[(0x6426, 0)],
+        steps: &[(300, false), (-300, false)],
+    },
+    AnalogPhase {
+        what: "6423h TRUE, 6421h:01 = 04h, delta 0",
+        enable: true,
+        selection: 0x04,
+        limits: &[(0x6426, 0)],
+        steps: &[(600, true)],
+    },
+    AnalogPhase {
+        what: "6421h:01 = 01h, upper limit 6424h:01 = 1000",
+        enable: true,
+        selection: 0x01,
+        limits: &[(0x6424, 1000)],
+        steps: &[(500, false), (1500, true), (500, false)],
+    },
+    AnalogPhase {
+        what: "6421h:01 = 02h, lower limit 6425h:01 = -1000",
+        enable: true,
+        selection: 0x02,
+        limits: &[(0x6425, -1000)],
+        steps: &[(0, false), (-1500, true), (0, false)],
+    },
+    AnalogPhase {
+        what: "6421h:01 = 04h, delta 6426h:01 = 100",
+        enable: true,
+        selection: 0x04,
+        limits: &[(0x6426, 100)],
+        steps: &[(400, true), (450, false), (600, true), (650, false), (480, true)],
+    },
+];
+
+/// `value` in the little-endian size of `index`:`sub` as the EDS declares it (4 bytes if unknown).
+fn sized(ctx: &Ctx<'_, '_>, index: u16, sub: u8, value: i64) -> Vec<u8> {
+    let size = ctx
+        .model()
+        .entry(index, sub)
+        .and_then(|e| e.size())
+        .filter(|&n| (1..=8).contains(&n))
+        .unwrap_or(4);
+    value.to_le_bytes()[..size].to_vec()
+}
+
+fn analog_interrupts(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    if !is_cia401(ctx) {
+        return Ok(Finding::not_applicable(NOT_401));
+    }
+    if ctx.model().entry(0x6401, 1).is_none() {
+        return Ok(Finding::not_applicable("the EDS has no 6401h:01"));
+    }
+    let writable =
+        |ctx: &Ctx<'_, '_>, index: u16, sub: u8| ctx.model().entry(index, sub).is_some_and(|e| e.writable());
+    for (index, sub) in [(0x6421u16, 1u8), (0x6423, 0), (0x6426, 1)] {
+        if !writable(ctx, index, sub) {
+            return Ok(Finding::not_applicable(format!(
+                "the EDS has no writable {index:04X}h:{sub:02X}"
+            )));
+        }
+    }
+    let phases: Vec<&AnalogPhase> = ANALOG_PHASES
+        .iter()
+        .filter(|p| p.limits.iter().all(|&(index, _)| writable(ctx, index, 1)))
+        .collect();
+    let skipped: Vec<&str> = ANALOG_PHASES
+        .iter()
+        .filter(|p| !phases.iter().any(|q| std::ptr::eq(*q, *p)))
+        .map(|p| p.what)
+        .collect();
+    let driver = match driver(ctx, true)? {
+        Ok(driver) => driver,
+        Err(finding) => return Ok(finding),
+    };
+    let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6401_0110)? else {
+        return Ok(Finding::not_applicable("no valid TPDO maps 6401h:01"));
+    };
+    if let Some(refused) = event_driven(ctx, &pdo, 0)? {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} cannot be made event-driven: {refused}",
+            pdo.number
+        )));
+    }
+    // The input starts at 0 while the device is pre-operational, so no step starts from a stale value.
+    if driver == Driver::Factory {
+        ctx.modify(0x2002, 1, vec![0, 0])?;
+    }
+    let id = match zero_then_operational(ctx, driver, analog(0), &pdo)? {
+        Ok(id) => id,
+        Err(finding) => return Ok(finding),
+    };
+    let mut log = Vec::new();
+    let mut wrong = None;
+    for phase in &phases {
+        let mut settings = vec![
+            (0x6423u16, 0u8, vec![u8::from(phase.enable)]),
+            (0x6421, 1, vec![phase.selection]),
+        ];
+        for &(index, value) in phase.limits {
+            settings.push((index, 1, sized(ctx, index, 1, value)));
+        }
+        for (index, sub, data) in settings {
+            let reply = ctx.modify(index, sub, data.clone())?;
+            if !matches!(reply, Reply::Done(_)) {
+                back_to_pre_operational(ctx)?;
+                return Ok(refused_unexpectedly(
+                    &download_text((index, sub), &data),
+                    &reply,
+                    ANALOG_INTERRUPTS,
+                    "the object is writable in the EDS",
+                ));
+            }
+        }
+        log.push(format!("[{}]", phase.what));
+        for &(value, expect) in phase.steps {
+            let mark = ctx.mark();
+            if let Some(inconclusive) = apply(ctx, driver, analog(value))? {
+                back_to_pre_operational(ctx)?;
+                return Ok(inconclusive);
+            }
+            ctx.listen(EVENT_WAIT, |_| false)?;
+            let carried: Vec<Option<i16>> = ctx
+                .received_since(mark)
+                .into_iter()
+                .filter(|l| l.frame.id() == id && !l.frame.is_remote())
+                .map(|l| {
+                    l.frame
+                        .data()
+                        .get(pdo.offset..pdo.offset + 2)
+                        .map(|b| i16::from_le_bytes([b[0], b[1]]))
+                })
+                .collect();
+            let seen = match carried.as_slice() {
+                [] => "no TPDO".to_owned(),
+                values => format!(
+                    "{} TPDO{} carrying {}",
+                    values.len(),
+                    if values.len() > 1 { "s" } else { "" },
+                    values
+                        .iter()
+                        .map(|v| v.map_or("(too short)".to_owned(), |v| v.to_string()))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            };
+            log.push(format!("{value}: {seen}"));
+            // A device that repeats a limit interrupt while the value stays beyond it sends more
+            // than one TPDO; each must carry the new value.
+            let right = if expect {
+                !carried.is_empty() && carried.iter().all(|v| *v == Some(value))
+            } else {
+                carried.is_empty()
+            };
+            if !right && wrong.is_none() {
+                wrong = Some((phase.what, value, expect, seen));
+            }
+        }
+    }
+    back_to_pre_operational(ctx)?;
+    if driver == Driver::Hook {
+        // Back to 0, as the module docs promise; a failure here changes no verdict.
+        apply(ctx, driver, analog(0))?;
+    }
+    let not_run = if skipped.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; not run (objects not writable in the EDS): {}",
+            skipped.join("; ")
+        )
+    };
+    match wrong {
+        None => Ok(Finding::pass(format!(
+            "TPDO{} came exactly on the selected conditions ({}){not_run}{}",
+            pdo.number,
+            log.join("; "),
+            driven_by(driver)
+        ))),
+        Some((what, value, expect, seen)) => Ok(Finding::fail(
+            format!(
+                "with {what}: value {value} should {}give a TPDO{} carrying it, got {seen}",
+                if expect { "" } else { "not " },
+                pdo.number
+            ),
+            Evidence {
+                request: format!(
+                    "TPDO{} event-driven (inhibit time and event timer 0), operational; {}",
+                    pdo.number,
+                    log.join("; ")
+                ),
+                requirement: format!(
+                    "{ANALOG_INTERRUPTS}: while 6423h is TRUE, a new value of channel 1 triggers the TPDO mapping 6401h:01 iff a condition 6421h:01 selects holds (above 6424h:01, below 6425h:01, changed by at least 6426h:01); while 6423h is FALSE, none does"
+                ),
+                answer: seen,
+                cause: format!(
+                    "the analogue trigger selection, limits or global interrupt enable are not evaluated as CiA 401 defines them{}",
+                    hook_caveat(driver)
+                ),
+            },
+        )),
+    }
 }

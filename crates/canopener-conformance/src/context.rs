@@ -18,6 +18,7 @@ use crate::finding::Stop;
 use crate::model::{Direction, Measurement};
 use crate::recorder::{Logged, Recorder};
 use crate::requirements::code_meaning;
+use crate::stimulus::{Hook, InputChange};
 
 /// How a device answered an SDO request.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -98,6 +99,7 @@ pub struct Ctx<'r, 'l> {
     restores: Vec<Restore>,
     measurements: BTreeMap<String, Measurement>,
     performance: &'r Performance,
+    stimulus: Option<Hook<'r>>,
 }
 
 /// The settings of a run that does not choose its own.
@@ -127,7 +129,34 @@ impl<'r, 'l> Ctx<'r, 'l> {
             restores: Vec::new(),
             measurements: BTreeMap::new(),
             performance: &DEFAULT_PERFORMANCE,
+            stimulus: None,
         }
+    }
+
+    /// The same context with the user's stimulus hook (`--stimulus`).
+    pub fn with_stimulus(mut self, stimulus: Option<Hook<'r>>) -> Ctx<'r, 'l> {
+        self.stimulus = stimulus;
+        self
+    }
+
+    /// Whether the user gave a stimulus hook.
+    pub fn has_stimulus(&self) -> bool {
+        self.stimulus.is_some()
+    }
+
+    /// Applies `change` through the stimulus hook, then listens for its settle time (the frames
+    /// stay in the log, for [`Ctx::received_since`]). `Ok(Err(reason))` when there is no hook or
+    /// the hook could not apply it.
+    pub fn stimulate(&mut self, change: &InputChange) -> Result<Result<(), String>, Stop> {
+        let Some(hook) = self.stimulus.as_mut() else {
+            return Ok(Err("no stimulus hook was given (--stimulus)".to_owned()));
+        };
+        let settle = hook.settle;
+        if let Err(reason) = hook.stimulus.apply(change) {
+            return Ok(Err(reason));
+        }
+        self.listen(settle, |_| false)?;
+        Ok(Ok(()))
     }
 
     /// The same context with the performance suite's criteria and repetitions.

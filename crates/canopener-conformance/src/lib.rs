@@ -35,3 +35,4 @@ pub mod recorder;
 pub mod render;
 pub mod requirements;
 pub mod runner;
+pub mod stimulus;

@@ -16,6 +16,7 @@ use crate::device_model::DeviceModel;
 use crate::finding::{Finding, Stop};
 use crate::model::{BusInfo, DeviceInfo, Identity, REPORT_VERSION, Report, Summary, Telegram, TestReport};
 use crate::recorder::{Logged, Recorder};
+use crate::stimulus::Hook;
 
 /// What a run needs besides the link.
 #[derive(Debug, Clone)]
@@ -87,6 +88,19 @@ pub fn run_with(
     spec: &RunSpec<'_>,
     performance: &Performance,
     tests: &[TestDef],
+    on_progress: impl FnMut(Progress<'_>),
+) -> Result<Outcome, RunError> {
+    run_stimulated(link, spec, performance, None, tests, on_progress)
+}
+
+/// [`run_with`] with the user's stimulus hook, which the CiA 401 tests use to change inputs on a
+/// device without the factory test registers.
+pub fn run_stimulated(
+    link: &mut dyn Link,
+    spec: &RunSpec<'_>,
+    performance: &Performance,
+    mut stimulus: Option<Hook<'_>>,
+    tests: &[TestDef],
     mut on_progress: impl FnMut(Progress<'_>),
 ) -> Result<Outcome, RunError> {
     let timestamps = link.timestamps();
@@ -135,7 +149,8 @@ pub fn run_with(
                 current: Some(test),
             });
             let test_start = recorder.now();
-            let (finding, measurements, left, stopped) = run_one(&mut recorder, spec, performance, test)?;
+            let (finding, measurements, left, stopped) =
+                run_one(&mut recorder, spec, performance, stimulus.as_mut(), test)?;
             report.left_modified.extend(left);
             let telegrams = telegrams(recorder.since(0), start, &mut decoder);
             recorder.clear();
@@ -228,10 +243,13 @@ fn run_one(
     recorder: &mut Recorder<'_>,
     spec: &RunSpec<'_>,
     performance: &Performance,
+    stimulus: Option<&mut Hook<'_>>,
     test: &TestDef,
 ) -> Result<OneResult, RunError> {
     let session = SdoSession::new(&mut *recorder, spec.node, spec.sdo_timeout)?;
-    let mut ctx = Ctx::new(session, spec.model, spec.eds_errors.as_deref()).with_performance(performance);
+    let mut ctx = Ctx::new(session, spec.model, spec.eds_errors.as_deref())
+        .with_performance(performance)
+        .with_stimulus(stimulus.map(Hook::reborrow));
     let (finding, mut stopped) = match (test.run)(&mut ctx) {
         Ok(finding) => (finding, false),
         Err(Stop::Cancelled) => (

@@ -1,6 +1,7 @@
 //! The CiA 401 suite against simulated devices on virtual time: the clean CiA 401 demo device passes
 //! every test, a device that is no CiA 401 device gets `not_applicable`, and a device that applies
-//! a mask to the wrong edge or ignores the global interrupt enable fails the tests written for it.
+//! a mask to the wrong edge, ignores a global interrupt enable or mixes up the analogue interrupt
+//! settings fails the tests written for it.
 
 #[path = "shared/support.rs"]
 #[allow(dead_code)]
@@ -38,7 +39,7 @@ fn failed(report: &Report) -> Vec<String> {
 #[test]
 fn clean_cia401_device_passes_every_test() {
     let report = support::run_rewriting(&full_io(), &["cia401"], &|f, _| *f);
-    assert_eq!(report.tests.len(), 8);
+    assert_eq!(report.tests.len(), 9);
     for (id, verdict, reason) in verdicts(&report) {
         assert_eq!(verdict, Verdict::Pass, "{id}: {reason}");
     }
@@ -47,6 +48,8 @@ fn clean_cia401_device_passes_every_test() {
         "cia401 suite, clean device: {:.2} virtual seconds",
         report.duration_s
     );
+    let io9 = report.tests.iter().find(|t| t.id == "cia401.io.9").unwrap();
+    eprintln!("cia401.io.9: {}", io9.reason);
 }
 
 #[test]
@@ -62,6 +65,8 @@ fn the_vendored_demo_device_passes_what_its_eds_makes_applicable() {
         ("cia401.io.6", Verdict::NotApplicable),
         ("cia401.io.7", Verdict::Pass),
         ("cia401.io.8", Verdict::Pass),
+        // Nor 6421h, 6423h or 6426h.
+        ("cia401.io.9", Verdict::NotApplicable),
     ];
     let got: Vec<_> = report.tests.iter().map(|t| (t.id.as_str(), t.verdict)).collect();
     assert_eq!(got, expected, "{:#?}", verdicts(&report));
@@ -186,4 +191,32 @@ fn ignored_polarity_is_caught() {
         "{}",
         report.tests[0].reason
     );
+}
+
+#[test]
+fn wrong_analogue_interrupt_handling_is_caught() {
+    let io9 = |report: &Report| {
+        let test = report.tests.iter().find(|t| t.id == "cia401.io.9").unwrap();
+        (test.verdict, test.reason.clone())
+    };
+    // 6423h written TRUE is ignored: it stays FALSE, no analogue event at all.
+    let report = support::run_rewriting(&full_io(), &["cia401.io.9"], &ignore(0x6423));
+    let (verdict, reason) = io9(&report);
+    assert_eq!(verdict, Verdict::Fail, "{reason}");
+    assert!(reason.contains("value 600 should give a TPDO2"), "{reason}");
+    // 6421h ignored: the default 07h stays, so a value under the upper limit still triggers (delta 0).
+    let report = support::run_rewriting(&full_io(), &["cia401.io.9"], &ignore(0x6421));
+    let (verdict, reason) = io9(&report);
+    assert_eq!(verdict, Verdict::Fail, "{reason}");
+    assert!(reason.contains("value 500 should not give a TPDO2"), "{reason}");
+    // The upper limit lands in the lower limit: 500 is "above" the upper limit 0.
+    let report = support::run_rewriting(&full_io(), &["cia401.io.9"], &redirect(0x6424, 0x6425));
+    let (verdict, reason) = io9(&report);
+    assert_eq!(verdict, Verdict::Fail, "{reason}");
+    assert!(reason.contains("upper limit"), "{reason}");
+    // The delta lands in the upper limit (unused by then) and stays 0: every change triggers.
+    let report = support::run_rewriting(&full_io(), &["cia401.io.9"], &redirect(0x6426, 0x6424));
+    let (verdict, reason) = io9(&report);
+    assert_eq!(verdict, Verdict::Fail, "{reason}");
+    assert!(reason.contains("value 450 should not give a TPDO2"), "{reason}");
 }

@@ -18,7 +18,16 @@
 //! - analogue inputs: 6401h:*n* = channel *n*. A change is returned in `changed`, so event-driven
 //!   TPDOs mapping it (TPDO2 by default) send it; cyclic transmission is the PDO engine's event
 //!   timer. If the dictionary has the analogue global interrupt enable 6423h, changes are returned
-//!   only while it is TRUE (CiA 401 default FALSE); without it every change is (the thesis device);
+//!   only while it is TRUE (CiA 401 default FALSE); without it interrupts are enabled (the thesis
+//!   device). An enabled change of channel *n* is returned when a condition its interrupt trigger
+//!   selection 6421h:*n* (default 07h) selects holds for the new value (reference §8.2/§8.4):
+//!   bit 0 value > upper limit 6424h:*n*, bit 1 value < lower limit 6425h:*n*, bit 2
+//!   |value − previous value| ≥ delta 6426h:*n*, bit 3 a decrease ≥ negative delta 6427h:*n*, bit 4
+//!   an increase ≥ positive delta 6428h:*n* (absent objects: their default 0). With the defaults every
+//!   change triggers. The limits are levels: every new value beyond one triggers, not only the
+//!   crossing. The delta compares with the previous value, as esd does (the reference leaves open
+//!   whether CiA 401 means the last transmitted one); the interrupt source 6422h is not kept, since
+//!   its reset rule is unconfirmed;
 //! - factory test registers (thesis §5.2): while 2000h (BOOLEAN) is TRUE, the digital inputs come
 //!   from 2001h (UNSIGNED8) and analogue channel *n* from 2002h:*n* (INTEGER16) instead of the
 //!   physical inputs, so an SDO write to 2001h/2002h acts like a change at the terminals.
@@ -85,6 +94,20 @@ pub const READ_ANALOG_INPUT: u16 = 0x6401;
 pub const WRITE_ANALOG_OUTPUT: u16 = 0x6411;
 /// Global interrupt enable analogue 6423h.
 pub const ANALOG_INTERRUPT_ENABLE: ObjectKey = ObjectKey::new(0x6423, 0);
+/// Analogue input interrupt trigger selection 6421h (ARRAY of UNSIGNED8, sub-index *n* for channel *n*).
+pub const ANALOG_TRIGGER_SELECTION: u16 = 0x6421;
+/// Analogue input interrupt upper limit integer 6424h (ARRAY of INTEGER32).
+pub const ANALOG_UPPER_LIMIT: u16 = 0x6424;
+/// Analogue input interrupt lower limit integer 6425h (ARRAY of INTEGER32).
+pub const ANALOG_LOWER_LIMIT: u16 = 0x6425;
+/// Analogue input interrupt delta unsigned 6426h (ARRAY of UNSIGNED32).
+pub const ANALOG_DELTA: u16 = 0x6426;
+/// Analogue input interrupt negative delta unsigned 6427h.
+pub const ANALOG_NEGATIVE_DELTA: u16 = 0x6427;
+/// Analogue input interrupt positive delta unsigned 6428h.
+pub const ANALOG_POSITIVE_DELTA: u16 = 0x6428;
+/// 6421h's CiA 401 default: upper limit, lower limit and delta selected.
+pub const DEFAULT_TRIGGER_SELECTION: u8 = 0x07;
 
 /// Whether `od` describes a CiA 401 generic I/O device the application can run: device type
 /// 1000h says profile 401 in bits 15..0 (0191h) and the dictionary has digital inputs 6000h or
@@ -398,11 +421,12 @@ impl Cia401Io {
             _ => *physical,
         };
         let key = ObjectKey::new(READ_ANALOG_INPUT, channel);
-        if read_i16(od, key) == Some(value) || od.set_value(key, &value.to_le_bytes()).is_err() {
+        let previous = read_i16(od, key);
+        if previous == Some(value) || od.set_value(key, &value.to_le_bytes()).is_err() {
             return;
         }
         let enabled = self.optional_u8(od, Feature::AnalogInterruptEnable, ANALOG_INTERRUPT_ENABLE, 1) != 0;
-        if enabled {
+        if enabled && analog_trigger(od, channel, previous.unwrap_or(0), value) {
             changes.changed.push(key);
         }
     }
@@ -433,6 +457,32 @@ impl Cia401Io {
             default
         }
     }
+}
+
+/// Whether the change of analogue channel `channel` from `previous` to `value` meets a condition
+/// 6421h:`channel` selects (see the [module docs](self)).
+fn analog_trigger(od: &DynamicOd, channel: u8, previous: i16, value: i16) -> bool {
+    let at = |index: u16| ObjectKey::new(index, channel);
+    let selection = read_u8(od, at(ANALOG_TRIGGER_SELECTION)).unwrap_or(DEFAULT_TRIGGER_SELECTION);
+    let signed = |index: u16| read_int(od, at(index)).unwrap_or(0);
+    let unsigned = |index: u16| {
+        read_uint(od, at(index))
+            .and_then(|v| i64::try_from(v).ok())
+            .unwrap_or(0)
+    };
+    let value = i64::from(value);
+    let step = value - i64::from(previous);
+    let conditions = [
+        value > signed(ANALOG_UPPER_LIMIT),
+        value < signed(ANALOG_LOWER_LIMIT),
+        step.abs() >= unsigned(ANALOG_DELTA),
+        step < 0 && -step >= unsigned(ANALOG_NEGATIVE_DELTA),
+        step > 0 && step >= unsigned(ANALOG_POSITIVE_DELTA),
+    ];
+    conditions
+        .iter()
+        .enumerate()
+        .any(|(bit, &holds)| holds && selection & (1 << bit) != 0)
 }
 
 fn merge(mut into: AppChanges, from: AppChanges) -> AppChanges {
@@ -490,6 +540,16 @@ fn read_uint(od: &DynamicOd, key: ObjectKey) -> Option<u64> {
     let mut buf = [0u8; 8];
     buf[..value.len()].copy_from_slice(value);
     Some(u64::from_le_bytes(buf))
+}
+
+/// A signed value of 1, 2 or 4 bytes, sign-extended.
+fn read_int(od: &DynamicOd, key: ObjectKey) -> Option<i64> {
+    match *od.get(key)?.value() {
+        [a] => Some(i64::from(a as i8)),
+        [a, b] => Some(i64::from(i16::from_le_bytes([a, b]))),
+        [a, b, c, d] => Some(i64::from(i32::from_le_bytes([a, b, c, d]))),
+        _ => None,
+    }
 }
 
 fn read_u8(od: &DynamicOd, key: ObjectKey) -> Option<u8> {
@@ -1040,6 +1100,139 @@ mod tests {
         assert_eq!(read_i16(&od, AI1), Some(1), "the value is still updated");
         sdo(&mut io, &mut od, ANALOG_INTERRUPT_ENABLE, &[1]);
         assert_eq!(io.set_analog_input(T0, 1, 2, &mut od).unwrap().changed, [AI1]);
+    }
+
+    /// A device with 6423h TRUE and channel 1's 6421h, 6424h, 6425h, 6426h (as a CiA 401 EDS lists
+    /// them, with their defaults).
+    fn analog_interrupt_device() -> (Cia401Io, DynamicOd) {
+        let (mut io, mut od) = device();
+        grow(&mut od);
+        for (key, data_type, value) in [
+            (ANALOG_INTERRUPT_ENABLE, DataType::BOOLEAN, vec![1]),
+            (
+                ObjectKey::new(ANALOG_TRIGGER_SELECTION, 1),
+                DataType::UNSIGNED8,
+                vec![0x07],
+            ),
+            (
+                ObjectKey::new(ANALOG_UPPER_LIMIT, 1),
+                DataType::INTEGER32,
+                vec![0; 4],
+            ),
+            (
+                ObjectKey::new(ANALOG_LOWER_LIMIT, 1),
+                DataType::INTEGER32,
+                vec![0; 4],
+            ),
+            (ObjectKey::new(ANALOG_DELTA, 1), DataType::UNSIGNED32, vec![0; 4]),
+        ] {
+            od.insert(Entry::new(key, data_type, Access::Rw, &value).unwrap())
+                .unwrap();
+        }
+        io.reset(T0, &mut od);
+        (io, od)
+    }
+
+    fn analog_settings(od: &mut DynamicOd, selection: u8, upper: i32, lower: i32, delta: u32) {
+        od.set_value(ObjectKey::new(ANALOG_TRIGGER_SELECTION, 1), &[selection])
+            .unwrap();
+        od.set_value(ObjectKey::new(ANALOG_UPPER_LIMIT, 1), &upper.to_le_bytes())
+            .unwrap();
+        od.set_value(ObjectKey::new(ANALOG_LOWER_LIMIT, 1), &lower.to_le_bytes())
+            .unwrap();
+        od.set_value(ObjectKey::new(ANALOG_DELTA, 1), &delta.to_le_bytes())
+            .unwrap();
+    }
+
+    /// Applies each value to channel 1 and returns which ones triggered.
+    fn analog_steps(io: &mut Cia401Io, od: &mut DynamicOd, values: &[i16]) -> Vec<bool> {
+        values
+            .iter()
+            .map(|&v| !io.set_analog_input(T0, 1, v, od).unwrap().changed.is_empty())
+            .collect()
+    }
+
+    #[test]
+    fn analog_defaults_trigger_on_every_change() {
+        let (mut io, mut od) = analog_interrupt_device();
+        assert_eq!(
+            analog_steps(&mut io, &mut od, &[5, -5, 6, 6, 0]),
+            [true, true, true, false, true],
+            "an unchanged value is no new sample"
+        );
+    }
+
+    #[test]
+    fn analog_upper_limit_triggers_above_it_only() {
+        let (mut io, mut od) = analog_interrupt_device();
+        analog_settings(&mut od, 0x01, 1000, 0, 0);
+        assert_eq!(
+            analog_steps(&mut io, &mut od, &[500, 1000, 1001, 1500, 500, -1500]),
+            [false, false, true, true, false, false]
+        );
+    }
+
+    #[test]
+    fn analog_lower_limit_triggers_below_it_only() {
+        let (mut io, mut od) = analog_interrupt_device();
+        analog_settings(&mut od, 0x02, 0, -1000, 0);
+        assert_eq!(
+            analog_steps(&mut io, &mut od, &[-500, -1000, -1001, -1500, 0, 1500]),
+            [false, false, true, true, false, false]
+        );
+    }
+
+    #[test]
+    fn analog_delta_compares_with_the_previous_value() {
+        let (mut io, mut od) = analog_interrupt_device();
+        analog_settings(&mut od, 0x04, i32::MAX, i32::MIN, 100);
+        assert_eq!(
+            analog_steps(&mut io, &mut od, &[50, 200, 250, 80, 179, 79]),
+            [false, true, false, true, false, true]
+        );
+    }
+
+    #[test]
+    fn analog_negative_and_positive_deltas_see_one_direction_each() {
+        let (mut io, mut od) = analog_interrupt_device();
+        analog_settings(&mut od, 0x08, 0, 0, 0);
+        assert_eq!(
+            analog_steps(&mut io, &mut od, &[10, 5, 7]),
+            [false, true, false],
+            "6427h absent: any decrease"
+        );
+        analog_settings(&mut od, 0x10, 0, 0, 0);
+        assert_eq!(analog_steps(&mut io, &mut od, &[3, 9]), [false, true]);
+    }
+
+    proptest! {
+        /// With 6421h's defaults (07h, limits and delta 0) every new value triggers and a repeated
+        /// one does not; with no condition selected (00h) nothing does, whatever the values.
+        #[test]
+        fn analog_defaults_send_every_change_and_no_selection_sends_none(
+            values in proptest::collection::vec(any::<i16>(), 1..24)
+        ) {
+            let (mut io, mut od) = analog_interrupt_device();
+            let mut previous = 0i16;
+            for &value in &values {
+                let sent = !io.set_analog_input(T0, 1, value, &mut od).unwrap().changed.is_empty();
+                prop_assert_eq!(sent, value != previous, "{} after {}", value, previous);
+                previous = value;
+            }
+            analog_settings(&mut od, 0x00, 0, 0, 0);
+            for &value in &values {
+                let changes = io.set_analog_input(T0, 1, value.wrapping_add(1), &mut od).unwrap();
+                prop_assert!(changes.changed.is_empty());
+            }
+        }
+    }
+
+    #[test]
+    fn analog_global_interrupt_enable_gates_the_trigger_conditions() {
+        let (mut io, mut od) = analog_interrupt_device();
+        od.set_value(ANALOG_INTERRUPT_ENABLE, &[0]).unwrap();
+        assert_eq!(analog_steps(&mut io, &mut od, &[300, -300]), [false, false]);
+        assert_eq!(read_i16(&od, AI1), Some(-300), "the value is still updated");
     }
 
     #[test]

@@ -53,6 +53,7 @@ pub mod pdo_watch;
 pub mod sdo_session;
 pub mod simulator;
 pub mod state_store;
+pub mod stimulus_program;
 pub mod sync_producer;
 pub mod system;
 pub mod virtual_link;

@@ -11,6 +11,17 @@ use crate::args::{BusArg, parse_duration, parse_in_range, parse_node_id};
 /// leaves it to the implementation).
 pub(crate) const DEFAULT_TIMEOUT: &str = "500ms";
 
+/// `--stimulus-settle` unless given: `canopener_conformance::stimulus::DEFAULT_SETTLE`.
+pub(crate) const DEFAULT_SETTLE: &str = "10ms";
+
+/// A `--stimulus` command line: anything but blank.
+fn parse_stimulus(text: &str) -> Result<String, String> {
+    if text.trim().is_empty() {
+        return Err("give the program that applies an input, e.g. --stimulus ./set-input.sh".to_owned());
+    }
+    Ok(text.to_owned())
+}
+
 /// The report formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub(crate) enum ReportFormat {
@@ -70,7 +81,32 @@ pub(crate) struct TestArgs {
     #[arg(long, default_value = "1000", value_name = "N",
           value_parser = |t: &str| parse_in_range(t, 1, 1_000_000, "--repetitions").map(|v| v as usize))]
     pub(crate) repetitions: usize,
+    /// A program that applies an input on the device under test, for the cia401 input tests of a
+    /// device without the factory test registers 2000h–2002h. Run through `sh -c` as `CMD OBJECT
+    /// SUB VALUE` (e.g. `CMD 6000 1 0x5A`, `CMD 6401 1 -1234`); exit status 0 means applied,
+    /// anything else makes the test inconclusive with the program's stderr; killed after 10 s
+    /// (docs/conformance.md, "The stimulus hook").
+    #[arg(long, value_name = "CMD", value_parser = parse_stimulus)]
+    pub(crate) stimulus: Option<String>,
+    /// How long the cia401 tests wait after --stimulus returned before they read the input or expect
+    /// its TPDO (the input's filter time), e.g. 10ms, 50ms.
+    #[arg(long, default_value = DEFAULT_SETTLE, value_parser = parse_duration, value_name = "DURATION",
+          requires = "stimulus")]
+    pub(crate) stimulus_settle: Duration,
     /// List the tests (ids, titles, CiA and CCT references, preconditions) instead of running them.
     #[arg(long)]
     pub(crate) list: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_settle_time_is_the_librarys() {
+        assert_eq!(
+            parse_duration(DEFAULT_SETTLE),
+            Ok(canopener_conformance::stimulus::DEFAULT_SETTLE)
+        );
+    }
 }

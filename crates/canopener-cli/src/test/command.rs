@@ -13,9 +13,11 @@ use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::{Report, rfc3339_utc};
 use canopener_conformance::render::{candump, html, human, junit};
 use canopener_conformance::runner::{self, RunSpec};
+use canopener_conformance::stimulus::{Hook, Stimulus};
 use canopener_runtime::files::{create_dir_all, same_file, write_atomic};
 use canopener_runtime::link::{BusLink, Link};
 use canopener_runtime::simulator::simulation::Simulation;
+use canopener_runtime::stimulus_program::StimulusProgram;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
@@ -84,7 +86,12 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
         cancel: stop.as_ref().map(StopFlag::token),
     };
     let bar = progress_bar(tests.len());
-    let outcome = runner::run_with(link.as_mut(), &spec, &performance, &tests, |progress| {
+    let mut program = args.stimulus.as_deref().map(StimulusProgram::new);
+    let hook = program.as_mut().map(|program| Hook {
+        stimulus: program as &mut dyn Stimulus,
+        settle: args.stimulus_settle,
+    });
+    let outcome = runner::run_stimulated(link.as_mut(), &spec, &performance, hook, &tests, |progress| {
         bar.set_position(progress.done as u64);
         if let Some(test) = progress.current {
             bar.set_message(test.id);

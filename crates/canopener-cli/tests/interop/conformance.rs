@@ -411,7 +411,7 @@ fn python_local_node_has_no_cia401_behaviour_and_never_passes_for_it() {
         .collect();
     eprintln!("python LocalNode, cia401: {verdicts:#?}");
     assert_eq!(code, Some(6), "stderr: {stderr}");
-    assert_eq!(verdicts.len(), 8);
+    assert_eq!(verdicts.len(), 9);
     for (id, verdict, reason) in &verdicts {
         match id.as_str() {
             "cia401.io.1" => assert_eq!(verdict, "pass", "{id}: {reason}"),
