@@ -148,7 +148,8 @@ mod tests {
 
     use super::*;
 
-    const PACK: &str = r#"
+    /// A one-rule pack the XML pipeline's tests share.
+    pub(super) const PACK: &str = r#"
 [pack]
 name = "test"
 

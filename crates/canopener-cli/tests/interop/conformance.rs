@@ -43,6 +43,26 @@ fn run_test(args: &[&str]) -> (Option<i32>, String, String, Duration) {
     (status.code(), stdout, proc.stderr(), start.elapsed())
 }
 
+/// `canopener test --bus BUS --node NODE --eds EDS --format json -o DIR/report.json EXTRA…`: exit code,
+/// the JSON report, stderr and wall time.
+fn json_run(
+    dir: &ScratchDir,
+    bus: &str,
+    node: &str,
+    eds: &Path,
+    extra: &[&str],
+) -> (Option<i32>, Value, String, Duration) {
+    let out = dir.join("report.json");
+    let eds = eds.to_str().unwrap();
+    let out_arg = out.to_str().unwrap();
+    let mut args = vec![
+        "--bus", bus, "--node", node, "--eds", eds, "--format", "json", "-o", out_arg,
+    ];
+    args.extend_from_slice(extra);
+    let (code, _, stderr, took) = run_test(&args);
+    (code, report(&out), stderr, took)
+}
+
 fn report(path: &Path) -> Value {
     serde_json::from_str(&fixture::read_to_string(path).expect("report written")).expect("JSON report")
 }
@@ -62,39 +82,33 @@ fn a_clean_simulated_device_passes_and_its_logs_decode_and_replay() {
     let hub = HubProc::start();
     let _device = sim(&hub, "can0", "5", &[]);
     let dir = ScratchDir::new("conformance-clean");
-    let out = dir.join("report.json");
     let logs = dir.join("logs");
     let bus = hub.spec("can0");
     let eds = corpus::eds(SIM_EDS);
-    let (code, _, stderr, took) = run_test(&[
-        "--bus",
+    let (code, report, stderr, took) = json_run(
+        &dir,
         &bus,
-        "--node",
         "0x05",
-        "--eds",
-        eds.to_str().unwrap(),
-        "--format",
-        "json",
-        "-o",
-        out.to_str().unwrap(),
-        "--log",
-        logs.to_str().unwrap(),
-        // The simulated device runs on this (loaded, shared) host's scheduler, not on a real-time
-        // controller: its heartbeat, event timer, inhibit time and SYNC producer intervals are
-        // judged on virtual time (tests/simulated.rs), not here.
-        "--skip",
-        "cia301.ec.1",
-        "--skip",
-        "cia301.pdo.6",
-        "--skip",
-        "cia301.pdo.12",
-        "--skip",
-        "cia301.sync.4",
-        // The performance suite through the hub has its own test below (heartbeat deviation).
-        "--skip",
-        "cia313",
-    ]);
-    let report = report(&out);
+        &eds,
+        &[
+            "--log",
+            logs.to_str().unwrap(),
+            // The simulated device runs on this (loaded, shared) host's scheduler, not on a real-time
+            // controller: its heartbeat, event timer, inhibit time and SYNC producer intervals are
+            // judged on virtual time (tests/simulated.rs), not here.
+            "--skip",
+            "cia301.ec.1",
+            "--skip",
+            "cia301.pdo.6",
+            "--skip",
+            "cia301.pdo.12",
+            "--skip",
+            "cia301.sync.4",
+            // The performance suite through the hub has its own test below (heartbeat deviation).
+            "--skip",
+            "cia313",
+        ],
+    );
     let undecided: Vec<String> = report["tests"]
         .as_array()
         .expect("tests")
@@ -310,29 +324,23 @@ fn a_foreign_device_runs_to_the_end_and_names_its_real_gaps() {
     let hub = HubProc::start();
     let _peer = local_node(&python, &hub, "34", &eds, &[]);
     let dir = ScratchDir::new("conformance-foreign");
-    let out = dir.join("report.json");
     let bus = hub.spec("can0");
-    let (code, _, stderr, took) = run_test(&[
-        "--bus",
+    let (code, report, stderr, took) = json_run(
+        &dir,
         &bus,
-        "--node",
         "34",
-        "--eds",
-        eds.to_str().unwrap(),
-        "--format",
-        "json",
-        "-o",
-        out.to_str().unwrap(),
-        // A Python process on a loaded, shared host is no real-time device: its heartbeat jitter
-        // would measure the host, not python canopen. For the same reason the performance suite
-        // (cia313) is not judged here.
-        "--skip",
-        "cia301.ec.1",
-        "--skip",
-        "cia313",
-    ]);
+        &eds,
+        &[
+            // A Python process on a loaded, shared host is no real-time device: its heartbeat jitter
+            // would measure the host, not python canopen. For the same reason the performance suite
+            // (cia313) is not judged here.
+            "--skip",
+            "cia301.ec.1",
+            "--skip",
+            "cia313",
+        ],
+    );
     assert_eq!(code, Some(6), "stderr: {stderr}");
-    let report = report(&out);
     assert_eq!(report["interrupted"], false);
     // Without node guarding, life guarding cannot be judged (cia301.ec.4 fails for guarding itself);
     // without RTR on TPDOs in operational (cia301.pdo.3 fails), neither can RTR in stopped.
@@ -383,23 +391,8 @@ fn python_local_node_has_no_cia401_behaviour_and_never_passes_for_it() {
     let hub = HubProc::start();
     let _peer = local_node(&python, &hub, "34", &eds, &[]);
     let dir = ScratchDir::new("conformance-cia401-local-node");
-    let out = dir.join("report.json");
     let bus = hub.spec("can0");
-    let (code, _, stderr, _) = run_test(&[
-        "--bus",
-        &bus,
-        "--node",
-        "34",
-        "--eds",
-        eds.to_str().unwrap(),
-        "--suite",
-        "cia401",
-        "--format",
-        "json",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let report = report(&out);
+    let (code, report, stderr, _) = json_run(&dir, &bus, "34", &eds, &["--suite", "cia401"]);
     let verdicts: Vec<(String, String, String)> = report["tests"]
         .as_array()
         .expect("tests")
@@ -435,24 +428,9 @@ fn heartbeat_deviation(fault: Option<&str>) -> Value {
     let extra: Vec<&str> = fault.map_or(Vec::new(), |f| vec!["--fault", f]);
     let _device = sim(&hub, "can0", "5", &extra);
     let dir = ScratchDir::new("conformance-heartbeat");
-    let out = dir.join("report.json");
     let bus = hub.spec("can0");
     let eds = corpus::eds(SIM_EDS);
-    let (code, _, stderr, _) = run_test(&[
-        "--bus",
-        &bus,
-        "--node",
-        "5",
-        "--eds",
-        eds.to_str().unwrap(),
-        "--only",
-        "cia313.perf.8",
-        "--format",
-        "json",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let report = report(&out);
+    let (code, report, stderr, _) = json_run(&dir, &bus, "5", &eds, &["--only", "cia313.perf.8"]);
     assert_eq!(report["bus"]["timestamps"], "hub");
     let test = report["tests"][0].clone();
     let expected = if test["verdict"] == "pass" { 0 } else { 6 };

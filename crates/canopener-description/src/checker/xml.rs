@@ -241,18 +241,7 @@ mod tests {
         PDOMapping=0\n[2000]\nParameterName=Filter time\nObjectType=0x7\nDataType=0x0006\n\
         AccessType=rw\nDefaultValue=2000\nLowLimit=1\nHighLimit=1000\nPDOMapping=0\n";
 
-    const PACK: &str = r#"
-[pack]
-name = "test"
-
-[[rule]]
-id = "test/no-blank-names"
-description = "names have no blanks"
-severity = "warning"
-select = "objects"
-assert = "!item.name.contains(' ')"
-message = "ParameterName '{item.name}' contains blanks"
-"#;
+    use super::super::tests::PACK;
 
     fn xml() -> String {
         let eds = canopener_eds::load(EDS.as_bytes()).eds;
