@@ -9,7 +9,6 @@
 pub mod consumer;
 pub mod eds;
 pub mod error_control;
-pub mod helpers;
 pub mod nmt;
 pub mod object_dictionary;
 pub mod pdo;

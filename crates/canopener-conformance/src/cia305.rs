@@ -12,40 +12,16 @@
 //! change the node-ID (`cia305.lss.8`, `cia305.lss.10`) configure it back, and store it back when they
 //! stored another.
 
-use canopener_can::CanFrame;
+use canopener_wire::{LssAddress, LssAddressPart, LssRequest};
 
-use crate::catalogue::TestDef;
-use crate::cia301::nmt::BOOT_UP_WAIT;
-use crate::context::{Ctx, hex};
-use crate::finding::{Evidence, Finding, Outcome, Stop};
-
-pub mod services;
-
-use services::{Address, Lss, PART_NAMES};
-
-// Clauses are cited by service name: the section numbers of CiA 305 v3.0 were not at hand to
-// verify, and a wrong number is worse than none.
-
-/// CiA 305 LSS slave states (waiting and configuration).
-const STATES: &str = "CiA 305 v3.0 (LSS slave state machine)";
-/// CiA 305 switch state global.
-const SWITCH_GLOBAL: &str = "CiA 305 v3.0 (switch state global)";
-/// CiA 305 switch state selective.
-const SWITCH_SELECTIVE: &str = "CiA 305 v3.0 (switch state selective)";
-/// CiA 305 configure node-ID.
-const CONFIGURE_NODE_ID: &str = "CiA 305 v3.0 (configure node-ID)";
-/// CiA 305 configure bit timing.
-const CONFIGURE_BIT_TIMING: &str = "CiA 305 v3.0 (configure bit timing parameters)";
-/// CiA 305 store configuration.
-const STORE: &str = "CiA 305 v3.0 (store configuration)";
-/// CiA 305 inquire services.
-const INQUIRE: &str = "CiA 305 v3.0 (inquire LSS address, inquire node-ID)";
-/// CiA 305 identify remote slave.
-const IDENTIFY_REMOTE: &str = "CiA 305 v3.0 (LSS identify remote slave)";
-/// CiA 305 identify non-configured remote slave.
-const IDENTIFY_NON_CONFIGURED: &str = "CiA 305 v3.0 (LSS identify non-configured remote slave)";
-/// CiA 305 fastscan.
-const FASTSCAN: &str = "CiA 305 v3.0 (LSS fastscan)";
+use crate::context::Ctx;
+use crate::finding::{Evidence, Finding, Outcome};
+use crate::procedures::lss::{Lss, answer_code, describe, listed_bit_rates, prepare, ranges_text};
+use crate::requirements::lss::{
+    CONFIGURE_BIT_TIMING, CONFIGURE_NODE_ID, FASTSCAN, IDENTIFY_NON_CONFIGURED, IDENTIFY_REMOTE, INQUIRE,
+    STATES, STORE, SWITCH_GLOBAL, SWITCH_SELECTIVE,
+};
+use crate::test_def::TestDef;
 
 /// The precondition every test states.
 const PRECONDITION: &str = "EDS LSS_Supported=1, or (key absent) the device answers inquire or identify";
@@ -136,44 +112,11 @@ pub fn tests() -> Vec<TestDef> {
     ]
 }
 
-/// The device's LSS address, or the verdict when LSS does not apply or cannot be tested.
-pub(crate) fn prepare(ctx: &mut Ctx<'_, '_>) -> Result<Result<Address, Finding>, Stop> {
-    if ctx.model().lss_supported == Some(false) {
-        return Ok(Err(Finding::not_applicable("the EDS says LSS_Supported=0")));
-    }
-    let Some(address) = Address::read(ctx)? else {
-        return Ok(Err(Finding::inconclusive(
-            "1018h:01–04 (the LSS address) cannot be read over SDO",
-        )));
-    };
-    let mut lss = Lss::new(ctx);
-    lss.switch_global(true)?;
-    let inquired = lss.ask([0x5A, 0, 0, 0, 0, 0, 0, 0], 0x5A)?;
-    lss.switch_global(false)?;
-    if inquired.is_some() || lss.identify_remote(&address.ranges())? {
-        return Ok(Ok(address));
-    }
-    let request = "switch state global to configuration, inquire vendor-ID (5Ah), identify remote slave \
-                   with the device's own address"
-        .to_owned();
-    Ok(Err(match ctx.model().lss_supported {
-        Some(true) => Finding::fail(
-            "no answer to any LSS service although the EDS says LSS_Supported=1",
-            Evidence {
-                request,
-                requirement: format!("{INQUIRE} and {IDENTIFY_REMOTE}: an LSS slave answers on 7E4h"),
-                answer: format!("nothing on 7E4h within {} ms each", ctx.timeout().as_millis()),
-                cause: "no LSS slave, or it listens on another CAN-ID".to_owned(),
-            },
-        ),
-        _ => Finding::not_applicable(
-            "the EDS does not say LSS_Supported and the device answers neither inquire nor identify",
-        ),
-    }))
-}
-
 /// Runs `body` with the device's address when LSS applies.
-fn with_lss(ctx: &mut Ctx<'_, '_>, body: impl FnOnce(&mut Lss<'_, '_, '_>, &Address) -> Outcome) -> Outcome {
+fn with_lss(
+    ctx: &mut Ctx<'_, '_>,
+    body: impl FnOnce(&mut Lss<'_, '_, '_>, &LssAddress) -> Outcome,
+) -> Outcome {
     match prepare(ctx)? {
         Ok(address) => {
             let mut lss = Lss::new(ctx);
@@ -198,19 +141,12 @@ fn fail(reason: String, request: String, requirement: String, answer: String, ca
     )
 }
 
-fn describe(answer: &Option<Vec<u8>>) -> String {
-    match answer {
-        Some(data) => format!("7E4h {}", hex(data)),
-        None => "nothing on 7E4h".to_owned(),
-    }
-}
-
 fn switch_global(ctx: &mut Ctx<'_, '_>) -> Outcome {
     with_lss(ctx, |lss, _| {
         let node = lss.node();
         lss.switch_global(true)?;
         let answer = lss.inquire_node_id()?;
-        if answer.as_ref().map(|d| d[1]) != Some(node) {
+        if answer_code(&answer) != Some(node) {
             return Ok(fail(
                 "inquire node-ID after switch state global to configuration".to_owned(),
                 "switch state global (04h 01), inquire node-ID (5Eh)".to_owned(),
@@ -254,7 +190,7 @@ fn switch_selective(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ));
         }
         let inquired = lss.inquire_node_id()?;
-        if inquired.as_ref().map(|d| d[1]) != Some(node) {
+        if answer_code(&inquired) != Some(node) {
             return Ok(fail(
                 "no configuration state after 44h".to_owned(),
                 "inquire node-ID (5Eh) after switch state selective".to_owned(),
@@ -271,14 +207,14 @@ fn switch_selective(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn selective_wrong_address(ctx: &mut Ctx<'_, '_>) -> Outcome {
     with_lss(ctx, |lss, address| {
-        for (part, name) in PART_NAMES.iter().enumerate() {
+        for part in LssAddressPart::ALL {
             let wrong = address.with_part(part, address.part(part) ^ 1);
             // Inquire node-ID right behind the last part: one wait shows both a 44h and a state
             // change (inquire is served in configuration state only).
             let answers = lss.switch_selective_then_inquire(&wrong)?;
             if let Some(answer) = answers {
                 return Ok(fail(
-                    format!("switch state selective with a wrong {name} was obeyed"),
+                    format!("switch state selective with a wrong {part} was obeyed"),
                     format!("switch state selective 40h–43h with {wrong}, then inquire node-ID"),
                     format!(
                         "{SWITCH_SELECTIVE}: only a slave whose whole LSS address matches answers and changes state"
@@ -297,19 +233,21 @@ fn selective_wrong_address(ctx: &mut Ctx<'_, '_>) -> Outcome {
 fn inquire(ctx: &mut Ctx<'_, '_>) -> Outcome {
     with_lss(ctx, |lss, address| {
         lss.switch_global(true)?;
-        for (part, name) in PART_NAMES.iter().enumerate() {
-            let cs = 0x5A + part as u8;
-            let answer = lss.ask([cs, 0, 0, 0, 0, 0, 0, 0], cs)?;
+        for (sub, part) in (1u8..).zip(LssAddressPart::ALL) {
+            let request = LssRequest::InquireAddress(part);
+            let cs = request.encode()[0];
+            let answer = lss.ask(request)?;
             let value = answer
                 .as_ref()
-                .map(|d| u32::from_le_bytes([d[1], d[2], d[3], d[4]]));
+                .and_then(|d| d.get(1..5))
+                .and_then(|bytes| <[u8; 4]>::try_from(bytes).ok())
+                .map(u32::from_le_bytes);
             if value != Some(address.part(part)) {
                 return Ok(fail(
-                    format!("inquire {name} does not give 1018h:{:02X}", part + 1),
-                    format!("inquire {name} ({cs:02X}h) in configuration state"),
+                    format!("inquire {part} does not give 1018h:{sub:02X}"),
+                    format!("inquire {part} ({cs:02X}h) in configuration state"),
                     format!(
-                        "{INQUIRE}: the answer {cs:02X}h carries the {name}, 1018h:{:02X} = {:#010X}",
-                        part + 1,
+                        "{INQUIRE}: the answer {cs:02X}h carries the {part}, 1018h:{sub:02X} = {:#010X}",
                         address.part(part)
                     ),
                     describe(&answer),
@@ -319,7 +257,7 @@ fn inquire(ctx: &mut Ctx<'_, '_>) -> Outcome {
         }
         let node = lss.node();
         let answer = lss.inquire_node_id()?;
-        if answer.as_ref().map(|d| d[1]) != Some(node) {
+        if answer_code(&answer) != Some(node) {
             return Ok(fail(
                 "inquire node-ID does not give the node-ID".to_owned(),
                 "inquire node-ID (5Eh) in configuration state".to_owned(),
@@ -337,8 +275,8 @@ fn configure_node_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
         let node = lss.node();
         lss.switch_global(true)?;
         for (id, expected) in [(0x00, 1), (0x80, 1), (node, 0)] {
-            let answer = lss.ask([0x11, id, 0, 0, 0, 0, 0, 0], 0x11)?;
-            if answer.as_ref().map(|d| d[1]) != Some(expected) {
+            let answer = lss.ask(LssRequest::ConfigureNodeId { node_id: id })?;
+            if answer_code(&answer) != Some(expected) {
                 return Ok(fail(
                     format!("configure node-ID {id:#04X}: expected error code {expected}"),
                     format!("configure node-ID (11h) with {id:#04X} in configuration state"),
@@ -360,7 +298,7 @@ fn identify_remote(ctx: &mut Ctx<'_, '_>) -> Outcome {
     with_lss(ctx, |lss, address| {
         let [vendor, product, revision, serial] = address.parts();
         let inside = [
-            ("its exact address", address.ranges()),
+            ("its exact address", address.exact_ranges()),
             (
                 "revision and serial 0–FFFFFFFFh",
                 [vendor, product, 0, u32::MAX, 0, u32::MAX],
@@ -370,10 +308,7 @@ fn identify_remote(ctx: &mut Ctx<'_, '_>) -> Outcome {
             if !lss.identify_remote(&ranges)? {
                 return Ok(fail(
                     format!("no 4Fh for identify remote slave with {what}"),
-                    format!(
-                        "identify remote slave 46h–4Bh: {}",
-                        services::ranges_text(&ranges)
-                    ),
+                    format!("identify remote slave 46h–4Bh: {}", ranges_text(&ranges)),
                     format!(
                         "{IDENTIFY_REMOTE}: every slave whose vendor-ID and product code match and whose revision and serial lie in the ranges answers 4Fh"
                     ),
@@ -408,10 +343,7 @@ fn identify_remote(ctx: &mut Ctx<'_, '_>) -> Outcome {
             if lss.identify_remote(&ranges)? {
                 return Ok(fail(
                     format!("4Fh for identify remote slave with {what}"),
-                    format!(
-                        "identify remote slave 46h–4Bh: {}",
-                        services::ranges_text(&ranges)
-                    ),
+                    format!("identify remote slave 46h–4Bh: {}", ranges_text(&ranges)),
                     format!("{IDENTIFY_REMOTE}: a slave outside the ranges does not answer"),
                     "7E4h 4F".to_owned(),
                     "the slave ignores part of the ranges",
@@ -424,7 +356,7 @@ fn identify_remote(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn identify_configured(ctx: &mut Ctx<'_, '_>) -> Outcome {
     with_lss(ctx, |lss, _| {
-        let answer = lss.ask([0x4C, 0, 0, 0, 0, 0, 0, 0], 0x50)?;
+        let answer = lss.ask(LssRequest::IdentifyNonConfiguredRemoteSlave)?;
         if answer.is_some() {
             return Ok(fail(
                 "a device with a node-ID answered identify non-configured remote slave".to_owned(),
@@ -494,7 +426,7 @@ fn stored_node_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn configure_bit_timing(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let listed = services::listed_bit_rates(ctx);
+    let listed = listed_bit_rates(ctx);
     with_lss(ctx, |lss, _| {
         let Some(&((supported, kbit), _)) = listed.iter().find(|(_, on)| *on) else {
             return Ok(Finding::not_applicable(
@@ -514,8 +446,11 @@ fn configure_bit_timing(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ),
         ];
         for (index, expected, what) in &checks {
-            let answer = lss.ask([0x13, 0, *index, 0, 0, 0, 0, 0], 0x13)?;
-            if answer.as_ref().map(|d| d[1]) != Some(*expected) {
+            let answer = lss.ask(LssRequest::ConfigureBitTiming {
+                table: 0,
+                index: *index,
+            })?;
+            if answer_code(&answer) != Some(*expected) {
                 return Ok(fail(
                     format!("configure bit timing to {what}: expected error code {expected}"),
                     format!("configure bit timing (13h), table 0, index {index}"),
@@ -538,8 +473,8 @@ fn fastscan(ctx: &mut Ctx<'_, '_>) -> Outcome {
         let node = lss.node();
         // Unconfigure: node-ID FFh becomes active with the next reset communication.
         lss.switch_global(true)?;
-        let answer = lss.ask([0x11, 0xFF, 0, 0, 0, 0, 0, 0], 0x11)?;
-        if answer.as_ref().map(|d| d[1]) != Some(0) {
+        let answer = lss.ask(LssRequest::ConfigureNodeId { node_id: 0xFF })?;
+        if answer_code(&answer) != Some(0) {
             return Ok(fail(
                 "configure node-ID FFh refused".to_owned(),
                 "configure node-ID (11h) with FFh in configuration state".to_owned(),
@@ -555,10 +490,10 @@ fn fastscan(ctx: &mut Ctx<'_, '_>) -> Outcome {
         // configure, and back to waiting, which CiA 305 makes a reset communication for a device
         // that had none.
         lss.switch_global(true)?;
-        let answer = lss.ask([0x11, node, 0, 0, 0, 0, 0, 0], 0x11)?;
+        let answer = lss.ask(LssRequest::ConfigureNodeId { node_id: node })?;
         lss.switch_global(false)?;
         let active = lss.boot_and_inquire()?;
-        if answer.as_ref().map(|d| d[1]) != Some(0) || active != Some(node) {
+        if answer_code(&answer) != Some(0) || active != Some(node) {
             return Ok(fail(
                 format!("node-ID {node} not back after the fastscan"),
                 format!(
@@ -579,8 +514,8 @@ fn fastscan(ctx: &mut Ctx<'_, '_>) -> Outcome {
     })
 }
 
-fn fastscan_unconfigured(lss: &mut Lss<'_, '_, '_>, address: &Address) -> Outcome {
-    let answer = lss.ask([0x4C, 0, 0, 0, 0, 0, 0, 0], 0x50)?;
+fn fastscan_unconfigured(lss: &mut Lss<'_, '_, '_>, address: &LssAddress) -> Outcome {
+    let answer = lss.ask(LssRequest::IdentifyNonConfiguredRemoteSlave)?;
     if answer.is_none() {
         return Ok(fail(
             "no 50h from a device with node-ID FFh".to_owned(),
@@ -601,7 +536,7 @@ fn fastscan_unconfigured(lss: &mut Lss<'_, '_, '_>, address: &Address) -> Outcom
         ));
     }
     let inquired = lss.inquire_node_id()?;
-    if inquired.as_ref().map(|d| d[1]) != Some(0xFF) {
+    if answer_code(&inquired) != Some(0xFF) {
         return Ok(fail(
             "not in configuration state with node-ID FFh after the fastscan".to_owned(),
             "inquire node-ID (5Eh) after the last fastscan step".to_owned(),
@@ -613,20 +548,4 @@ fn fastscan_unconfigured(lss: &mut Lss<'_, '_, '_>, address: &Address) -> Outcom
     Ok(Finding::pass(format!(
         "50h, fastscan found {address}, then configuration state"
     )))
-}
-
-/// The frame on 7E4h with command specifier `cs`.
-pub(crate) fn is_lss_answer(frame: &CanFrame, cs: u8) -> bool {
-    frame.id() == services::lss_response_id() && !frame.is_remote() && frame.data().first() == Some(&cs)
-}
-
-/// The node-ID of the first boot-up message within the boot-up wait.
-fn first_boot_up(ctx: &mut Ctx<'_, '_>) -> Result<Option<u8>, Stop> {
-    let boot = ctx
-        .wait_for(BOOT_UP_WAIT, |f| {
-            let raw = services::standard(f);
-            (0x701..=0x77F).contains(&raw) && f.data() == [0]
-        })?
-        .map(|l| (services::standard(&l.frame) - 0x700) as u8);
-    Ok(boot)
 }

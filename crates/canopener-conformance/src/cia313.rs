@@ -1,6 +1,6 @@
 //! The CiA 313-style performance test: how fast and how regularly a device does what CiA 301
 //! requires, measured on the bus and judged against criteria the user gives (`--criteria FILE`,
-//! [`criteria`]).
+//! [`criteria`](crate::performance::criteria)).
 //!
 //! Every test is designed from CiA 301 (what the device must do at all) and the method of CiA 313 as
 //! the thesis (`seeds/001`, §4) applies it: a request seen on the bus, the answer seen on the bus,
@@ -23,45 +23,14 @@ use canopener_wire::NmtCommand;
 
 use canopener_runtime::link::Timestamps;
 
-use crate::catalogue::TestDef;
 use crate::context::{Ctx, Reply};
 use crate::finding::{Evidence, Finding, Stop};
 use crate::model::{Limits, Measurement};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
-pub mod criteria;
 pub mod cycle;
 mod response;
-
-pub use criteria::Criteria;
-
-/// How often a response time is measured unless `--repetitions` says otherwise (the thesis's 1000,
-/// §4.2.2).
-pub const DEFAULT_REPETITIONS: usize = 1000;
-
-/// What the performance tests are judged by and how often they repeat.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Performance {
-    /// The pass criteria.
-    pub criteria: Criteria,
-    /// How many samples of each response time (SDO, RTR, LSS per service); the boot-up time takes at
-    /// most [`BOOT_UPS`] of them, since each costs a reset.
-    pub repetitions: usize,
-}
-
-impl Performance {
-    /// The documented defaults: [`Criteria::DEFAULT`] and [`DEFAULT_REPETITIONS`].
-    pub const DEFAULT: Performance = Performance {
-        criteria: Criteria::DEFAULT,
-        repetitions: DEFAULT_REPETITIONS,
-    };
-}
-
-impl Default for Performance {
-    fn default() -> Performance {
-        Performance::DEFAULT
-    }
-}
 
 /// How many resets the boot-up time test makes at most.
 pub const BOOT_UPS: usize = 10;

@@ -16,14 +16,13 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{
-    back_to_pre_operational, download_text, refused_unexpectedly, u32_of, upload_text,
-};
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::PdoDirection;
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::nmt::back_to_pre_operational;
+use crate::procedures::sdo::{download_text, refused_unexpectedly, u32_of, upload_text};
 use crate::stimulus::InputChange;
+use crate::test_def::TestDef;
 
 /// CiA 401 device type and I/O functionality bits of 1000h.
 pub const DEVICE_TYPE: &str = "CiA 401 (device type 1000h: 0191h, I/O functionality bits 16..23)";

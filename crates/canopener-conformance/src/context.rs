@@ -12,10 +12,10 @@ use canopener_runtime::nmt_command;
 use canopener_runtime::sdo_session::{SdoError, SdoSession};
 use canopener_wire::{NmtCommand, NodeId};
 
-use crate::cia313::Performance;
 use crate::device_model::DeviceModel;
 use crate::finding::Stop;
 use crate::model::{Direction, Measurement};
+use crate::performance::Performance;
 use crate::recorder::{Logged, Recorder};
 use crate::requirements::code_meaning;
 use crate::stimulus::{Hook, InputChange};

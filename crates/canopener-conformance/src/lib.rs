@@ -2,13 +2,15 @@
 //! [`Link`](canopener_runtime::link::Link) (a real bus on the wall clock, or simulated devices on
 //! virtual time) with its EDS, and get a verdict per test with the evidence.
 //!
-//! - [`catalogue`]: every test with its stable id, title, CiA and CCT references and the precondition
-//!   it takes from the EDS; selection by suite, id and tag.
+//! - [`test_def`]: what a test is (stable id, title, CiA and CCT references, the precondition it takes
+//!   from the EDS); [`catalogue`]: every suite's tests assembled, selection by suite, id and tag.
+//! - [`procedures`]: what the suites share (refusal verdicts, NMT resets, TPDO set-up, an LSS master);
+//!   a suite never uses another suite (`tests/layering.rs`).
 //! - [`cia301`]: the CiA 301 device test (designed from CiA 301, covering the CCT's cases; see
 //!   `docs/conformance.md` for the mapping and what is not covered yet).
 //! - [`cia305`]: the CiA 305 (LSS) device test.
 //! - [`cia313`]: the CiA 313-style performance test (response times, cycle times, heartbeat
-//!   deviation) judged by [`cia313::criteria`].
+//!   deviation) judged by [`performance::criteria`].
 //! - [`runner`]: runs a selection against one node, keeps each test's telegrams, restores what a test
 //!   changed and leaves the device in pre-operational between tests.
 //! - [`model`]: the report every suite fills (verdicts, telegrams, measurements with raw samples and
@@ -31,8 +33,11 @@ pub mod demo;
 pub mod device_model;
 pub mod finding;
 pub mod model;
+pub mod performance;
+pub mod procedures;
 pub mod recorder;
 pub mod render;
 pub mod requirements;
 pub mod runner;
 pub mod stimulus;
+pub mod test_def;

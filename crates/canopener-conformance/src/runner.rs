@@ -9,12 +9,12 @@ use canopener_runtime::link::Link;
 use canopener_runtime::sdo_session::SdoSession;
 use canopener_wire::{Decoder, NmtCommand};
 
-use crate::catalogue::TestDef;
-use crate::cia313::Performance;
+use crate::test_def::TestDef;
 use crate::context::{Ctx, Reply};
 use crate::device_model::DeviceModel;
 use crate::finding::{Finding, Stop};
 use crate::model::{BusInfo, DeviceInfo, Identity, REPORT_VERSION, Report, Summary, Telegram, TestReport};
+use crate::performance::Performance;
 use crate::recorder::{Logged, Recorder};
 use crate::stimulus::Hook;
 
@@ -196,7 +196,7 @@ fn prepare(
         ctx.nmt(NmtCommand::ResetNode, false)?;
         let boot = ctx.id(0x700 + u16::from(spec.node));
         let heard = ctx
-            .wait_for(crate::cia301::nmt::BOOT_UP_WAIT, |f| {
+            .wait_for(crate::procedures::nmt::BOOT_UP_WAIT, |f| {
                 f.id() == boot && f.data() == [0]
             })?
             .is_some();

@@ -10,8 +10,9 @@ use std::time::Duration;
 
 use canopener_can::bits::INTERMISSION_BITS;
 use canopener_can::{Bitrate, CanFrame};
-use canopener_conformance::cia313::{Criteria, DEFAULT_REPETITIONS, Performance, cycle};
+use canopener_conformance::cia313::cycle;
 use canopener_conformance::model::{Direction, Report, Telegram, TestReport, Verdict};
+use canopener_conformance::performance::{Criteria, DEFAULT_REPETITIONS, Performance};
 use canopener_device::faults::{DEFAULT_SDO_DELAY, Fault};
 use canopener_runtime::simulator::simulation::Simulation;
 

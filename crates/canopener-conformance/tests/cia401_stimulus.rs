@@ -15,9 +15,9 @@ use std::time::Duration;
 
 use canopener_can::{CanFrame, CanId, Instant, StandardId};
 use canopener_conformance::catalogue::{Selection, catalogue};
-use canopener_conformance::cia313::Performance;
 use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::{Report, Verdict};
+use canopener_conformance::performance::Performance;
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_conformance::stimulus::{Hook, InputChange, Stimulus};
 use canopener_runtime::link::{Link, LinkError};

@@ -6,8 +6,8 @@
 mod support;
 
 use canopener_can::candump::parse_log;
-use canopener_conformance::cia313::{Criteria, Performance};
 use canopener_conformance::model::Verdict;
+use canopener_conformance::performance::{Criteria, Performance};
 use canopener_conformance::render::candump;
 use canopener_device::faults::{DEFAULT_SDO_DELAY, Fault};
 

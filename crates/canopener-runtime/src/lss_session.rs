@@ -27,14 +27,6 @@ use crate::link::{Ended, Flow, Link, LinkError, drive};
 /// More devices than this in one listing means something answers that is no CiA 305 slave.
 pub const MAX_LISTED: usize = 1024;
 
-/// The address parts in CiA 305 order (1018h sub 1 to 4).
-pub const PARTS: [LssAddressPart; 4] = [
-    LssAddressPart::VendorId,
-    LssAddressPart::ProductCode,
-    LssAddressPart::RevisionNumber,
-    LssAddressPart::SerialNumber,
-];
-
 /// Added to a service's own timeout and settle time before the session gives up on the core.
 const SERVICE_SLACK: Duration = Duration::from_secs(1);
 
@@ -295,7 +287,7 @@ impl<L: Link> LssSession<L> {
     /// `Err(timeout)` when the device did not answer that inquiry.
     pub fn inquire_selected(&mut self, global: bool) -> Result<(LssAddress, Result<u8, Duration>), LssError> {
         let mut values = [0u32; 4];
-        for (idx, part) in PARTS.into_iter().enumerate() {
+        for (idx, part) in LssAddressPart::ALL.into_iter().enumerate() {
             match self.service(|master, now| master.inquire_address(now, part))? {
                 LssEvent::Inquired { value, .. } => values[idx] = value,
                 LssEvent::TimedOut { service, after } if idx == 0 && global => {

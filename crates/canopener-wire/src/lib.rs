@@ -61,7 +61,8 @@ pub use emcy::{
     emcy_code_text, error_register_text,
 };
 pub use lss::{
-    IdentifyField, LssAddress, LssAddressPart, LssError, LssRequest, LssResponse, bit_timing_text,
+    BIT_TIMING_TABLE, BitTiming, IdentifyField, LssAddress, LssAddressPart, LssError, LssRequest,
+    LssResponse, bit_timing_index, bit_timing_text,
 };
 pub use nmt::{GUARD_TOGGLE_BIT, NmtCommand, NmtState, encode_guard_response};
 pub use node::NodeId;

@@ -148,6 +148,33 @@ impl LssAddress {
             LssAddressPart::SerialNumber => self.serial_number,
         }
     }
+
+    /// The four parts in fastscan order.
+    pub fn parts(&self) -> [u32; 4] {
+        LssAddressPart::ALL.map(|part| self.part(part))
+    }
+
+    /// This address with one part replaced (a tester's "wrong in one part" address).
+    pub fn with_part(&self, part: LssAddressPart, value: u32) -> LssAddress {
+        let mut parts = self.parts();
+        parts[usize::from(part.offset())] = value;
+        LssAddress::from_parts(parts)
+    }
+
+    /// The identify remote slave bounds (vendor-id, product code, revision low and high, serial low
+    /// and high) that hold exactly this address.
+    pub fn exact_ranges(&self) -> [u32; 6] {
+        let [vendor, product, revision, serial] = self.parts();
+        [vendor, product, revision, revision, serial, serial]
+    }
+
+    /// The switch state selective requests (40h–43h) that address this slave.
+    pub fn switch_selective(&self) -> [LssRequest; 4] {
+        LssAddressPart::ALL.map(|part| LssRequest::SwitchStateSelective {
+            part,
+            value: self.part(part),
+        })
+    }
 }
 
 /// `vendor-id 0x0000031A, product code 0x00000001, revision number 0x00010000, serial number 0x00000007`.
@@ -180,7 +207,8 @@ pub enum IdentifyField {
 }
 
 impl IdentifyField {
-    const ALL: [IdentifyField; 6] = [
+    /// The six bounds in the order a master sends them (46h to 4Bh).
+    pub const ALL: [IdentifyField; 6] = [
         IdentifyField::VendorId,
         IdentifyField::ProductCode,
         IdentifyField::RevisionLow,
@@ -272,6 +300,16 @@ pub enum LssRequest {
     InquireAddress(LssAddressPart),
     /// 5Eh: the slave in configuration state answers with its node-id.
     InquireNodeId,
+}
+
+impl LssRequest {
+    /// The identify remote slave requests (46h–4Bh) for `bounds` in [`IdentifyField::ALL`] order.
+    pub fn identify_remote_slave(bounds: [u32; 6]) -> [LssRequest; 6] {
+        std::array::from_fn(|i| LssRequest::IdentifyRemoteSlave {
+            field: IdentifyField::ALL[i],
+            value: bounds[i],
+        })
+    }
 }
 
 /// A frame from an LSS slave (7E4h).
@@ -538,22 +576,83 @@ impl LssResponse {
     }
 }
 
-/// The bit rate of an entry of the CiA 305 bit timing table (table selector 0 of CiA 305).
-/// Index 5 (formerly 100 kbit/s) is reserved.
+/// One entry of the CiA 305 bit timing table (table selector 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BitTiming {
+    /// The table index sent in configure bit timing.
+    pub index: u8,
+    /// The bit rate in kbit/s; `None` for the reserved entry 5 and for automatic detection (9).
+    pub kbit: Option<u16>,
+    /// How the entry reads in a decoded frame.
+    pub text: &'static str,
+}
+
+/// The CiA 305 bit timing table (table selector 0), the one copy every crate reads. Index 5
+/// (formerly 100 kbit/s) is reserved.
+pub const BIT_TIMING_TABLE: [BitTiming; 10] = [
+    BitTiming {
+        index: 0,
+        kbit: Some(1000),
+        text: "1000 kbit/s",
+    },
+    BitTiming {
+        index: 1,
+        kbit: Some(800),
+        text: "800 kbit/s",
+    },
+    BitTiming {
+        index: 2,
+        kbit: Some(500),
+        text: "500 kbit/s",
+    },
+    BitTiming {
+        index: 3,
+        kbit: Some(250),
+        text: "250 kbit/s",
+    },
+    BitTiming {
+        index: 4,
+        kbit: Some(125),
+        text: "125 kbit/s",
+    },
+    BitTiming {
+        index: 5,
+        kbit: None,
+        text: "reserved, formerly 100 kbit/s",
+    },
+    BitTiming {
+        index: 6,
+        kbit: Some(50),
+        text: "50 kbit/s",
+    },
+    BitTiming {
+        index: 7,
+        kbit: Some(20),
+        text: "20 kbit/s",
+    },
+    BitTiming {
+        index: 8,
+        kbit: Some(10),
+        text: "10 kbit/s",
+    },
+    BitTiming {
+        index: 9,
+        kbit: None,
+        text: "automatic bit rate detection",
+    },
+];
+
+/// The bit rate of an entry of the CiA 305 bit timing table, as a decoded frame says it.
 pub fn bit_timing_text(index: u8) -> Option<&'static str> {
-    Some(match index {
-        0 => "1000 kbit/s",
-        1 => "800 kbit/s",
-        2 => "500 kbit/s",
-        3 => "250 kbit/s",
-        4 => "125 kbit/s",
-        5 => "reserved, formerly 100 kbit/s",
-        6 => "50 kbit/s",
-        7 => "20 kbit/s",
-        8 => "10 kbit/s",
-        9 => "automatic bit rate detection",
-        _ => return None,
-    })
+    BIT_TIMING_TABLE.get(usize::from(index)).map(|entry| entry.text)
+}
+
+/// The CiA 305 bit timing table index of a bit rate in kbit/s; `None` when the table has none.
+pub fn bit_timing_index(kbit: u16) -> Option<u8> {
+    BIT_TIMING_TABLE
+        .iter()
+        .find(|entry| entry.kbit == Some(kbit))
+        .map(|entry| entry.index)
 }
 
 fn node_id_text(node_id: u8) -> String {
@@ -659,6 +758,37 @@ impl fmt::Display for LssResponse {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn bit_timing_table_is_indexed_by_position_and_round_trips_every_rate() {
+        for (position, entry) in BIT_TIMING_TABLE.iter().enumerate() {
+            assert_eq!(usize::from(entry.index), position);
+            if let Some(kbit) = entry.kbit {
+                assert_eq!(bit_timing_index(kbit), Some(entry.index));
+            }
+        }
+        assert_eq!(bit_timing_index(100), None, "100 kbit/s is reserved in CiA 305");
+        assert_eq!(bit_timing_text(10), None);
+    }
+
+    #[test]
+    fn address_requests_carry_every_part_in_order() {
+        let address = LssAddress::from_parts([1, 2, 3, 4]);
+        assert_eq!(address.parts(), [1, 2, 3, 4]);
+        assert_eq!(
+            address.with_part(LssAddressPart::RevisionNumber, 9).parts(),
+            [1, 2, 9, 4]
+        );
+        let selective: Vec<u8> = address.switch_selective().iter().map(|r| r.encode()[0]).collect();
+        assert_eq!(selective, [0x40, 0x41, 0x42, 0x43]);
+        let identify: Vec<[u8; 8]> = LssRequest::identify_remote_slave(address.exact_ranges())
+            .iter()
+            .map(LssRequest::encode)
+            .collect();
+        assert_eq!(identify[2], [0x48, 3, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(identify[3], [0x49, 3, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(identify[5], [0x4B, 4, 0, 0, 0, 0, 0, 0]);
+    }
 
     #[test]
     fn inquire_identity_exchange() {

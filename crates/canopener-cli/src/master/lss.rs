@@ -16,11 +16,9 @@ use std::time::Duration;
 
 use canopener_master::lss_master::{KnownParts, LssConfig, ScanError, ScanPlan};
 use canopener_runtime::link::{BusLink, Link};
-use canopener_runtime::lss_session::{
-    Found, LssError, LssSession, MAX_LISTED, PARTS, ScanOutcome, node_id_text,
-};
+use canopener_runtime::lss_session::{Found, LssError, LssSession, MAX_LISTED, ScanOutcome, node_id_text};
 use canopener_wire::lss::UNCONFIGURED_NODE_ID;
-use canopener_wire::{LssAddress, NodeId};
+use canopener_wire::{LssAddress, LssAddressPart, NodeId};
 use serde_json::json;
 
 use crate::args::OutputFormat;
@@ -287,7 +285,7 @@ pub(crate) fn inquire(args: LssInquireArgs) -> CliResult {
         }
         OutputFormat::Text => {
             let mut text = String::new();
-            for part in PARTS {
+            for part in LssAddressPart::ALL {
                 text.push_str(&format!("{:<16} 0x{:08X}\n", part.to_string(), found.part(part)));
             }
             let node = node_id.map_or_else(|| "no answer".to_owned(), node_id_text);
@@ -445,26 +443,12 @@ fn parse_u32(text: &str, option: &str, example: &str) -> CliResult<u32> {
 
 /// The CiA 305 bit timing table index (table selector 0) of a bit rate in kbit/s.
 fn bit_timing_index(kbit: u16) -> CliResult<u8> {
-    const TABLE: [(u16, u8); 8] = [
-        (1000, 0),
-        (800, 1),
-        (500, 2),
-        (250, 3),
-        (125, 4),
-        (50, 6),
-        (20, 7),
-        (10, 8),
-    ];
-    TABLE
-        .iter()
-        .find(|(rate, _)| *rate == kbit)
-        .map(|(_, index)| *index)
-        .ok_or_else(|| {
-            CliError::Usage(format!(
-                "--bitrate {kbit} is not in the CiA 305 bit timing table: use 1000, 800, 500, 250, 125, 50, 20 \
+    canopener_wire::bit_timing_index(kbit).ok_or_else(|| {
+        CliError::Usage(format!(
+            "--bitrate {kbit} is not in the CiA 305 bit timing table: use 1000, 800, 500, 250, 125, 50, 20 \
                  or 10 (kbit/s; 100 is reserved), e.g. `{CONFIGURE_EXAMPLE} --bitrate 250`"
-            ))
-        })
+        ))
+    })
 }
 
 fn address_json(address: &LssAddress) -> serde_json::Value {

@@ -8,9 +8,9 @@ use std::io::IsTerminal;
 use std::path::Path;
 
 use canopener_conformance::catalogue::{Selection, TestDef, catalogue};
-use canopener_conformance::cia313::{Criteria, Performance};
 use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::{Report, rfc3339_utc};
+use canopener_conformance::performance::{Criteria, Performance};
 use canopener_conformance::render::{candump, html, human, junit};
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_conformance::stimulus::{Hook, Stimulus};

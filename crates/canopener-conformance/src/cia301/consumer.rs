@@ -6,13 +6,12 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{
-    download_text, expect_refusal, observed_state, start_heartbeat, state_name, u32_of,
-};
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::nmt::{observed_state, start_heartbeat, state_name};
+use crate::procedures::sdo::{download_text, expect_refusal, u32_of};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 /// The consumer time the reaction test sets, in ms.
 pub const TEST_CONSUMER_MS: u16 = 250;
@@ -222,7 +221,7 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
     // A heartbeat built before the event may still be on its way (a late one is cia301.ec.1's
     // business): the state is judged from the heartbeats of the period after the event.
     ctx.listen(
-        Duration::from_millis(u64::from(crate::cia301::helpers::TEST_HEARTBEAT_MS)),
+        Duration::from_millis(u64::from(crate::procedures::nmt::TEST_HEARTBEAT_MS)),
         |_| false,
     )?;
     let state = observed_state(ctx, true)?;
@@ -402,7 +401,7 @@ fn consumer_after_reset(ctx: &mut Ctx<'_, '_>) -> Outcome {
             download_text((0x1016, 1), &consumer)
         )));
     }
-    if !crate::cia301::helpers::reset_node(ctx)? {
+    if !crate::procedures::nmt::reset_node(ctx)? {
         return Ok(Finding::inconclusive("no boot-up after the reset node"));
     }
     let after_reset = ctx.read(0x1016, 1)?;
@@ -413,7 +412,7 @@ fn consumer_after_reset(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 request: format!(
                     "{}, NMT reset node, {}",
                     download_text((0x1016, 1), &consumer),
-                    crate::cia301::helpers::upload_text((0x1016, 1))
+                    crate::procedures::sdo::upload_text((0x1016, 1))
                 ),
                 requirement: format!(
                     "{}: reset node sets every parameter to its power-on value ({} by the EDS)",

@@ -4,10 +4,10 @@
 use canopener_check::Selection;
 use canopener_eds::{Loaded, Severity};
 
-use crate::catalogue::TestDef;
 use crate::context::Ctx;
 use crate::finding::{Evidence, Finding, Outcome};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 /// The EDS tests.
 pub fn tests() -> Vec<TestDef> {

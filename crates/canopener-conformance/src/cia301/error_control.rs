@@ -5,14 +5,13 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{
-    TEST_HEARTBEAT_MS, download_text, intervals_text, measure_intervals, refused_unexpectedly,
-    start_heartbeat, u32_of, upload_text,
-};
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome};
+use crate::procedures::intervals::{intervals_text, measure_intervals};
+use crate::procedures::nmt::{TEST_HEARTBEAT_MS, start_heartbeat};
+use crate::procedures::sdo::{download_text, refused_unexpectedly, u32_of, upload_text};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 /// How far one heartbeat interval may stray from the period. CiA 301 sets no producer tolerance;
 /// canopener allows a tenth of the period (a consumer is typically set to 1.5–2 periods), and
@@ -403,7 +402,7 @@ fn error_history(ctx: &mut Ctx<'_, '_>, request: &str) -> Result<Finding, crate:
     }
     let beyond = ctx.read(0x1003, count + 1)?;
     Ok(
-        match crate::cia301::helpers::expect_refusal(
+        match crate::procedures::sdo::expect_refusal(
             &upload_text((0x1003, count + 1)),
             &beyond,
             req::NO_DATA,

@@ -6,21 +6,18 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{
-    back_to_pre_operational, observed_state, start_heartbeat, state_name, upload_text,
-};
 use crate::context::{Ctx, Reply};
 use crate::finding::{Evidence, Finding, Outcome};
+use crate::procedures::nmt::{
+    BOOT_UP_WAIT, back_to_pre_operational, observed_state, start_heartbeat, state_name,
+};
+use crate::procedures::sdo::upload_text;
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 const PRE_OPERATIONAL: u8 = 0x7F;
 const OPERATIONAL: u8 = 0x05;
 const STOPPED: u8 = 0x04;
-
-/// How long a device may take from a reset to its boot-up message. CiA 301 sets no bound; the CCT
-/// waits a fixed time, canopener waits 2 s (documented in `docs/conformance.md`).
-pub const BOOT_UP_WAIT: Duration = Duration::from_secs(2);
 
 /// How long after a boot-up message a second one counts as a duplicate.
 const DUPLICATE_WAIT: Duration = Duration::from_millis(50);

@@ -2,12 +2,14 @@
 
 use canopener_eds::AccessType;
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, is_pdo_or_special, reset_node, upload_text};
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{EntryModel, OBJ_FLAG_REFUSE_WRITE, number_bytes, number_text, step_beyond};
 use crate::finding::{Evidence, Finding, Outcome};
+use crate::procedures::entries::is_pdo_or_special;
+use crate::procedures::nmt::reset_node;
+use crate::procedures::sdo::{download_text, expect_refusal, upload_text};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 /// The object dictionary tests.
 pub fn tests() -> Vec<TestDef> {

@@ -2,12 +2,12 @@
 //! CiA 301 §7.5.2.38 describes, and the refusals of a mapping written without it, too long, or in
 //! the wrong direction, with the abort codes the CCT accepts (reference §3.4).
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, refused_unexpectedly, u32_of};
 use crate::context::{Ctx, Reply};
 use crate::device_model::{EntryModel, PdoDirection, PdoModel};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::sdo::{download_text, expect_refusal, refused_unexpectedly, u32_of};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 /// The mapping tests.
 pub fn tests() -> Vec<TestDef> {

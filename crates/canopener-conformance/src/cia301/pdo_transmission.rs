@@ -5,12 +5,13 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{back_to_pre_operational, intervals_text, measure_intervals};
-use crate::cia301::pdo::{configurable_tpdo, configure_tpdo};
 use crate::context::{Ctx, Reply};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::intervals::{intervals_text, measure_intervals};
+use crate::procedures::nmt::back_to_pre_operational;
+use crate::procedures::tpdo::{configurable_tpdo, configure_tpdo};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 /// The event timer the test sets, in ms.
 pub const TEST_EVENT_TIMER_MS: u16 = 100;
@@ -395,7 +396,7 @@ fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !ctx.model().entry(0x1019, 0).is_some_and(|e| e.writable()) {
         return Ok(Finding::not_applicable("no writable 1019h"));
     }
-    if crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
+    if crate::procedures::sdo::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
         return Ok(Finding::not_applicable(
             "the device produces SYNC (1005h bit 30): the tester cannot send the counter",
         ));
@@ -474,7 +475,7 @@ fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 /// The SYNC CAN-ID from 1005h (80h when it cannot be read).
 fn sync_id(ctx: &mut Ctx<'_, '_>) -> Result<u16, Stop> {
-    Ok(match crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?) {
+    Ok(match crate::procedures::sdo::u32_of(&ctx.read(0x1005, 0)?) {
         Some(cob) => (cob & 0x7FF) as u16,
         None => 0x80,
     })
@@ -535,7 +536,7 @@ fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     // Make the device a SYNC consumer where the EDS allows it (CCT Synchronization 04).
     let mut setup = Vec::new();
     if writable(ctx, 0x1005) {
-        let cob = crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).unwrap_or(0x80) & !0x4000_0000;
+        let cob = crate::procedures::sdo::u32_of(&ctx.read(0x1005, 0)?).unwrap_or(0x80) & !0x4000_0000;
         setup.push((0x1005u16, cob.to_le_bytes().to_vec()));
     }
     if writable(ctx, 0x1006) {
@@ -544,15 +545,15 @@ fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     for (index, data) in setup {
         let reply = ctx.modify(index, 0, data.clone())?;
         if !matches!(reply, Reply::Done(_)) {
-            return Ok(crate::cia301::helpers::refused_unexpectedly(
-                &crate::cia301::helpers::download_text((index, 0), &data),
+            return Ok(crate::procedures::sdo::refused_unexpectedly(
+                &crate::procedures::sdo::download_text((index, 0), &data),
                 &reply,
                 req::SYNC_OBJECTS,
                 "the device refuses to be a SYNC consumer",
             ));
         }
     }
-    if crate::cia301::helpers::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
+    if crate::procedures::sdo::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
         return Ok(Finding::not_applicable(
             "the device produces SYNC (1005h bit 30) and 1005h is not writable",
         ));
@@ -563,7 +564,7 @@ fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         if ids.len() == MAX_COUNTED_TPDOS {
             break;
         }
-        let Some((pdo, cob)) = crate::cia301::pdo::configurable_tpdo_at(ctx, &pdo, &[1, 2])? else {
+        let Some((pdo, cob)) = crate::procedures::tpdo::configurable_tpdo_at(ctx, &pdo, &[1, 2])? else {
             continue;
         };
         let id = (cob & 0x7FF) as u16;

@@ -4,14 +4,13 @@
 use canopener_master::sdo_client::{DownloadMode, UploadMode};
 use canopener_wire::abort;
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{
-    download_text, expect_refusal, refused_unexpectedly, upload_text, writable_of_size,
-};
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{number_bytes, number_text, step_beyond};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::entries::writable_of_size;
+use crate::procedures::sdo::{download_text, expect_refusal, refused_unexpectedly, upload_text};
 use crate::requirements::{self as req, Accepted, code_meaning};
+use crate::test_def::TestDef;
 
 /// The SDO tests.
 pub fn tests() -> Vec<TestDef> {
@@ -427,7 +426,7 @@ pub fn beyond_limit(ctx: &mut Ctx<'_, '_>, up: bool) -> Outcome {
     let found = ctx.model().entries.values().find_map(|e| {
         let limit = if up { e.high } else { e.low }?;
         let data_type = e.data_type?;
-        if !e.writable() || crate::cia301::helpers::is_pdo_or_special(e.index) {
+        if !e.writable() || crate::procedures::entries::is_pdo_or_special(e.index) {
             return None;
         }
         let value = step_beyond(limit, up, data_type)?;
@@ -889,7 +888,7 @@ fn further_sdo_channels(ctx: &mut Ctx<'_, '_>) -> Outcome {
     {
         changed = Some(download_text((index, sub), &value));
     }
-    if !crate::cia301::helpers::reset_communication(ctx)? {
+    if !crate::procedures::nmt::reset_communication(ctx)? {
         return Ok(Finding::inconclusive("no boot-up after the reset communication"));
     }
     for e in &entries {

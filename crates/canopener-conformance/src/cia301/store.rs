@@ -5,11 +5,12 @@
 //! defaults ("load" to 1011h:01 and a reset node), so parameters a user had stored before are gone
 //! afterwards. `--skip cia301.other` leaves the memory alone.
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, reset_node, upload_text};
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::nmt::reset_node;
+use crate::procedures::sdo::{download_text, expect_refusal, upload_text};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 /// The signature that saves ("save", CiA 301 §7.5.2.13).
 pub const SAVE: &[u8] = b"save";
@@ -244,7 +245,7 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Ou
     }
     let reset_ok = match reset {
         Reset::Node => reset_node(ctx)?,
-        Reset::Communication => crate::cia301::helpers::reset_communication(ctx)?,
+        Reset::Communication => crate::procedures::nmt::reset_communication(ctx)?,
     };
     if !reset_ok {
         let _ = restore_defaults(ctx, targets)?;

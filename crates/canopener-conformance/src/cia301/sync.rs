@@ -3,11 +3,12 @@
 
 use std::time::Duration;
 
-use crate::catalogue::TestDef;
-use crate::cia301::helpers::{download_text, expect_refusal, measure_intervals, u32_of, upload_text};
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::intervals::measure_intervals;
+use crate::procedures::sdo::{download_text, expect_refusal, u32_of, upload_text};
 use crate::requirements as req;
+use crate::test_def::TestDef;
 
 /// The SYNC period the producer test sets, in µs.
 pub const TEST_SYNC_PERIOD_US: u32 = 10_000;
@@ -126,7 +127,7 @@ fn reserved_counter(ctx: &mut Ctx<'_, '_>) -> Outcome {
     // 0 is valid: SYNC without a counter (CCT Synchronization 06).
     let reply = ctx.modify(0x1019, 0, vec![0])?;
     if !matches!(reply, Reply::Done(_)) {
-        return Ok(crate::cia301::helpers::refused_unexpectedly(
+        return Ok(crate::procedures::sdo::refused_unexpectedly(
             &download_text((0x1019, 0), &[0]),
             &reply,
             req::SYNC_OBJECTS,

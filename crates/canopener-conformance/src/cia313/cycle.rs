@@ -5,12 +5,13 @@ use std::time::Duration;
 use canopener_wire::NmtCommand;
 
 use super::{Criterion, Judged, judge, ms_between, standard_id};
-use crate::cia301::helpers::{back_to_pre_operational, u32_of};
-use crate::cia301::pdo::{configurable_tpdo, configure_tpdo};
 use crate::context::{Ctx, Reply};
 use crate::device_model::EntryModel;
 use crate::finding::{Evidence, Finding, Outcome};
 use crate::model::Measurement;
+use crate::procedures::nmt::back_to_pre_operational;
+use crate::procedures::sdo::u32_of;
+use crate::procedures::tpdo::{configurable_tpdo, configure_tpdo};
 use crate::requirements as req;
 
 /// The event timer `cia313.perf.3` sets, in ms.
@@ -218,7 +219,10 @@ pub(super) fn heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
                     "{}: the heartbeat producer sends every producer heartbeat time (1017h)",
                     req::HEARTBEAT
                 ),
-                answer: format!("periods {}", crate::cia301::helpers::intervals_text(&periods)),
+                answer: format!(
+                    "periods {}",
+                    crate::procedures::intervals::intervals_text(&periods)
+                ),
                 cause: "the heartbeat producer stops or misses periods".to_owned(),
             },
         ));

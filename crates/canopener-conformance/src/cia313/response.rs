@@ -6,12 +6,15 @@ use std::time::Duration;
 use canopener_wire::NmtCommand;
 
 use super::{BOOT_UPS, Criterion, Judged, Outgoing, Timed, exchange, judge, standard_id, unusable};
-use crate::cia301::helpers::{back_to_pre_operational, download_text, u32_of, upload_text};
-use crate::cia301::nmt::BOOT_UP_WAIT;
-use crate::cia305::services::Address;
+use crate::procedures::nmt::BOOT_UP_WAIT;
+use crate::procedures::nmt::back_to_pre_operational;
+use crate::procedures::sdo::{download_text, u32_of, upload_text};
+use canopener_wire::{LSS_MASTER_TO_SLAVE_ID, LssAddress, LssAddressPart, LssRequest};
+
 use crate::context::{Ctx, Reply};
 use crate::device_model::PdoDirection;
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::lss::{answer_specifier, is_lss_answer};
 use crate::requirements as req;
 
 /// How long a TPDO may take to answer a remote frame before the test calls it missing (as
@@ -333,16 +336,28 @@ fn rtr_tpdo(ctx: &mut Ctx<'_, '_>) -> Result<Option<(u16, u16, u8)>, Stop> {
 
 /// The inquire services measured (CiA 305: the answer has the request's command specifier), with
 /// their measurement names.
-const LSS_SERVICES: [(u8, &str); 5] = [
-    (0x5A, "inquire_vendor_id"),
-    (0x5B, "inquire_product_code"),
-    (0x5C, "inquire_revision"),
-    (0x5D, "inquire_serial"),
-    (0x5E, "inquire_node_id"),
+const LSS_SERVICES: [(LssRequest, &str); 5] = [
+    (
+        LssRequest::InquireAddress(LssAddressPart::VendorId),
+        "inquire_vendor_id",
+    ),
+    (
+        LssRequest::InquireAddress(LssAddressPart::ProductCode),
+        "inquire_product_code",
+    ),
+    (
+        LssRequest::InquireAddress(LssAddressPart::RevisionNumber),
+        "inquire_revision",
+    ),
+    (
+        LssRequest::InquireAddress(LssAddressPart::SerialNumber),
+        "inquire_serial",
+    ),
+    (LssRequest::InquireNodeId, "inquire_node_id"),
 ];
 
 pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let address = match crate::cia305::prepare(ctx)? {
+    let address = match crate::procedures::lss::prepare(ctx)? {
         Ok(address) => address,
         Err(finding) => return Ok(finding),
     };
@@ -351,13 +366,14 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let mut measured = Vec::new();
     let mut failure = None;
     switch_global(ctx, true)?;
-    for (cs, name) in LSS_SERVICES {
+    for (request, name) in LSS_SERVICES {
+        let cs = answer_specifier(&request);
         match lss_samples(ctx, repetitions, &mut |ctx| {
             exchange(
                 ctx,
-                Outgoing::Data(LSS_REQUEST, &[cs, 0, 0, 0, 0, 0, 0, 0]),
+                Outgoing::Data(LSS_MASTER_TO_SLAVE_ID, &request.encode()),
                 timeout,
-                |f| crate::cia305::is_lss_answer(f, cs),
+                |f| is_lss_answer(f, cs),
             )
         })? {
             Ok(samples) => measured.push((name, format!("{name} ({cs:02X}h)"), samples)),
@@ -437,9 +453,6 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }))
 }
 
-/// The LSS request CAN-ID (CiA 305: master → slave).
-const LSS_REQUEST: u16 = 0x7E5;
-
 /// `repetitions` samples of `one`, or how many answered before one did not.
 fn lss_samples(
     ctx: &mut Ctx<'_, '_>,
@@ -458,23 +471,24 @@ fn lss_samples(
 
 /// Switch state selective with `address`, timed from the last request (43h) to the 44h answer;
 /// back to waiting first, so that each repetition switches again.
-fn selective(ctx: &mut Ctx<'_, '_>, address: &Address, timeout: Duration) -> Timed {
+fn selective(ctx: &mut Ctx<'_, '_>, address: &LssAddress, timeout: Duration) -> Timed {
     switch_global(ctx, false)?;
-    let parts = address.parts();
-    for (cs, part) in (0x40u8..0x43).zip(parts) {
-        let [a, b, c, d] = part.to_le_bytes();
-        ctx.send(LSS_REQUEST, &[cs, a, b, c, d, 0, 0, 0])?;
+    let [first @ .., last] = address.switch_selective();
+    for request in first {
+        ctx.send(LSS_MASTER_TO_SLAVE_ID, &request.encode())?;
     }
-    let [a, b, c, d] = parts[3].to_le_bytes();
     exchange(
         ctx,
-        Outgoing::Data(LSS_REQUEST, &[0x43, a, b, c, d, 0, 0, 0]),
+        Outgoing::Data(LSS_MASTER_TO_SLAVE_ID, &last.encode()),
         timeout,
-        |f| crate::cia305::is_lss_answer(f, 0x44),
+        |f| is_lss_answer(f, answer_specifier(&last)),
     )
 }
 
 /// Switch state global (04h), unconfirmed.
 fn switch_global(ctx: &mut Ctx<'_, '_>, configuration: bool) -> Result<(), Stop> {
-    ctx.send(LSS_REQUEST, &[0x04, u8::from(configuration), 0, 0, 0, 0, 0, 0])
+    let request = LssRequest::SwitchStateGlobal {
+        mode: u8::from(configuration),
+    };
+    ctx.send(LSS_MASTER_TO_SLAVE_ID, &request.encode())
 }

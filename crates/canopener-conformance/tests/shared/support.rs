@@ -5,9 +5,9 @@ use std::time::Duration;
 
 use canopener_can::{CanFrame, Instant};
 use canopener_conformance::catalogue::{Selection, catalogue};
-use canopener_conformance::cia313::Performance;
 use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::model::Report;
+use canopener_conformance::performance::Performance;
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_device::faults::Fault;
 use canopener_runtime::cancel::Cancel;
