@@ -13,6 +13,7 @@ mod cli;
 mod demo;
 mod eds;
 mod error;
+mod grammar;
 mod master;
 mod mbt;
 mod net;
