@@ -37,20 +37,26 @@ pub(crate) const EXIT_CODES_HELP: &str = "\
 Exit codes:
   0  success
   1  internal error (a bug: please report it)
-  2  usage error: bad command-line arguments
+  2  usage error: bad command-line arguments, or a missing or malformed --bus
   3  invalid input: a file, frame or value could not be read (the message names file:line)
   4  bus error: the CAN bus could not be opened, or the connection was lost
   5  output error: a result could not be written (file exists, disk full, permission)
-  6  check failed: the command ran and found a problem (e.g. frames lost in `demo --monitor`)
+  6  check failed: the command ran and found a problem (a test or model verdict fail or
+     inconclusive, frames lost in `demo --monitor`)
   7  device error: the device refused a request (SDO abort, LSS error) or did not answer in time
-130  interrupted: Ctrl-C or SIGTERM while talking to a device (a running transfer is aborted on the bus)
+130  interrupted: Ctrl-C or SIGTERM while talking to a device (a running transfer is aborted
+     on the bus)
 
-`eds` and `net` commands (except `net monitor`) follow diff(1) instead:
+`eds` commands and `net check|show|convert|draw` follow diff(1) instead:
   0  success (`eds diff`: both files describe the same device and object dictionary;
      `eds check`/`eds fix`: no errors, or no warnings either with --deny warnings)
-  1  `eds diff`: the files differ; `eds check`/`eds fix`/`net check`: errors found (or warnings with
-     --deny warnings)
-  2  any trouble: bad arguments, a file that cannot be read, refused or written";
+  1  `eds diff`: the files differ; `eds fmt --check`: not canonical;
+     `eds check`/`eds fix`/`net check`: errors found (or warnings with --deny warnings)
+  2  any trouble: bad arguments, a file that cannot be read, refused or written
+Why two rules: the file commands stand beside compilers and linters in CI scripts, which read
+1 as \"found something\" and 2 as \"could not run\" (diff, grep, clippy). Commands that talk to a
+bus can end in more ways (the bus, the device, an interruption), so they need the whole table,
+where a failed verdict is 6.";
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum Command {
