@@ -13,9 +13,7 @@ pub(crate) fn canopener() -> Command {
     Command::new(env!("CARGO_BIN_EXE_canopener"))
 }
 
-pub(crate) fn workspace_root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+pub(crate) use canopener_testkit::corpus::workspace_root;
 
 pub(crate) fn script(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
