@@ -31,6 +31,7 @@
   }
 
   function show(name, checked) {
+    page.checked = checked;
     page.report = checked.report;
     const file = checked.report.files[0];
     const summary = checked.report.summary;

@@ -10,7 +10,12 @@
     lastSeq: 0,        // the number of the last event applied
     latencies: [],     // ms from the monitor's event (its time) to its arrival here
     startedUnixMs: null,
+    gaps: 0,           // events whose number did not follow the one before (lost on the way)
+    raw: [],           // the last events as received (the JSON text of each server-sent event)
+    connected: false,
+    ready: false,
   };
+  let lastReceived = null;
   const diagnoses = new Map(); // network -> explanations
   let supplies = {};
   let pending = [];
@@ -65,21 +70,19 @@
     document.getElementById('all-heard').hidden = panel.children.length > 0 || diagnoses.size === 0;
   }
 
-  function apply(event, fromLog) {
+  // Applies an event to the page and logs it; `logOnly` for events the state already includes.
+  function apply(event, logOnly) {
     const t = event.time.toFixed(3) + ' s  net ' + event.network + '  ';
     if (event.event === 'state') {
-      setState(event.node, event.network, event.state);
-      if (fromLog) log(t + event.node + ' (node ' + event.node_id + '): ' + event.state, event.state);
+      if (!logOnly) setState(event.node, event.network, event.state);
+      log(t + event.node + ' (node ' + event.node_id + '): ' + event.state, event.state);
     } else if (event.event === 'recovered') {
-      if (fromLog) log(t + event.node + ' (node ' + event.node_id + ') is heard again', 'recovered');
+      log(t + event.node + ' (node ' + event.node_id + ') is heard again', 'recovered');
     } else if (event.event === 'diagnosis') {
-      diagnoses.set(event.network, event.explanations);
-      drawDiagnosis();
-      if (fromLog) {
-        log(event.silent.length === 0 ? t + 'every device is heard'
-          : t + 'silent: ' + event.silent.join(', ') + '; ' + event.explanations.map(
-            (e) => e.kind + ' ' + e.candidates.join(' or ')).join('; '), 'diagnosis');
-      }
+      if (!logOnly) { diagnoses.set(event.network, event.explanations); drawDiagnosis(); }
+      log(event.silent.length === 0 ? t + 'every device is heard'
+        : t + 'silent: ' + event.silent.join(', ') + '; ' + event.explanations.map(
+          (e) => e.kind + ' ' + e.candidates.join(' or ')).join('; '), 'diagnosis');
     }
   }
 
@@ -88,7 +91,16 @@
     live.startedUnixMs = state.started_unix_ms;
     const snapshot = state.snapshot;
     if (snapshot) {
-      for (const d of snapshot.devices) if (!d.is_monitor) setState(d.node, d.network, d.state);
+      for (const d of snapshot.devices) {
+        if (!d.is_monitor) { setState(d.node, d.network, d.state); continue; }
+        // The monitor's own vertex is not watched: its badge says where the monitor listens.
+        for (const badge of document.querySelectorAll('.state[data-network="' + d.network + '"]')) {
+          if (badge.getAttribute('data-device') !== d.node) continue;
+          badge.setAttribute('data-monitor', 'true');
+          const title = badge.querySelector('title');
+          if (title) title.textContent = d.node + ' on network ' + d.network + ': the monitor listens here';
+        }
+      }
       diagnoses.clear();
       for (const n of snapshot.diagnoses) if (n.last) diagnoses.set(n.network, n.last.explanations);
       drawDiagnosis();
@@ -99,6 +111,10 @@
   function receive(message) {
     live.received += 1;
     const seq = Number(message.lastEventId);
+    if (lastReceived !== null && seq !== lastReceived + 1) live.gaps += 1;
+    lastReceived = seq;
+    live.raw.push(message.data);
+    if (live.raw.length > 20000) live.raw.shift();
     const event = JSON.parse(message.data);
     if (live.startedUnixMs !== null) {
       live.latencies.push(Date.now() - (live.startedUnixMs + event.time * 1000));
@@ -108,7 +124,7 @@
     if (seq <= live.lastSeq) return;
     live.lastSeq = seq;
     live.applied += 1;
-    apply(event, true);
+    apply(event, false);
   }
 
   async function load() {
@@ -116,11 +132,15 @@
     const connection = document.getElementById('connection');
     if (!ok) { connection.textContent = state.error; return; }
     applySnapshot(state);
+    if (document.getElementById('events').children.length === 0) {
+      for (const event of state.recent || []) apply(event, true);
+    }
     for (const [seq, event] of pending) {
-      if (seq > live.lastSeq) { live.lastSeq = seq; live.applied += 1; apply(event, true); }
+      if (seq > live.lastSeq) { live.lastSeq = seq; live.applied += 1; apply(event, false); }
     }
     pending = [];
     ready = true;
+    live.ready = true;
     connection.dataset.connection = state.status.startsWith('failed') ? 'lost' : 'live';
     connection.textContent = state.status.startsWith('failed') ? state.status : 'live: monitor ' + state.status;
   }
@@ -129,7 +149,7 @@
   source.onmessage = receive;
   // On every (re)connection: the state again, then the events after it (a reconnection resumes
   // with Last-Event-ID; whatever the server no longer kept is in the state).
-  source.onopen = () => { ready = false; load(); };
+  source.onopen = () => { ready = false; live.ready = false; live.connected = true; load(); };
   source.onerror = () => {
     const connection = document.getElementById('connection');
     connection.dataset.connection = 'lost';

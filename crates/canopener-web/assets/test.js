@@ -3,7 +3,9 @@
 // A page that shows no run yet follows the next one anybody starts.
 'use strict';
 (function () {
-  const page = canopener.runs = { received: 0, shown: null, verdicts: new Map(), finished: new Set() };
+  const page = canopener.runs = {
+    received: 0, shown: null, verdicts: new Map(), finished: new Set(), connected: false,
+  };
   const $ = (id) => document.getElementById(id);
   const box = $('run');
   const fixed = box && box.dataset.run ? Number(box.dataset.run) : null;
@@ -97,6 +99,7 @@
       show(event.run);
     }
   };
+  source.onopen = () => { page.connected = true; };
   if (fixed !== null) show(fixed);
 
   const form = $('start');

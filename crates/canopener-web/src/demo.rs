@@ -42,8 +42,8 @@ pub const CUT_FOR: Duration = Duration::from_secs(6);
 /// The in-process bus of each of the tour's networks.
 fn buses() -> Vec<(u32, String)> {
     vec![
-        (1, "virtual:canopener-tour-chassis".to_owned()),
-        (2, "virtual:canopener-tour-crane".to_owned()),
+        (1, "virtual:tour-chassis".to_owned()),
+        (2, "virtual:tour-crane".to_owned()),
     ]
 }
 
@@ -132,5 +132,39 @@ fn tour(file: &Path, runs: &Arc<Runs>, cancel: &Cancel) {
     drop(commands);
     if let Ok(simulation) = simulation {
         let _ = simulation.join();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_system_reads_without_findings_and_names_the_cables_the_tour_cuts() {
+        let loaded = canopener_network::load(FILES[0].1);
+        let errors: Vec<String> = loaded.diagnostics.iter().map(|d| d.to_string()).collect();
+        assert!(errors.is_empty(), "{errors:?}");
+        let topology = &loaded.topology;
+        assert_eq!(topology.background.as_deref(), Some("background.svg"));
+        assert_eq!(topology.network_numbers().into_iter().collect::<Vec<_>>(), [1, 2]);
+        for cable in CUTS {
+            assert!(topology.cables.iter().any(|c| c.label() == cable), "{cable}");
+        }
+        // Every DCF and picture the system names is shipped.
+        let shipped: Vec<&str> = FILES.iter().map(|(name, _)| *name).collect();
+        for vertex in &topology.vertices {
+            for dcf in vertex.attachments.iter().filter_map(|a| a.dcf.as_deref()) {
+                assert!(shipped.contains(&format!("dcf/{dcf}").as_str()), "{dcf}");
+            }
+            if let Some(fig) = &vertex.fig {
+                assert!(shipped.contains(&fig.as_str()), "{fig}");
+            }
+        }
+        for (net, spec) in buses() {
+            assert!(
+                spec.parse::<canopener_transport::BusSpec>().is_ok(),
+                "network {net}: {spec}"
+            );
+        }
     }
 }

@@ -14,6 +14,9 @@ use serde_json::{Value, json};
 use crate::backend::{self, Cancel, System};
 use crate::events::EventRing;
 
+/// How many of the last events `/api/state` carries for the page's event log.
+const RECENT: u64 = 50;
+
 /// The extensions of pictures the server shows (the Background and NodeFig files).
 const PICTURES: [&str; 7] = ["png", "jpg", "jpeg", "gif", "svg", "bmp", "webp"];
 
@@ -117,8 +120,19 @@ impl Watched {
     /// What `/api/state` returns.
     pub fn state(&self) -> Value {
         let (seq, snapshot, started, status) = self.live.current();
+        // The last events up to the snapshot, for the page's event log (not applied again).
+        let recent: Vec<Value> = self
+            .live
+            .events()
+            .after(seq.saturating_sub(RECENT))
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|(n, _)| *n <= seq)
+            .filter_map(|(_, text)| serde_json::from_str(&text).ok())
+            .collect();
         json!({
             "seq": seq,
+            "recent": recent,
             "status": status,
             "started_unix_ms": started,
             "file": self.file,

@@ -372,3 +372,120 @@ pub fn problem(title: &str, message: &str) -> String {
     let body = format!("<h1>{}</h1><p class=\"refusal\">{}</p>", esc(title), esc(message));
     layout(Tab::Monitor, title, &body, None)
 }
+
+#[cfg(test)]
+mod tests {
+    use canopener_conformance::model::Measurement;
+
+    use super::*;
+    use crate::compare::{Moved, VerdictChange};
+
+    fn row(id: i64, device: &str, fault: Option<&str>, fail: i64) -> RunRow {
+        RunRow {
+            id,
+            started: format!("2026-01-0{id}T10:00:00Z"),
+            status: "done".to_owned(),
+            message: None,
+            node: 5,
+            bus: "simulated".to_owned(),
+            eds: "io.eds".to_owned(),
+            device: device.to_owned(),
+            revision: Some("0x00010002".to_owned()),
+            fault: fault.map(str::to_owned),
+            suites: "cia301".to_owned(),
+            pass: 70 - fail,
+            fail,
+            inconclusive: 0,
+            not_applicable: 6,
+        }
+    }
+
+    #[test]
+    fn the_monitor_page_carries_the_contract_on_the_drawing() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../canopener-network/test_data/gateway.graphml");
+        let system = crate::backend::System::read(&file).unwrap();
+        let watched = Watched::new(
+            system,
+            None,
+            vec![
+                (1, "socketcand://127.0.0.1:29536/can0".to_owned()),
+                (2, "socketcan:can1".to_owned()),
+            ],
+            "gateway.graphml".to_owned(),
+        );
+        let page = monitor(Some(&watched));
+        assert!(page.contains(r#"data-device="Boom2" data-network="2" data-state="unknown""#));
+        assert!(page.contains(r#"data-cable="B2""#));
+        insta::assert_snapshot!("monitor", page);
+        insta::assert_snapshot!("monitor_without_system", monitor(None));
+    }
+
+    #[test]
+    fn the_check_test_and_run_pages() {
+        insta::assert_snapshot!("check", check(crate::upload::DEFAULT_CAP));
+        let descriptions = [StoredDescription {
+            sha256: "ab".repeat(32),
+            name: "motor.eds".to_owned(),
+        }];
+        let buses = [(1, "socketcan:can0".to_owned())];
+        insta::assert_snapshot!("test", test(&buses, &descriptions, &[]));
+        let view = RunView {
+            id: 3,
+            status: "done".to_owned(),
+            message: None,
+            node: 5,
+            bus: "simulated".to_owned(),
+            eds: "io.eds".to_owned(),
+            started: "2026-01-03T10:00:00Z".to_owned(),
+            total: 0,
+            done: 0,
+            current: None,
+            verdicts: Vec::new(),
+        };
+        insta::assert_snapshot!("run", run(&view, Some(2)));
+    }
+
+    #[test]
+    fn the_history_groups_runs_by_device_and_offers_the_comparison_with_the_run_before() {
+        let rows = [
+            row(2, "Motor (ACME)", Some("heartbeat-jitter"), 1),
+            row(1, "Motor (ACME)", None, 0),
+            row(3, "Valve", None, 0),
+        ];
+        let page = history(&rows, "Runs are kept in data/canopener.sqlite.");
+        assert!(page.contains(r#"href="/compare?a=1&amp;b=2""#));
+        insta::assert_snapshot!("history", page);
+    }
+
+    #[test]
+    fn the_comparison_shows_changed_verdicts_and_both_plots_of_a_moved_measurement() {
+        let comparison = Comparison {
+            verdicts: vec![VerdictChange {
+                id: "cia301.ec.1".to_owned(),
+                title: "Heartbeat producer".to_owned(),
+                before: Some("pass".to_owned()),
+                after: Some("fail".to_owned()),
+                reason: "an interval of 140 ms".to_owned(),
+            }],
+            moved: vec![Moved {
+                test: "cia301.ec.1".to_owned(),
+                name: "heartbeat interval".to_owned(),
+                before: Measurement::new("ms", vec![100.0, 100.0, 100.0]),
+                after: Measurement::new("ms", vec![100.0, 140.0, 60.0, 140.0]),
+            }],
+            unchanged: 70,
+        };
+        let page = comparison_page(&comparison);
+        assert_eq!(page.matches("<figure class=\"measurement\"").count(), 2);
+        insta::assert_snapshot!("comparison", page);
+    }
+
+    fn comparison_page(c: &Comparison) -> String {
+        comparison(
+            &row(1, "Motor", None, 0),
+            &row(2, "Motor", Some("heartbeat-jitter"), 1),
+            c,
+        )
+    }
+}
