@@ -394,25 +394,27 @@ fn runs_from_the_test_page_are_watched_by_ten_sessions_kept_listed_and_compared(
     let Some(browser) = browser(&dir) else { return };
     let data = dir.join("data");
     let server = Server::start("serve", &["serve", "--data", data.to_str().unwrap()]);
+    let clock = Instant::now();
     // Ten sessions, each its own browser context (cookies, storage), all on /test.
     let contexts: Vec<_> = (0..10)
         .map(|_| browser.new_context().expect("a browser context"))
         .collect();
-    let tabs: Vec<_> = contexts
-        .iter()
-        .map(|c| {
-            let tab = c.new_tab().expect("tab");
-            tab.set_default_timeout(Duration::from_secs(60));
-            tab.navigate_to(&server.url("/test"))
-                .unwrap()
-                .wait_until_navigated()
-                .unwrap();
-            tab
-        })
-        .collect();
+    let tabs: Vec<_> = contexts.iter().map(|c| c.new_tab().expect("tab")).collect();
+    // Loaded side by side, as ten people would open the page.
+    let page = server.url("/test");
+    std::thread::scope(|scope| {
+        for tab in &tabs {
+            let page = &page;
+            scope.spawn(move || {
+                tab.set_default_timeout(Duration::from_secs(60));
+                tab.navigate_to(page).unwrap().wait_until_navigated().unwrap();
+            });
+        }
+    });
     for tab in &tabs {
         wait_until(tab, "canopener.runs.connected", Duration::from_secs(20));
     }
+    eprintln!("ten sessions open: {:?}", clock.elapsed());
     let run = js(&tabs[0], &format!("canopener.runs.start({})", start_request("")));
     assert_eq!(run, json!(1));
     // A session that goes away mid-run disturbs nothing.
@@ -424,6 +426,7 @@ fn runs_from_the_test_page_are_watched_by_ten_sessions_kept_listed_and_compared(
             Duration::from_secs(120),
         );
     }
+    eprintln!("run 1 seen done by nine sessions: {:?}", clock.elapsed());
     let view = server.get_json("/api/runs/1");
     let total = view["verdicts"].as_array().unwrap().len();
     assert!(total > 50, "{view}");
@@ -474,6 +477,7 @@ fn runs_from_the_test_page_are_watched_by_ten_sessions_kept_listed_and_compared(
         "document.querySelector('#run .ended[data-status=\"done\"]') !== null && canopener.runs.shown === 2",
         Duration::from_secs(120),
     );
+    eprintln!("run 2 done: {:?}", clock.elapsed());
     // Kept in --data, listed by device and date.
     assert!(data.join("canopener.sqlite").is_file());
     let history = open(&browser, &server.url("/history"));
@@ -528,7 +532,23 @@ fn ctrl_c_stops_a_run_on_a_bus_cleanly_and_the_history_says_so() {
         "serve",
         &["serve", "--bus", &can0, "--data", data.to_str().unwrap()],
     );
-    let body = json!({"bus": "0", "node": 5, "eds": "bundled", "suites": ["cia301"]}).to_string();
+    // The description uploaded as the /test page uploads it, kept by content, offered on the page.
+    let (status, stored) = http(
+        &server.base,
+        "POST",
+        "/api/eds?name=io.eds",
+        &[],
+        &std::fs::read(&eds).unwrap(),
+    );
+    assert_eq!(status, 200, "{stored}");
+    let stored: Value = serde_json::from_str(&stored).unwrap();
+    let sha = stored["eds"].as_str().unwrap().to_owned();
+    let (_, page) = http(&server.base, "GET", "/test", &[], b"");
+    assert!(
+        page.contains(&format!(r#"<option value="{sha}">io.eds ("#)),
+        "{page}"
+    );
+    let body = json!({"bus": "0", "node": 5, "eds": sha, "suites": ["cia301"]}).to_string();
     let json_header = [("Content-Type", "application/json")];
     let (status, answer) = http(&server.base, "POST", "/api/runs", &json_header, body.as_bytes());
     assert_eq!(status, 200, "{answer}");
@@ -563,6 +583,7 @@ fn ctrl_c_stops_a_run_on_a_bus_cleanly_and_the_history_says_so() {
     assert_eq!(status, 200);
     let report: Value = serde_json::from_str(&report).unwrap();
     assert_eq!(report["interrupted"], true);
+    assert_eq!(report["device"]["eds"], "io.eds");
     assert!(report["tests"].as_array().unwrap().len() >= 3);
 }
 
