@@ -187,8 +187,18 @@ pub async fn check(State(access): State<Access>, request: Request, next: Next) -
     if let (Some(token), Some(_)) = (&access.token, &query_token)
         && request.method() == Method::GET
     {
-        let path = request.uri().path().to_owned();
-        let mut response = Redirect::to(&path).into_response();
+        let rest: Vec<&str> = request
+            .uri()
+            .query()
+            .unwrap_or_default()
+            .split('&')
+            .filter(|pair| !pair.is_empty() && !pair.starts_with("token="))
+            .collect();
+        let mut target = request.uri().path().to_owned();
+        if !rest.is_empty() {
+            target = format!("{target}?{}", rest.join("&"));
+        }
+        let mut response = Redirect::to(&target).into_response();
         let cookie = format!("{COOKIE}={token}; HttpOnly; SameSite=Strict; Path=/");
         if let Ok(value) = HeaderValue::from_str(&cookie) {
             response.headers_mut().insert(header::SET_COOKIE, value);
