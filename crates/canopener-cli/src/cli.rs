@@ -11,6 +11,7 @@ use crate::master::args::{
 };
 use crate::mbt::args::MbtCommand;
 use crate::net::args::NetCommand;
+use crate::serve::args::ServeArgs;
 use crate::sim::args::SimArgs;
 use crate::test::args::TestArgs;
 
@@ -66,6 +67,7 @@ pub(crate) enum Command {
   canopener demo                                  # the tour; reports in ./canopener-demo/ (clean.html, fault-*.html)
   canopener demo --dir /tmp/tour --fault no-emcy  # another fault, another directory
   canopener demo --format json | jq .runs         # one JSON summary for machines
+  canopener demo --serve                          # the tour in a browser: http://127.0.0.1:8080/ (monitor, checks, runs)
   canopener demo --monitor                        # replay a 4-node session through an in-process hub, decoded
   canopener demo --monitor --speed 0              # as fast as possible
   canopener demo --monitor --bus 'virtual:demo?bitrate=500k'  # bit-accurate simulated 500 kbit/s bus, bus load
@@ -115,6 +117,18 @@ Each test resets what it changed and leaves the device pre-operational; the run 
 Exit status: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
 answer at all, 2 bad arguments, 3 unreadable EDS or criteria file, 4 bus error, 130 interrupted (partial report written).")]
     Test(TestArgs),
+    /// A local web application: the system monitor on the machine's drawing, EDS checks and conformance
+    /// runs with their history, in a browser.
+    #[command(after_help = "Examples:
+  canopener serve                                          # http://127.0.0.1:8080/: /check and /test (simulated device)
+  canopener serve --nodelist Nodelist.graphml --bus socketcand://127.0.0.1:29536/can0 --data runs/
+  canopener serve --nodelist Nodelist.graphml --bus 1=socketcan:can0 --bus 2=socketcan:can1
+  canopener serve --listen 0.0.0.0:8080 --token-file token.txt  # other machines: every request needs the token
+  canopener demo --serve                                   # the tour: a simulated system, cables cut and repaired
+Pages: / (monitor), /check, /test, /history; API: /api/state, /api/events (server-sent events: the JSON events of
+`net monitor --format json`), docs/web.md. Exit status: 0 stopped by Ctrl-C, 2 bad arguments or address,
+3 unreadable system or token file, 5 --data cannot be written.")]
+    Serve(ServeArgs),
     /// Read and write objects of a device over SDO (expedited, segmented, block).
     #[command(subcommand)]
     Sdo(SdoCommand),

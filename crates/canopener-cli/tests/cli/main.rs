@@ -27,6 +27,8 @@ mod sim;
 mod test_criteria;
 mod test_html;
 mod test_stimulus;
+mod web;
+mod web_harness;
 
 use std::process::Output;
 use std::time::Duration;

@@ -101,6 +101,15 @@ impl Proc {
         }
     }
 
+    /// The process id (for its CPU time in /proc).
+    #[allow(
+        dead_code,
+        reason = "only the web tests of the cli suite read a process's CPU time"
+    )]
+    pub(crate) fn id(&self) -> u32 {
+        self.child.id()
+    }
+
     pub(crate) fn stderr(&self) -> String {
         self.stderr.lock().map(|text| text.clone()).unwrap_or_default()
     }

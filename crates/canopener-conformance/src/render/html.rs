@@ -332,6 +332,20 @@ fn write_log(out: &mut String, test: &TestReport) {
     out.push_str("</tbody></table></div>\n</details>\n");
 }
 
+/// The stylesheet the report's page carries, for another page that shows parts of a report (a run
+/// comparison) and must look the same.
+pub fn stylesheet() -> &'static str {
+    STYLE
+}
+
+/// One measurement as the report draws it: a `<figure class="measurement">` with its histogram and
+/// time series (inline SVG, limits drawn), its statistics and its raw samples.
+pub fn measurement(name: &str, measurement: &Measurement) -> String {
+    let mut out = String::new();
+    write_measurement(&mut out, name, measurement);
+    out
+}
+
 fn write_measurement(out: &mut String, name: &str, measurement: &Measurement) {
     let unit = &measurement.unit;
     let _ = writeln!(
