@@ -61,6 +61,25 @@ pub(crate) fn parse_usize(text: &str) -> Result<usize, String> {
     unsigned(text, u64::MAX).and_then(|v| usize::try_from(v).map_err(|e| e.to_string()))
 }
 
+/// A size in bytes: a number, or a number with `KiB` or `MiB` (`1000`, `512KiB`, `16MiB`); 0 is
+/// refused, since every size names room for something.
+pub(crate) fn parse_size(text: &str) -> Result<usize, String> {
+    let text = text.trim();
+    let (number, factor) = if let Some(n) = text.strip_suffix("MiB") {
+        (n, 1024 * 1024)
+    } else if let Some(n) = text.strip_suffix("KiB") {
+        (n, 1024)
+    } else {
+        (text, 1)
+    };
+    let n = parse_number(number.trim())
+        .and_then(|n| usize::try_from(n).ok())
+        .ok_or_else(|| format!("{text:?} is not a size: give bytes, or a number with KiB or MiB (16MiB)"))?;
+    n.checked_mul(factor)
+        .filter(|n| *n > 0)
+        .ok_or_else(|| format!("{text:?}: give a size above 0 that fits the machine"))
+}
+
 /// An integer in `min..=max`; `what` names it in the message.
 pub(crate) fn parse_in_range(text: &str, min: u64, max: u64, what: &str) -> Result<u64, String> {
     let value = unsigned(text, u64::MAX)?;
@@ -208,6 +227,16 @@ mod tests {
                 .unwrap_err()
                 .contains("2..240")
         );
+    }
+
+    #[test]
+    fn sizes_take_kib_and_mib() {
+        assert_eq!(parse_size("16MiB"), Ok(16 * 1024 * 1024));
+        assert_eq!(parse_size("512KiB"), Ok(512 * 1024));
+        assert_eq!(parse_size("0x10KiB"), Ok(16 * 1024));
+        assert_eq!(parse_size("1000"), Ok(1000));
+        assert!(parse_size("0").is_err());
+        assert!(parse_size("lots").unwrap_err().contains("not a size"));
     }
 
     #[test]

@@ -5,6 +5,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use crate::grammar::parse_size;
+
 #[derive(Debug, Args)]
 pub(crate) struct ServeArgs {
     /// The address to listen on. Anything but loopback needs the token (printed at start, or
@@ -31,37 +33,4 @@ pub(crate) struct ServeArgs {
     /// The largest upload accepted: bytes, or with KiB or MiB.
     #[arg(long, value_name = "SIZE", default_value = "16MiB", value_parser = parse_size)]
     pub(crate) max_upload: usize,
-}
-
-/// `16MiB`, `512KiB`, `1000`.
-pub(crate) fn parse_size(text: &str) -> Result<usize, String> {
-    let text = text.trim();
-    let (number, factor) = if let Some(n) = text.strip_suffix("MiB") {
-        (n, 1024 * 1024)
-    } else if let Some(n) = text.strip_suffix("KiB") {
-        (n, 1024)
-    } else {
-        (text, 1)
-    };
-    let n: usize = number
-        .trim()
-        .parse()
-        .map_err(|_| format!("{text:?} is not a size: give bytes, or a number with KiB or MiB (16MiB)"))?;
-    n.checked_mul(factor)
-        .filter(|n| *n > 0)
-        .ok_or_else(|| format!("{text:?}: give a size above 0 that fits the machine"))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sizes_take_kib_and_mib() {
-        assert_eq!(parse_size("16MiB"), Ok(16 * 1024 * 1024));
-        assert_eq!(parse_size("512KiB"), Ok(512 * 1024));
-        assert_eq!(parse_size("1000"), Ok(1000));
-        assert!(parse_size("0").is_err());
-        assert!(parse_size("lots").unwrap_err().contains("not a size"));
-    }
 }
