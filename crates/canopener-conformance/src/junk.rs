@@ -16,7 +16,7 @@ use canopener_can::{CanFrame, CanId, Instant};
 use canopener_wire::NmtState;
 
 use crate::finding::Finding;
-use crate::model::Verdict;
+use crate::model::{Direction, Report, Verdict};
 
 /// A frame no correct device sends, and why.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -120,6 +120,48 @@ pub fn judge(finding: Finding, junk: &[Junk]) -> Finding {
             ..finding
         },
     }
+}
+
+/// The tests of `report` (a run against node `node`) that break the rule of this module: their
+/// log holds junk and they passed, were not applicable, or quote no frame they received in their
+/// reason or analysis. Empty for every report the runner makes; hostile-device tests and the
+/// fuzz target check it.
+pub fn unjudged(node: u8, report: &Report) -> Vec<String> {
+    let mut broken = Vec::new();
+    for test in &report.tests {
+        let received: Vec<String> = test
+            .telegrams
+            .iter()
+            .filter(|t| t.dir == Direction::Rx)
+            .map(|t| t.frame.to_string())
+            .collect();
+        let junk: Vec<String> = test
+            .telegrams
+            .iter()
+            .filter(|t| t.dir == Direction::Rx && malformed(node, &t.frame).is_some())
+            .map(|t| t.frame.to_string())
+            .collect();
+        if junk.is_empty() {
+            continue;
+        }
+        if matches!(test.verdict, Verdict::Pass | Verdict::NotApplicable) {
+            broken.push(format!(
+                "{} met junk {junk:?} and says {}: {}",
+                test.id,
+                test.verdict.as_str(),
+                test.reason
+            ));
+        } else if !received
+            .iter()
+            .any(|f| test.reason.contains(f.as_str()) || test.analysis.contains(f.as_str()))
+        {
+            broken.push(format!(
+                "{} met junk {junk:?} but quotes no frame it received: {}",
+                test.id, test.reason
+            ));
+        }
+    }
+    broken
 }
 
 #[cfg(test)]

@@ -187,6 +187,8 @@ pub struct Hostile<C> {
     outbox: VecDeque<CanFrame>,
     next_noise: Option<Instant>,
     spoiled: usize,
+    now: Instant,
+    starved: Option<Instant>,
 }
 
 impl<C: Core> Hostile<C> {
@@ -202,6 +204,8 @@ impl<C: Core> Hostile<C> {
             outbox: VecDeque::new(),
             next_noise: behaviour.noise_period().map(|period| Instant::ZERO + period),
             spoiled: 0,
+            now: Instant::ZERO,
+            starved: None,
         }
     }
 
@@ -225,6 +229,17 @@ impl<C: Core> Hostile<C> {
     /// How many frames were spoiled, dropped or added so far.
     pub fn spoiled(&self) -> usize {
         self.spoiled
+    }
+
+    /// Where the choices come from (whether a script ran out).
+    pub fn entropy(&self) -> &Entropy {
+        &self.entropy
+    }
+
+    /// When the first frame was dropped because the script had run out (the device fell silent
+    /// from then on).
+    pub fn starved_since(&self) -> Option<Instant> {
+        self.starved
     }
 
     /// Takes what the core sends and spoils it into the outbox.
@@ -274,6 +289,7 @@ impl<C: Core> Hostile<C> {
     fn scripted(&mut self, frame: CanFrame) {
         let Some(op) = self.entropy.below(10) else {
             self.spoiled += 1;
+            self.starved.get_or_insert(self.now);
             return;
         };
         let id = frame.id();
@@ -361,12 +377,14 @@ impl<C: Core> Core for Hostile<C> {
     type Event = C::Event;
 
     fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
+        self.now = now;
         self.last_request = Some(*frame);
         self.inner.handle_frame(now, frame);
         self.pull();
     }
 
     fn handle_timeout(&mut self, now: Instant) {
+        self.now = now;
         if self.inner.poll_timeout().is_some_and(|due| due <= now) {
             self.inner.handle_timeout(now);
         }
