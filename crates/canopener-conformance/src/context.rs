@@ -110,6 +110,7 @@ pub struct Ctx<'r, 'l> {
     performance: &'r Performance,
     stimulus: Option<Hook<'r>>,
     broken: Vec<Junk>,
+    unanswered: Vec<String>,
 }
 
 /// The settings of a run that does not choose its own.
@@ -141,6 +142,7 @@ impl<'r, 'l> Ctx<'r, 'l> {
             performance: &DEFAULT_PERFORMANCE,
             stimulus: None,
             broken: Vec::new(),
+            unanswered: Vec::new(),
         }
     }
 
@@ -398,6 +400,12 @@ impl<'r, 'l> Ctx<'r, 'l> {
         std::mem::take(&mut self.measurements)
     }
 
+    /// The SDO requests of the test that got no answer within the SDO timeout
+    /// (`SDO request for 1017h:00`).
+    pub fn unanswered(&self) -> &[String] {
+        &self.unanswered
+    }
+
     /// The junk the test met so far ([`crate::junk`]): answers that broke an SDO transfer, and
     /// frames of the wrong length or state on the device's answer CAN-IDs, in order.
     pub fn junk(&self) -> Vec<Junk> {
@@ -469,6 +477,10 @@ impl<'r, 'l> Ctx<'r, 'l> {
         result: Result<Vec<u8>, SdoError>,
     ) -> Result<Reply, Stop> {
         let reply = reply_of(result)?;
+        if reply == Reply::Silent {
+            self.unanswered
+                .push(format!("SDO request for {:04X}h:{:02X}", entry.0, entry.1));
+        }
         let response = self.id(0x580 + u16::from(self.node()));
         let answer = self
             .link()

@@ -122,6 +122,20 @@ pub fn judge(finding: Finding, junk: &[Junk]) -> Finding {
     }
 }
 
+/// What a test may conclude after SDO requests of it got no answer (`unanswered`): "not
+/// applicable" only for a reason the EDS or an abort code gives (CiA 301 §7.2.4.3.17: a server that
+/// does not serve a request aborts it), never for silence, so it becomes inconclusive, naming the
+/// request; other verdicts stay.
+pub fn judge_unanswered(finding: Finding, unanswered: &[String]) -> Finding {
+    match unanswered.first() {
+        Some(first) if finding.verdict == Verdict::NotApplicable => Finding::inconclusive(format!(
+            "{first} got no answer within the SDO timeout; silence is no reason for not applicable (without it: not_applicable, {})",
+            finding.reason
+        )),
+        _ => finding,
+    }
+}
+
 /// The tests of `report` (a run against node `node`) that break the rule of this module: their
 /// log holds junk and they passed, were not applicable, or quote no frame they received in their
 /// reason or analysis. Empty for every report the runner makes; hostile-device tests and the
@@ -217,6 +231,26 @@ mod tests {
             assert!(judged.reason.contains(&finding.reason), "{}", judged.reason);
         }
         assert_eq!(judge(Finding::pass("ok"), &[]), Finding::pass("ok"));
+    }
+
+    #[test]
+    fn silence_is_no_reason_for_not_applicable() {
+        let unanswered = ["SDO request for 1800h:02".to_owned()];
+        let judged = judge_unanswered(Finding::not_applicable("TPDO1 cannot be set up"), &unanswered);
+        assert_eq!(judged.verdict, Verdict::Inconclusive);
+        assert!(
+            judged
+                .reason
+                .starts_with("SDO request for 1800h:02 got no answer"),
+            "{}",
+            judged.reason
+        );
+        assert_eq!(
+            judge_unanswered(Finding::pass("silent in Stopped"), &unanswered).verdict,
+            Verdict::Pass
+        );
+        let na = Finding::not_applicable("the EDS has no 1003h");
+        assert_eq!(judge_unanswered(na.clone(), &[]), na);
     }
 
     #[test]

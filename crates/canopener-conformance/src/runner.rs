@@ -328,12 +328,14 @@ fn run_one(
 }
 
 /// Whatever a test concluded, junk on the device's CAN-IDs keeps it from passing
-/// ([`crate::junk::judge`]); a stopped run is judged no further.
+/// ([`crate::junk::judge`]), and an unanswered SDO request from being not applicable
+/// ([`crate::junk::judge_unanswered`]); a stopped run is judged no further.
 fn judged(finding: Finding, ctx: &Ctx<'_, '_>, stopped: bool) -> Finding {
     if stopped {
         finding
     } else {
-        crate::junk::judge(finding, &ctx.junk())
+        let finding = crate::junk::judge(finding, &ctx.junk());
+        crate::junk::judge_unanswered(finding, ctx.unanswered())
     }
 }
 

@@ -157,6 +157,14 @@ fn exit_code(outcome: &Outcome) -> u8 {
 /// the test's output.
 fn check(outcome: &Outcome, what: &str) -> String {
     let report = &outcome.report;
+    // Junk and silence are never a reason for "not applicable": every test that is, is so on the
+    // clean device too, for the same reason.
+    let clean = clean_not_applicable();
+    let extra: Vec<_> = not_applicable(report)
+        .into_iter()
+        .filter(|(id, reason)| clean.get(id) != Some(reason))
+        .collect();
+    assert!(extra.is_empty(), "{what}: not applicable only here: {extra:#?}");
     assert!(
         !report.interrupted,
         "{what}: the run was interrupted (hung past {LIMIT:?} or {MAX_FRAMES} frames): {:#?}",
@@ -242,6 +250,12 @@ fn scripted_devices_of_random_bytes_end_with_verdicts() {
     }
 }
 
+/// The not-applicable tests of the clean demo device, with their reasons (run once).
+fn clean_not_applicable() -> &'static BTreeMap<String, String> {
+    static CLEAN: std::sync::OnceLock<BTreeMap<String, String>> = std::sync::OnceLock::new();
+    CLEAN.get_or_init(|| not_applicable(&run_all(device(&demo_eds())).report))
+}
+
 /// The tests that are not applicable, with their reasons.
 fn not_applicable(report: &Report) -> BTreeMap<String, String> {
     report
@@ -255,7 +269,7 @@ fn not_applicable(report: &Report) -> BTreeMap<String, String> {
 /// Issue 22's measurement: beside a correct device, a second node answers 30 % of the requests to
 /// it first, with junk (empty, short or random frames, or echoes). Junk is never taken for "not
 /// applicable": every test that is not applicable is so on the clean device too, for the same
-/// reason, and the tests the junk reached fail or are inconclusive, quoting a frame.
+/// reason ([`check`]), and the tests the junk reached fail or are inconclusive, quoting a frame.
 #[test]
 fn a_junk_node_beside_a_correct_device_adds_no_not_applicable_verdict() {
     let eds = demo_eds();
@@ -284,15 +298,6 @@ fn a_junk_node_beside_a_correct_device_adds_no_not_applicable_verdict() {
             _ => 0,
         };
         let line = check(&outcome, &format!("junk node, seed {seed}"));
-        let na = not_applicable(&outcome.report);
-        let extra: Vec<_> = na
-            .iter()
-            .filter(|(id, reason)| clean_na.get(*id) != Some(reason))
-            .collect();
-        assert!(
-            extra.is_empty(),
-            "seed {seed}: not applicable only with junk: {extra:#?}"
-        );
         if outcome.silent {
             // The junk answered the preparation's read of 1000h: nothing was tested (exit 7), and
             // the preparation says what came.
