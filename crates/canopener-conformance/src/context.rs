@@ -14,6 +14,7 @@ use canopener_wire::{NmtCommand, NodeId};
 
 use crate::device_model::DeviceModel;
 use crate::finding::Stop;
+use crate::junk::{self, Junk};
 use crate::model::{Direction, Measurement};
 use crate::performance::Performance;
 use crate::recorder::{Logged, Recorder};
@@ -31,9 +32,10 @@ pub enum Reply {
     Silent,
     /// A raw request got this frame, which is no abort.
     Frame(Vec<u8>),
-    /// The tester aborted: the device broke the protocol (the reason says how).
+    /// The device broke the protocol (the reason says how); the tester aborted the transfer
+    /// unless `code` is 0.
     Broken {
-        /// The code the tester sent.
+        /// The code the tester sent (0: none).
         code: u32,
         /// What was wrong.
         reason: String,
@@ -49,6 +51,7 @@ impl Reply {
             Reply::Refused(code) => format!("abort {}", code_meaning(*code)),
             Reply::Silent => "no answer within the SDO timeout".to_owned(),
             Reply::Frame(data) => format!("the frame {}", hex(data)),
+            Reply::Broken { code: 0, reason } => format!("a protocol error: {reason}"),
             Reply::Broken { code, reason } => {
                 format!(
                     "a protocol error; the tester aborted with {}: {reason}",
@@ -83,12 +86,18 @@ pub fn hex(data: &[u8]) -> String {
         .join(" ")
 }
 
+/// How often a value is written back while the answers break the SDO protocol.
+const WRITE_BACK_TRIES: usize = 3;
+
 /// One value to write back.
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct Restore {
     index: u16,
     sub: u8,
     value: Vec<u8>,
+    /// The device confirmed the write (else its answer broke the protocol: it may not have
+    /// taken the value, and then refuses the write-back too).
+    confirmed: bool,
 }
 
 /// The tester's side of one test (see the [module docs](self)).
@@ -100,6 +109,8 @@ pub struct Ctx<'r, 'l> {
     measurements: BTreeMap<String, Measurement>,
     performance: &'r Performance,
     stimulus: Option<Hook<'r>>,
+    broken: Vec<Junk>,
+    unanswered: Vec<String>,
 }
 
 /// The settings of a run that does not choose its own.
@@ -130,6 +141,8 @@ impl<'r, 'l> Ctx<'r, 'l> {
             measurements: BTreeMap::new(),
             performance: &DEFAULT_PERFORMANCE,
             stimulus: None,
+            broken: Vec::new(),
+            unanswered: Vec::new(),
         }
     }
 
@@ -212,8 +225,9 @@ impl<'r, 'l> Ctx<'r, 'l> {
 
     /// Reads `index`:`sub` in `mode`.
     pub fn read_with(&mut self, index: u16, sub: u8, mode: UploadMode) -> Result<Reply, Stop> {
+        let mark = self.drain()?;
         let result = self.sdo.upload(index, sub, mode, &mut |_| {});
-        reply(result.map(|t| t.data))
+        self.reply(mark, (index, sub), result.map(|t| t.data))
     }
 
     /// Writes `data` to `index`:`sub` without remembering the old value (for writes that must be
@@ -230,22 +244,32 @@ impl<'r, 'l> Ctx<'r, 'l> {
         data: Vec<u8>,
         mode: DownloadMode,
     ) -> Result<Reply, Stop> {
+        let mark = self.drain()?;
         let result = self.sdo.download(index, sub, data, mode, &mut |_| {});
-        reply(result.map(|_| Vec::new()))
+        self.reply(mark, (index, sub), result.map(|_| Vec::new()))
     }
 
     /// Reads `index`:`sub`, remembers its value to write back when the test ends, then writes
-    /// `data`; a confirmed write is undone when the test ends. A value that cannot be read is not
-    /// remembered (the write still goes out: the test then owns the consequence).
+    /// `data`; a confirmed write (or one whose answer broke the protocol) is undone when the test
+    /// ends. A value that cannot be read is not
+    /// remembered (the write still goes out: the test then owns the consequence), except when the
+    /// answer broke the protocol: then nothing is written, and that answer is the reply (a change
+    /// nobody could undo would reach the tests that follow).
     pub fn modify(&mut self, index: u16, sub: u8, data: Vec<u8>) -> Result<Reply, Stop> {
         let old = self.read(index, sub)?;
+        if matches!(old, Reply::Broken { .. }) {
+            return Ok(old);
+        }
         let reply = self.write(index, sub, data)?;
-        // Only a confirmed write changed anything (a refused one is what many tests expect).
-        if let (Reply::Done(old), Reply::Done(_)) = (old, &reply) {
+        // Only a confirmed write changed anything (a refused one is what many tests expect), or
+        // one whose answer broke the protocol: the device may have taken it, and writing the old
+        // value back costs nothing if it did not.
+        if let (Reply::Done(old), Reply::Done(_) | Reply::Broken { .. }) = (old, &reply) {
             self.restores.push(Restore {
                 index,
                 sub,
                 value: old,
+                confirmed: matches!(reply, Reply::Done(_)),
             });
         }
         Ok(reply)
@@ -256,8 +280,16 @@ impl<'r, 'l> Ctx<'r, 'l> {
     pub fn restore(&mut self) -> Result<Vec<String>, Stop> {
         let mut left = Vec::new();
         while let Some(restore) = self.restores.pop() {
-            match self.write(restore.index, restore.sub, restore.value.clone())? {
+            let mut reply = self.write(restore.index, restore.sub, restore.value.clone())?;
+            // An answer that broke the protocol says nothing about the write: try again.
+            for _ in 1..WRITE_BACK_TRIES {
+                let Reply::Broken { .. } = reply else { break };
+                reply = self.write(restore.index, restore.sub, restore.value.clone())?;
+            }
+            match reply {
                 Reply::Done(_) => {}
+                // The unconfirmed write was refused as well: nothing changed.
+                Reply::Refused(_) if !restore.confirmed => {}
                 other => left.push(format!(
                     "{:04X}h:{:02X} (should be {}; writing it back got {})",
                     restore.index,
@@ -274,6 +306,7 @@ impl<'r, 'l> Ctx<'r, 'l> {
     /// 580h + node-ID within the SDO timeout: for requests the SDO client would never make.
     pub fn raw_sdo(&mut self, request: [u8; 8]) -> Result<Option<Vec<u8>>, Stop> {
         let node = u16::from(self.node());
+        self.drain()?;
         self.send(0x600 + node, &request)?;
         let response = self.id(0x580 + node);
         let deadline = self.now() + self.timeout();
@@ -285,15 +318,25 @@ impl<'r, 'l> Ctx<'r, 'l> {
         Ok(frames.first().map(|logged| logged.frame.data().to_vec()))
     }
 
-    /// Sends a data frame on the standard CAN-ID `id`.
+    /// Sends a data frame on the standard CAN-ID `id`; data CAN cannot carry (more than 8 bytes)
+    /// stops the test as inconclusive, not the run.
     pub fn send(&mut self, id: u16, data: &[u8]) -> Result<(), Stop> {
-        let frame = CanFrame::new(self.id(id), data).map_err(|_| Stop::Cancelled)?;
+        let frame = CanFrame::new(self.id(id), data).map_err(|error| {
+            Stop::Unsendable(format!(
+                "the tester cannot send {} bytes on {id:#05X}: {error}",
+                data.len()
+            ))
+        })?;
         self.send_frame(&frame)
     }
 
     /// Sends a remote frame on the standard CAN-ID `id` with `dlc`.
     pub fn send_remote(&mut self, id: u16, dlc: u8) -> Result<(), Stop> {
-        let frame = CanFrame::remote(self.id(id), dlc).map_err(|_| Stop::Cancelled)?;
+        let frame = CanFrame::remote(self.id(id), dlc).map_err(|error| {
+            Stop::Unsendable(format!(
+                "the tester cannot send a remote frame with DLC {dlc} on {id:#05X}: {error}"
+            ))
+        })?;
         self.send_frame(&frame)
     }
 
@@ -302,7 +345,11 @@ impl<'r, 'l> Ctx<'r, 'l> {
         let target = if broadcast {
             NmtTarget::All
         } else {
-            NmtTarget::Node(NodeId::new(self.node()).ok_or(Stop::Cancelled)?)
+            let node = self.node();
+            NmtTarget::Node(
+                NodeId::new(node)
+                    .ok_or_else(|| Stop::Unsendable(format!("node-ID {node} cannot be addressed by NMT")))?,
+            )
         };
         nmt_command::send(self.link_mut(), command, target)?;
         self.check_cancel()
@@ -353,6 +400,29 @@ impl<'r, 'l> Ctx<'r, 'l> {
         std::mem::take(&mut self.measurements)
     }
 
+    /// The SDO requests of the test that got no answer within the SDO timeout
+    /// (`SDO request for 1017h:00`).
+    pub fn unanswered(&self) -> &[String] {
+        &self.unanswered
+    }
+
+    /// The junk the test met so far ([`crate::junk`]): answers that broke an SDO transfer, and
+    /// frames of the wrong length or state on the device's answer CAN-IDs, in order.
+    pub fn junk(&self) -> Vec<Junk> {
+        let received: Vec<Logged> = self.received_since(0);
+        let mut found = junk::scan(
+            self.node(),
+            received.iter().map(|logged| (logged.link_time, &logged.frame)),
+        );
+        for broken in &self.broken {
+            if !found.iter().any(|j| j.at == broken.at && j.frame == broken.frame) {
+                found.push(broken.clone());
+            }
+        }
+        found.sort_by_key(|j| j.at);
+        found
+    }
+
     /// The standard CAN-ID `raw` (callers pass 11-bit values).
     pub fn id(&self, raw: u16) -> CanId {
         CanId::Standard(StandardId::new(raw & 0x7FF).unwrap_or(StandardId::ZERO))
@@ -386,6 +456,69 @@ impl<'r, 'l> Ctx<'r, 'l> {
         Ok(kept)
     }
 
+    /// Takes the frames that arrived before a request (late answers to an earlier one, or a second
+    /// node's): they are logged, and no answer to the request that follows. Returns the mark after
+    /// them.
+    /// No cancellation point: the transfer that follows ends itself on the bus when cancelled.
+    fn drain(&mut self) -> Result<usize, Stop> {
+        let now = self.now();
+        while self.link_mut().recv_stamped_until(now)?.is_some() {}
+        Ok(self.mark())
+    }
+
+    /// The reply of the transfer of `entry` that started at `mark`. When the tester's client
+    /// aborted it, the device's answer that made it do so is named in the reason and kept as junk;
+    /// so is an abort that names another entry than the transfer's (CiA 301 §7.2.4.3.17: the abort
+    /// carries the transfer's multiplexer), which is no refusal of this transfer.
+    fn reply(
+        &mut self,
+        mark: usize,
+        entry: (u16, u8),
+        result: Result<Vec<u8>, SdoError>,
+    ) -> Result<Reply, Stop> {
+        let reply = reply_of(result)?;
+        if reply == Reply::Silent {
+            self.unanswered
+                .push(format!("SDO request for {:04X}h:{:02X}", entry.0, entry.1));
+        }
+        let response = self.id(0x580 + u16::from(self.node()));
+        let answer = self
+            .link()
+            .since(mark)
+            .iter()
+            .rev()
+            .find(|l| l.dir == Direction::Rx && l.frame.id() == response && !l.frame.is_remote())
+            .copied();
+        let (code, reason) = match (reply, answer) {
+            (Reply::Broken { code, reason }, Some(_)) => (code, reason),
+            (Reply::Refused(code), Some(abort)) if !names(&abort.frame, entry) => (
+                0,
+                format!(
+                    "an abort ({}) that names another entry than {:04X}h:{:02X}",
+                    code_meaning(code),
+                    entry.0,
+                    entry.1
+                ),
+            ),
+            (reply, _) => return Ok(reply),
+        };
+        let Some(answer) = answer else {
+            return Ok(Reply::Broken { code, reason });
+        };
+        let text = answer.frame.to_string();
+        self.broken.push(Junk {
+            at: answer.link_time,
+            frame: answer.frame,
+            why: reason.clone(),
+        });
+        let reason = if reason.contains(&text) {
+            reason
+        } else {
+            format!("{reason} (the answer {text})")
+        };
+        Ok(Reply::Broken { code, reason })
+    }
+
     fn send_frame(&mut self, frame: &CanFrame) -> Result<(), Stop> {
         self.link_mut().send(frame)?;
         self.check_cancel()
@@ -408,7 +541,13 @@ impl<'r, 'l> Ctx<'r, 'l> {
     }
 }
 
-fn reply(result: Result<Vec<u8>, SdoError>) -> Result<Reply, Stop> {
+/// Whether the SDO frame `frame` carries the multiplexer `entry` (bytes 1–3).
+fn names(frame: &CanFrame, entry: (u16, u8)) -> bool {
+    let [lo, hi] = entry.0.to_le_bytes();
+    frame.data().get(1..4) == Some(&[lo, hi, entry.1][..])
+}
+
+fn reply_of(result: Result<Vec<u8>, SdoError>) -> Result<Reply, Stop> {
     match result {
         Ok(data) => Ok(Reply::Done(data)),
         Err(SdoError::Transfer(SdoTransferError::AbortedByServer { code })) => Ok(Reply::Refused(code)),

@@ -81,6 +81,10 @@ pub enum Stop {
     /// The bus failed.
     #[error(transparent)]
     Link(#[from] LinkError),
+    /// The test asked for a frame CAN cannot carry (more than 8 bytes, say, from a mapping the
+    /// device reported): the test is inconclusive with this reason, and the run goes on.
+    #[error("{0}")]
+    Unsendable(String),
 }
 
 /// What a test function returns.

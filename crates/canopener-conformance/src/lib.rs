@@ -18,10 +18,14 @@
 //! - [`render`]: the human summary, the HTML page with plots, JUnit XML and candump telegram logs.
 //! - [`demo`]: the product tour of `canopener demo` (a bundled CiA 401 device, clean and with a fault).
 //! - [`device_model`]: what the EDS says the device is; [`requirements`]: clauses and accepted abort
-//!   codes.
+//!   codes; [`junk`]: frames no correct device sends, which keep a test from passing.
 //!
 //! Everything here is sans-IO apart from the link it is given: no clocks, no files.
 #![warn(missing_docs)]
+// Whatever a device sends, the runner must not panic (issue 22): no unwrap, expect or panic! outside
+// tests. Indexing is checked by review and the hostile-device tests and fuzz target (issue 25 will
+// deny it for every crate that reads frames).
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod catalogue;
 pub mod cia301;
@@ -32,6 +36,7 @@ pub mod context;
 pub mod demo;
 pub mod device_model;
 pub mod finding;
+pub mod junk;
 pub mod model;
 pub mod performance;
 pub mod procedures;

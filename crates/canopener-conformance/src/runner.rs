@@ -188,6 +188,9 @@ pub fn run_stimulated(
     Ok(Outcome { report, silent })
 }
 
+/// How often the preparation reads 1000h when the answers break the SDO protocol.
+const PREPARATION_READS: usize = 3;
+
 /// Resets the node, waits for its boot-up and reads its identity; `Ok(false)` when it does not
 /// answer an SDO read of 1000h.
 fn prepare(
@@ -214,15 +217,26 @@ fn prepare(
                 "no boot-up within 2 s"
             }
         ));
-        let Reply::Done(_) = ctx.read(0x1000, 0)? else {
+        let mut reply = ctx.read(0x1000, 0)?;
+        // An answer that broke the protocol may be another node's: ask again, a few times.
+        for _ in 1..PREPARATION_READS {
+            let Reply::Broken { .. } = reply else { break };
             report
                 .preparation
-                .push("SDO upload 1000h:00: no answer".to_owned());
+                .push(format!("SDO upload 1000h:00: {}; asked again", reply.describe()));
+            reply = ctx.read(0x1000, 0)?;
+        }
+        if !matches!(reply, Reply::Done(_)) {
+            let answer = match reply {
+                Reply::Silent => "no answer".to_owned(),
+                other => format!("no usable answer: {}", other.describe()),
+            };
+            report.preparation.push(format!("SDO upload 1000h:00: {answer}"));
             return Ok(false);
-        };
+        }
         let mut field = |sub: u8| -> Result<Option<u32>, Stop> {
             Ok(match ctx.read(0x1018, sub)? {
-                Reply::Done(d) if d.len() == 4 => Some(u32::from_le_bytes([d[0], d[1], d[2], d[3]])),
+                Reply::Done(d) => <[u8; 4]>::try_from(d.as_slice()).ok().map(u32::from_le_bytes),
                 _ => None,
             })
         };
@@ -262,6 +276,7 @@ fn run_one(
             true,
         ),
         Err(Stop::Link(error)) => (Finding::inconclusive(format!("the bus failed: {error}")), true),
+        Err(Stop::Unsendable(reason)) => (Finding::inconclusive(reason), false),
     };
     let measurements = ctx.take_measurements();
     // A test that put no frame on the bus (a precondition from the EDS alone said not_applicable)
@@ -278,12 +293,32 @@ fn run_one(
     let cleanup = (|| -> Result<Vec<String>, Stop> {
         ctx.nmt(NmtCommand::EnterPreOperational, false)?;
         ctx.listen(Duration::from_millis(10), |_| false)?;
-        ctx.restore()
+        let mut left = ctx.restore()?;
+        if !left.is_empty() && !interrupted {
+            // What could not be written back would reach the tests that follow (a mapping left
+            // empty makes them "not applicable"): reset node brings back the power-on values
+            // (CiA 301 §7.2.8.3.1), then pre-operational as after every test.
+            let heard = crate::procedures::nmt::reset_node(&mut ctx)?;
+            ctx.nmt(NmtCommand::EnterPreOperational, false)?;
+            ctx.listen(Duration::from_millis(10), |_| false)?;
+            left.push(format!(
+                "after {}: NMT reset node sent to bring back the power-on values ({})",
+                test.id,
+                if heard {
+                    "boot-up received"
+                } else {
+                    "no boot-up within 2 s"
+                }
+            ));
+        }
+        Ok(left)
     })();
     if let Some(cancel) = spec.cancel.as_ref().filter(|_| interrupted) {
         // The run still ends here, as the user asked.
         cancel.cancel();
     }
+    // The write-back's frames are part of the test's log: junk there counts too.
+    let finding = judged(finding, &ctx, stopped);
     let left = match cleanup {
         Ok(left) => left,
         Err(_) => {
@@ -295,6 +330,18 @@ fn run_one(
         }
     };
     Ok((finding, measurements, left, stopped))
+}
+
+/// Whatever a test concluded, junk on the device's CAN-IDs keeps it from passing
+/// ([`crate::junk::judge`]), and an unanswered SDO request from being not applicable
+/// ([`crate::junk::judge_unanswered`]); a stopped run is judged no further.
+fn judged(finding: Finding, ctx: &Ctx<'_, '_>, stopped: bool) -> Finding {
+    if stopped {
+        finding
+    } else {
+        let finding = crate::junk::judge(finding, &ctx.junk());
+        crate::junk::judge_unanswered(finding, ctx.unanswered())
+    }
 }
 
 fn telegrams(log: &[Logged], start: Instant, decoder: &mut Decoder) -> Vec<Telegram> {

@@ -12,6 +12,7 @@ use canopener_testkit::fixture;
 const LAYERS: &[(&str, u8)] = &[
     ("model", 0),
     ("finding", 0),
+    ("junk", 0),
     ("recorder", 0),
     ("requirements", 0),
     ("device_model", 0),

@@ -12,6 +12,14 @@
 //! longest producer time of the network: every device a cut silences has timed out by then) and is
 //! emitted then if the silent set differs from the last one reported. Device states and `recovered`
 //! events are emitted at once.
+//!
+//! A frame on a watched device's heartbeat or EMCY CAN-ID that no correct device sends (a heartbeat
+//! without exactly 1 byte or with a state CiA 301 §7.2.8.3.2 does not have, an EMCY without 8 bytes,
+//! CiA 301 §7.2.7.3.1) is no sign of life: it is an `anomaly` event quoting the frame. So is a
+//! heartbeat with the state of the one before it within a tenth of the producer time (a producer
+//! sends one per period, CiA 301 §7.2.8.3.2.2; a state change may add one), though it is a sign of
+//! life. At most one anomaly per device and second is reported (all are counted), so a babbling
+//! device cannot flood the output. [`SystemMonitor::health`] sums a run up.
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::time::Duration;
@@ -25,6 +33,9 @@ use crate::wiring::Wiring;
 
 /// The factor of the producer heartbeat time after which a device is silent.
 pub const SILENCE_FACTOR: f64 = 1.5;
+
+/// The shortest time between two `anomaly` events of one device.
+pub const ANOMALY_REPEAT: Duration = Duration::from_secs(1);
 
 /// What a device last said about itself, or that it said nothing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -120,6 +131,32 @@ pub enum Event {
         /// Its node-ID there.
         node_id: u8,
     },
+    /// A frame on a device's heartbeat or EMCY CAN-ID that no correct device sends.
+    Anomaly {
+        /// Seconds since the start.
+        time: f64,
+        /// The network number.
+        network: u32,
+        /// The device's name.
+        node: String,
+        /// Its node-ID there.
+        node_id: u8,
+        /// The frame, `705#0501`.
+        frame: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+}
+
+/// How the watched devices did over a run (what `net monitor --duration` exits with).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Health {
+    /// Every watched device was heard and never silent, and no frame was an anomaly.
+    Healthy,
+    /// A device was silent at some point, or sent an anomaly.
+    Troubled,
+    /// No watched device was heard at all.
+    Unheard,
 }
 
 impl Event {
@@ -210,8 +247,13 @@ pub struct DeviceStatus {
     pub last_emcy: Option<LastEmcy>,
     /// Whether it is the monitor's own vertex (not watched).
     pub is_monitor: bool,
+    /// How often it went silent.
+    pub silences: usize,
+    /// How many frames on its CAN-IDs were anomalies (reported or not).
+    pub anomalies: usize,
     deadline: Option<Instant>,
     silent: bool,
+    last_anomaly: Option<Instant>,
 }
 
 impl DeviceStatus {
@@ -295,8 +337,11 @@ impl SystemMonitor {
                     last_heard: None,
                     last_emcy: None,
                     is_monitor: device.is_monitor,
+                    silences: 0,
+                    anomalies: 0,
                     deadline: None,
                     silent: false,
+                    last_anomaly: None,
                 });
             }
             networks.insert(
@@ -355,20 +400,63 @@ impl SystemMonitor {
             return;
         };
         match (base, frame.data()) {
-            (0x700, &[byte]) => {
-                let Some(state) = DeviceState::from_heartbeat(byte) else {
-                    return;
-                };
-                self.heard(now, index, state);
+            (0x700, &[byte]) => match DeviceState::from_heartbeat(byte) {
+                Some(state) => {
+                    let device = &self.devices[index];
+                    let babbled = device.state == Some(state)
+                        && device
+                            .last_heard
+                            .zip(device.period)
+                            .is_some_and(|(last, period)| now.saturating_duration_since(last) < period / 10);
+                    if let (true, Some(last), Some(period)) = (babbled, device.last_heard, device.period) {
+                        let reason = format!(
+                            "a heartbeat {:.3} ms after the last one with the same state; the producer time is {} ms",
+                            now.saturating_duration_since(last).as_secs_f64() * 1e3,
+                            period.as_millis()
+                        );
+                        self.anomaly(now, index, frame, reason);
+                    }
+                    self.heard(now, index, state);
+                }
+                // Bit 7 set with a state: a node guarding answer to someone's request.
+                None if byte & 0x80 != 0 && DeviceState::from_heartbeat(byte & 0x7F).is_some() => {}
+                None => self.anomaly(now, index, frame, format!("{byte:02X}h is no NMT state")),
+            },
+            (0x700, data) => {
+                let reason = format!("a heartbeat has 1 byte, this one {}", data.len());
+                self.anomaly(now, index, frame, reason);
             }
-            (0x080, &[low, high, register, ..]) if frame.data().len() == 8 => {
+            (0x080, &[low, high, register, _, _, _, _, _]) => {
                 self.devices[index].last_emcy = Some(LastEmcy {
                     at: now,
                     code: u16::from_le_bytes([low, high]),
                     register,
                 });
             }
+            (0x080, data) => {
+                let reason = format!("an EMCY has 8 bytes, this one {}", data.len());
+                self.anomaly(now, index, frame, reason);
+            }
             _ => {}
+        }
+    }
+
+    /// How the watched devices did since the start (see [`Health`]).
+    pub fn health(&self) -> Health {
+        let watched: Vec<&DeviceStatus> = self
+            .devices
+            .iter()
+            .filter(|d| d.period.is_some() && !d.is_monitor)
+            .collect();
+        if !watched.is_empty() && watched.iter().all(|d| d.last_heard.is_none()) {
+            return Health::Unheard;
+        }
+        let troubled = self.devices.iter().any(|d| d.anomalies > 0)
+            || watched.iter().any(|d| d.silences > 0 || d.last_heard.is_none());
+        if troubled {
+            Health::Troubled
+        } else {
+            Health::Healthy
         }
     }
 
@@ -379,6 +467,7 @@ impl SystemMonitor {
             if device.deadline.is_some_and(|d| d <= now) && !device.silent {
                 device.deadline = None;
                 device.silent = true;
+                device.silences = device.silences.saturating_add(1);
                 device.state = Some(DeviceState::Silent);
                 let network = device.network;
                 let event = self.state_event(now, index);
@@ -469,6 +558,29 @@ impl SystemMonitor {
             .iter()
             .copied()
             .find(|&i| self.devices[i].node_id == node_id && !self.devices[i].is_monitor)
+    }
+
+    /// Counts an anomaly and reports it unless the device's last report was within
+    /// [`ANOMALY_REPEAT`].
+    fn anomaly(&mut self, now: Instant, index: usize, frame: &CanFrame, reason: String) {
+        let time = self.seconds(now);
+        let device = &mut self.devices[index];
+        device.anomalies = device.anomalies.saturating_add(1);
+        if device
+            .last_anomaly
+            .is_some_and(|at| now.saturating_duration_since(at) < ANOMALY_REPEAT)
+        {
+            return;
+        }
+        device.last_anomaly = Some(now);
+        self.events.push_back(Event::Anomaly {
+            time,
+            network: device.network,
+            node: device.name.clone(),
+            node_id: device.node_id,
+            frame: frame.to_string(),
+            reason,
+        });
     }
 
     fn heard(&mut self, now: Instant, index: usize, state: DeviceState) {
@@ -714,6 +826,102 @@ mod tests {
             monitor.handle_timeout(due);
         }
         events.extend(std::iter::from_fn(|| monitor.poll_event()).map(|e| e.to_json()));
+    }
+
+    fn frame(id: u16, data: &[u8]) -> CanFrame {
+        CanFrame::new(StandardId::new(id).unwrap(), data).unwrap()
+    }
+
+    /// Heartbeats of the wrong length, unknown state bytes and short EMCYs are anomalies quoting the
+    /// frame, never a sign of life; a babbling device is reported once a second per reason; a
+    /// guarding answer is neither.
+    #[test]
+    fn malformed_heartbeats_and_emcys_are_anomalies_not_signs_of_life() {
+        let topology = system(&[("m", 1, None), ("a", 2, None)], &[], &[]);
+        let config = MonitorConfig {
+            networks: vec![1],
+            fallback: Some(Duration::from_millis(100)),
+            ..MonitorConfig::default()
+        };
+        let mut monitor = SystemMonitor::new(&topology, &config);
+        monitor.start(at(0));
+        for (t, f) in [
+            (10, frame(0x702, &[])),
+            (1020, frame(0x702, &[0x05, 0x00])),
+            (2030, frame(0x702, &[0x33])),
+            (2040, frame(0x702, &[0x44])),
+            (3050, frame(0x082, &[0x10, 0x82, 0x11])),
+            (4060, frame(0x702, &[0x85])),
+        ] {
+            while let Some(due) = monitor.poll_timeout().filter(|d| *d <= at(t)) {
+                monitor.handle_timeout(due);
+            }
+            monitor.handle_frame(at(t), 1, &f);
+        }
+        let events: Vec<String> = std::iter::from_fn(|| monitor.poll_event())
+            .map(|e| e.to_json())
+            .collect();
+        assert_eq!(
+            events,
+            [
+                r#"{"event":"anomaly","time":0.01,"network":1,"node":"a","node_id":2,"frame":"702#","reason":"a heartbeat has 1 byte, this one 0"}"#,
+                r#"{"event":"state","time":0.15,"network":1,"node":"a","node_id":2,"state":"silent"}"#,
+                r#"{"event":"diagnosis","time":0.3,"network":1,"silent":["a"],"explanations":[{"kind":"device","candidates":["a"],"explains":["a"]}]}"#,
+                r#"{"event":"anomaly","time":1.02,"network":1,"node":"a","node_id":2,"frame":"702#0500","reason":"a heartbeat has 1 byte, this one 2"}"#,
+                r#"{"event":"anomaly","time":2.03,"network":1,"node":"a","node_id":2,"frame":"702#33","reason":"33h is no NMT state"}"#,
+                r#"{"event":"anomaly","time":3.05,"network":1,"node":"a","node_id":2,"frame":"082#108211","reason":"an EMCY has 8 bytes, this one 3"}"#,
+            ]
+        );
+        assert_eq!(monitor.devices()[1].anomalies, 5);
+        assert_eq!(monitor.devices()[1].last_heard, None);
+        assert_eq!(monitor.health(), Health::Unheard);
+        monitor.handle_frame(at(4100), 1, &heartbeat(2, 0x05));
+        assert_eq!(monitor.health(), Health::Troubled);
+    }
+
+    /// Heartbeats repeated within a tenth of the producer time: an anomaly, but alive.
+    #[test]
+    fn a_babbling_heartbeat_is_an_anomaly_but_a_sign_of_life() {
+        let topology = system(&[("m", 1, None), ("a", 2, None)], &[], &[]);
+        let config = MonitorConfig {
+            networks: vec![1],
+            fallback: Some(Duration::from_millis(100)),
+            ..MonitorConfig::default()
+        };
+        let mut monitor = SystemMonitor::new(&topology, &config);
+        monitor.start(at(0));
+        for t in [10, 10, 110, 111, 210] {
+            monitor.handle_frame(at(t), 1, &heartbeat(2, 0x05));
+        }
+        // A state change may come at once.
+        monitor.handle_frame(at(211), 1, &heartbeat(2, 0x7F));
+        let anomalies: Vec<String> = std::iter::from_fn(|| monitor.poll_event())
+            .filter(|e| matches!(e, Event::Anomaly { .. }))
+            .map(|e| e.to_json())
+            .collect();
+        assert_eq!(
+            anomalies,
+            [
+                r#"{"event":"anomaly","time":0.01,"network":1,"node":"a","node_id":2,"frame":"702#05","reason":"a heartbeat 0.000 ms after the last one with the same state; the producer time is 100 ms"}"#
+            ]
+        );
+        assert_eq!(monitor.devices()[1].anomalies, 2);
+        assert_eq!(monitor.devices()[1].state, Some(DeviceState::PreOperational));
+    }
+
+    #[test]
+    fn a_run_of_valid_heartbeats_is_healthy() {
+        let topology = system(&[("m", 1, None), ("a", 2, None)], &[], &[]);
+        let config = MonitorConfig {
+            networks: vec![1],
+            fallback: Some(Duration::from_millis(100)),
+            ..MonitorConfig::default()
+        };
+        let mut monitor = SystemMonitor::new(&topology, &config);
+        monitor.start(at(0));
+        let mut events = Vec::new();
+        run_from(&mut monitor, 10, 1010, &[2], &mut events);
+        assert_eq!(monitor.health(), Health::Healthy);
     }
 
     #[test]

@@ -5,6 +5,8 @@
 //! - [`net`]: many cores on one simulated bus on virtual time (the runtime's network loop), every frame
 //!   recorded as a trace line; [`cores!`] makes one core type of several kinds.
 //! - [`frames`]: proptest strategies for frames a CANopen core meets.
+//! - [`hostile`]: devices that answer with junk (empty, short, random, echoed, on another node's
+//!   CAN-ID, babbling, flooding, or as a fuzzer's bytes say), and a junk node beside a correct device.
 //! - [`fixture`]: the file system as tests of sans-IO crates may use it (the workspace bans it there).
 //! - [`browser`]: headless Chromium for the tests of HTML pages (DOM dumps, screenshots).
 //! - [`corpus`]: where the EDS/XDD corpus is: the files vendored in the repository, and the optional
@@ -18,6 +20,7 @@ pub mod browser;
 pub mod corpus;
 pub mod fixture;
 pub mod frames;
+pub mod hostile;
 pub mod net;
 pub mod trace;
 

@@ -42,8 +42,10 @@ Exit status: 0 drawn, 2 the file could not be read or written, or bad arguments.
   canopener net monitor Nodelist.graphml --bus 1=socketcand://hub:29536/can0 --bus 2=socketcand://hub:29536/can1
   canopener net monitor nodelist.cpj --bus socketcan:can0 --heartbeat-ms 500 --format json | jq -c 'select(.event==\"diagnosis\")'
 A plain --bus is the bus of the monitor's network; --bus N=SPEC names the bus of network N.
-JSON events (one per line): state, diagnosis, recovered (docs/networks.md).
-Exit status: 0 stopped by Ctrl-C or --duration, 2 bad arguments or a file that cannot be read, 4 bus error.")]
+JSON events (one per line): state, diagnosis, recovered, anomaly (docs/networks.md).
+Exit status: 0 stopped by Ctrl-C or q, or --duration ended with every watched device heard throughout;
+6 --duration ended after a device was silent or sent an anomaly; 7 --duration ended and no watched
+device was heard; 2 bad arguments or a file that cannot be read, 4 bus error.")]
     Monitor(NetMonitorArgs),
 }
 
@@ -122,7 +124,8 @@ pub(crate) struct NetMonitorArgs {
     /// The heartbeat period of devices whose DCF gives no producer heartbeat time (1017h), in ms.
     #[arg(long, value_name = "MS", value_parser = |t: &str| parse_in_range(t, 1, 65535, "--heartbeat-ms"))]
     pub(crate) heartbeat_ms: Option<u64>,
-    /// Stop after this long (e.g. 30s); without it, run until Ctrl-C.
+    /// Stop after this long (e.g. 30s) and exit with the health of the run (0, 6 or 7); without it,
+    /// run until Ctrl-C.
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) duration: Option<Duration>,
     #[arg(long, value_enum, default_value_t = MonitorFormat::Human)]

@@ -4,13 +4,13 @@
 use std::io::{IsTerminal, Write};
 
 use canopener_network::Topology;
-use canopener_network::monitor::{Event, MonitorConfig, SystemMonitor};
+use canopener_network::monitor::{Event, Health, MonitorConfig, SystemMonitor};
 use canopener_runtime::link::{BusLink, Flow, Link};
 use canopener_runtime::system::watch::SystemWatch;
 
 use crate::args::{bus_values, buses_by_network};
 use crate::bus_open::open_bus;
-use crate::error::{CliError, CliResult, stdout_error};
+use crate::error::{CliError, CliResult, exit_code, stdout_error};
 use crate::net::args::{MonitorFormat, NetMonitorArgs};
 use crate::net::input::read_system;
 use crate::net::tui::Tui;
@@ -50,7 +50,7 @@ pub(crate) fn run(args: NetMonitorArgs) -> CliResult {
     let mut dyn_links: Vec<(u32, &mut dyn Link)> =
         links.iter_mut().map(|(n, l)| (*n, l as &mut dyn Link)).collect();
     let until = args.duration.map(|d| dyn_links[0].1.now() + d);
-    match args.format {
+    let ended = match args.format {
         MonitorFormat::Json => {
             let mut out = buffered_stdout();
             watch.run(&mut dyn_links, until, |_, _, events| {
@@ -59,7 +59,7 @@ pub(crate) fn run(args: NetMonitorArgs) -> CliResult {
                 }
                 out.flush().map_err(stdout_error)?;
                 Ok::<_, CliError>(Flow::Continue)
-            })?;
+            })?
         }
         MonitorFormat::Human if std::io::stdout().is_terminal() => {
             let mut tui = Tui::start(topology, &args.file.display().to_string())?;
@@ -67,7 +67,7 @@ pub(crate) fn run(args: NetMonitorArgs) -> CliResult {
                 tui.update(now, monitor, events)
             });
             tui.stop();
-            result?;
+            result?
         }
         MonitorFormat::Human => {
             let mut out = buffered_stdout();
@@ -77,10 +77,20 @@ pub(crate) fn run(args: NetMonitorArgs) -> CliResult {
                 }
                 out.flush().map_err(stdout_error)?;
                 Ok::<_, CliError>(Flow::Continue)
-            })?;
+            })?
         }
+    };
+    // A run of --duration ends with the health of what it watched; one the user ended (q,
+    // Ctrl-C) with 0, as before.
+    let cancelled = dyn_links.iter().any(|(_, link)| link.is_cancelled());
+    if until.is_none_or(|until| ended < until) || cancelled {
+        return Ok(());
     }
-    Ok(())
+    match watch.monitor().health() {
+        Health::Healthy => Ok(()),
+        Health::Troubled => Err(CliError::Exit(exit_code::CHECK_FAILED)),
+        Health::Unheard => Err(CliError::Exit(exit_code::DEVICE)),
+    }
 }
 
 /// `--at`, or the default position ([`Topology::default_position`]).
@@ -114,6 +124,14 @@ pub(crate) fn line(event: &Event) -> String {
             node,
             node_id,
         } => format!("{time:>9.3}s  net {network}  {node} (node {node_id}) is heard again"),
+        Event::Anomaly {
+            time,
+            network,
+            node,
+            node_id,
+            frame,
+            reason,
+        } => format!("{time:>9.3}s  net {network}  {node} (node {node_id}): anomaly {frame}: {reason}"),
         Event::Diagnosis {
             time,
             network,

@@ -16,6 +16,7 @@ mod eds;
 mod eds_check;
 mod grammar;
 mod harness;
+mod hostile;
 mod master_pdo;
 mod master_sdo;
 mod master_services;

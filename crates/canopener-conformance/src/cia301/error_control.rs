@@ -253,12 +253,14 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
         let Reply::Done(count) = ctx.read(mapping, 0)? else {
             continue;
         };
-        let mut bits = 0u32;
+        // Every entry must read: a length summed over part of the mapping would make the "correct"
+        // RPDO that clears the error too short as well, and leave the error to the next tests.
+        let mut bits = Some(0u32);
         for sub in 1..=count.first().copied().unwrap_or(0) {
-            if let Reply::Done(d) = ctx.read(mapping, sub)? {
-                bits += u32::from(d.first().copied().unwrap_or(0));
-            }
+            let entry = u32_of(&ctx.read(mapping, sub)?);
+            bits = bits.zip(entry).map(|(sum, entry)| sum + (entry & 0xFF));
         }
+        let Some(bits) = bits else { continue };
         if bits >= 8 {
             chosen = Some((pdo.number, (cob & 0x7FF) as u16, bits.div_ceil(8) as usize));
             break;
@@ -267,6 +269,12 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
     let Some((number, cob, bytes)) = chosen else {
         return Ok(Finding::not_applicable("no enabled RPDO with mapped data"));
     };
+    if bytes > 8 {
+        // A PDO carries at most 64 bits (CiA 301 §7.5.2.36): no shorter PDO can be sent.
+        return Ok(Finding::inconclusive(format!(
+            "RPDO{number}'s mapping reads as {bytes} bytes, more than a PDO carries (8)"
+        )));
+    }
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(50), |_| false)?;
     let short = vec![0u8; bytes - 1];

@@ -938,7 +938,7 @@ fn block_ack_sequence_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
     );
     match Reply::of_raw(ctx.raw_sdo(initiate)?) {
         // scs 6 (block upload), ss 0 (initiate).
-        Reply::Frame(d) if d[0] & 0xE1 == 0xC0 => {}
+        Reply::Frame(d) if d.first().is_some_and(|b| b & 0xE1 == 0xC0) => {}
         Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) => {
             return Ok(Finding::not_applicable(
                 "the device has no block transfer (0504 0001h)",
@@ -963,8 +963,11 @@ fn block_ack_sequence_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
     ctx.send(0x600 + node, &[0xA3, 0, 0, 0, 0, 0, 0, 0])?;
     let response = ctx.id(0x580 + node);
     let mut last_seq = 0;
-    loop {
-        let timeout = ctx.timeout();
+    // At most one sub-block's segments, within one timeout per segment: a server that keeps
+    // sending cannot keep the test waiting.
+    let deadline = ctx.now() + ctx.timeout() * u32::from(ACK_TEST_BLOCK);
+    for _ in 0..ACK_TEST_BLOCK {
+        let timeout = deadline.saturating_duration_since(ctx.now());
         let Some(segment) = ctx.wait_for(timeout, |f| f.id() == response && !f.is_remote())? else {
             break;
         };
