@@ -11,7 +11,7 @@ use crate::finding::{Evidence, Finding, Outcome};
 use crate::model::Measurement;
 use crate::procedures::nmt::back_to_pre_operational;
 use crate::procedures::sdo::u32_of;
-use crate::procedures::tpdo::{configurable_tpdo, configure_tpdo};
+use crate::procedures::tpdo::{Setting, set_up_tpdo};
 use crate::requirements as req;
 
 /// The event timer `cia313.perf.3` sets, in ms.
@@ -24,19 +24,19 @@ pub const SYNC_PERIOD: Duration = Duration::from_millis(10);
 pub const HEARTBEAT_MS: u16 = 100;
 
 pub(super) fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 5])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID, transmission type and event timer",
-        ));
-    };
     // Type FFh: event-driven, device profile specific; the event timer alone triggers it here.
-    let settings = [(2u8, vec![0xFF]), (5, EVENT_TIMER_MS.to_le_bytes().to_vec())];
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot use an event timer: {refused}",
-            pdo.number
-        )));
-    }
+    let settings = [
+        Setting::new(2, vec![0xFF], "event-driven transmission (type FFh)"),
+        Setting::new(
+            5,
+            EVENT_TIMER_MS.to_le_bytes().to_vec(),
+            "the event timer (18xxh:05) at this value",
+        ),
+    ];
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
+    };
     let id = (cob & 0x7FF) as u16;
     let period = Duration::from_millis(u64::from(EVENT_TIMER_MS));
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
@@ -96,17 +96,15 @@ pub(super) fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 pub(super) fn sync(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID and transmission type",
-        ));
+    let settings = [Setting::new(
+        2,
+        vec![1],
+        "cyclic synchronous transmission at this type",
+    )];
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
     };
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![1])], false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot be synchronous: {refused}",
-            pdo.number
-        )));
-    }
     let sync = match u32_of(&ctx.read(0x1005, 0)?) {
         Some(cob) => (cob & 0x7FF) as u16,
         None => 0x80,
