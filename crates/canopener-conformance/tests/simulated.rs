@@ -229,6 +229,25 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         // Not a CiA 301 violation (CiA 301 sets no SDO response time): the performance suite
         // catches it against a response-time criterion.
         Fault::SdoSlow => &["cia313.perf.1", "cia313.perf.2"],
+        // Every test that sets a TPDO up fails, none says "not applicable"; the PRL120 describes no
+        // inhibit time and no 1019h, so pdo.12 and pdo.14 are not applicable there for those EDS
+        // keys (`a_pdo_configuration_timeout_or_refusal_fails_and_is_never_not_applicable` runs
+        // them on the demo device).
+        Fault::TpdoConfigSilent | Fault::TpdoConfigRefused => &[
+            "cia301.pdo.3",
+            "cia301.pdo.15",
+            "cia301.pdo.6",
+            "cia301.pdo.7",
+            "cia301.pdo.13",
+            "cia301.sync.5",
+            "cia313.perf.3",
+            "cia313.perf.4",
+        ],
+        Fault::MappingNotApplied => &[],
+        // On STORE_DEVICE, which can produce SYNC.
+        Fault::SyncProducerFast => &[],
+        Fault::TpdoEventTimerFast => &["cia301.pdo.6", "cia313.perf.3"],
+        Fault::EmcyGenericBitClear => &[],
     }
 }
 
@@ -264,7 +283,7 @@ fn every_fault_fails_exactly_its_tests() {
     let mut mismatches = Vec::new();
     for fault in Fault::ALL {
         let device = match fault {
-            Fault::StoreIgnored | Fault::SyncCounterMissing => STORE_DEVICE,
+            Fault::StoreIgnored | Fault::SyncCounterMissing | Fault::SyncProducerFast => STORE_DEVICE,
             _ => FAULT_DEVICE,
         };
         let report = if fault == Fault::SdoSlow {
@@ -302,6 +321,62 @@ fn mismatch<'e>(
     let mut failed = device_failures(report);
     failed.sort();
     (failed != expected).then(|| format!("{}: failed {failed:?}, expected {expected:?}", fault.name()))
+}
+
+/// Every test that sets a TPDO up (`procedures::tpdo`), on the bundled CiA 401 demo device where
+/// each of them applies.
+const TPDO_CONFIGURING: &[&str] = &[
+    "cia301.pdo.3",
+    "cia301.pdo.15",
+    "cia301.pdo.6",
+    "cia301.pdo.7",
+    "cia301.pdo.12",
+    "cia301.pdo.13",
+    "cia301.pdo.14",
+    "cia301.sync.5",
+    "cia401.io.3",
+    "cia401.io.4",
+    "cia401.io.5",
+    "cia401.io.6",
+    "cia401.io.8",
+    "cia401.io.9",
+    "cia313.perf.3",
+    "cia313.perf.4",
+];
+
+#[test]
+fn a_pdo_configuration_timeout_or_refusal_fails_and_is_never_not_applicable() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("test_data/cia401_full_io.eds");
+    let bytes = canopener_testkit::fixture::read(&path).expect("the demo EDS");
+    let clean = support::run_edited(&bytes, "cia401_full_io.eds", &[], TPDO_CONFIGURING);
+    let passed: Vec<&str> = clean
+        .tests
+        .iter()
+        .filter(|t| t.verdict == Verdict::Pass)
+        .map(|t| t.id.as_str())
+        .collect();
+    assert_eq!(passed, TPDO_CONFIGURING, "the clean demo device passes them all");
+    for fault in [Fault::TpdoConfigSilent, Fault::TpdoConfigRefused] {
+        let report = support::run_edited(&bytes, "cia401_full_io.eds", &[fault], TPDO_CONFIGURING);
+        let mut failed = device_failures(&report);
+        failed.sort();
+        let mut expected: Vec<String> = TPDO_CONFIGURING.iter().map(|s| (*s).to_owned()).collect();
+        expected.sort();
+        assert_eq!(failed, expected, "{}", fault.name());
+        for test in &report.tests {
+            let answer = if fault == Fault::TpdoConfigSilent {
+                "no answer within the SDO timeout"
+            } else {
+                "abort 0800 0000h"
+            };
+            assert!(test.reason.contains(answer), "{}: {}", test.id, test.reason);
+            assert!(
+                test.analysis.contains("Required: CiA 301 §7.5.2.35–38"),
+                "{}",
+                test.analysis
+            );
+        }
+    }
 }
 
 #[test]

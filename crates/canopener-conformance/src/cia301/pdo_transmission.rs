@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::context::{Ctx, Reply};
+use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::intervals::{intervals_text, measure_intervals};
 use crate::procedures::nmt::back_to_pre_operational;
@@ -43,7 +43,7 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.6",
             suite: "cia301",
             group: "pdo",
-            title: "Event timer: an event-driven TPDO with 100 ms in 18xxh:05 comes every 100 ms",
+            title: "Event timer: an event-driven TPDO with 100 ms in 18xxh:05 comes every 100 ms, never later, and sooner only with new data",
             references: &[
                 req::PDO,
                 req::PDO_PARAMETERS,
@@ -156,11 +156,17 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         req::PDO,
         EVENT_TIMER_TOLERANCE * 100.0
     );
-    // Intervals shorter than the timer are allowed: an application event also triggers the TPDO.
     let late = intervals
         .iter()
         .copied()
         .find(|i| *i > period * (1.0 + EVENT_TIMER_TOLERANCE));
+    // A shorter interval is an application event (CiA 301 §7.2.2.2.1: type FFh is also sent on the
+    // profile's events, a change of the mapped data), so it must bring other data; the same data
+    // sooner than the timer means the timer elapsed early.
+    let early = intervals.iter().copied().enumerate().find(|(i, interval)| {
+        *interval < period * (1.0 - EVENT_TIMER_TOLERANCE)
+            && frames[i + 1].frame.data() == frames[*i].frame.data()
+    });
     Ok(if frames.len() < 5 {
         Finding::fail(
             format!(
@@ -184,8 +190,26 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 cause: "the event timer runs late".to_owned(),
             },
         )
+    } else if let Some((i, early)) = early {
+        Finding::fail(
+            format!(
+                "a TPDO {early:.1} ms after the previous one with the same data ({}) and a {TEST_EVENT_TIMER_MS} ms event timer",
+                hex(frames[i + 1].frame.data())
+            ),
+            Evidence {
+                request,
+                requirement: format!(
+                    "{requirement}; an interval shorter than the timer is an application event, which changes the data"
+                ),
+                answer: format!("intervals {}", intervals_text(&intervals)),
+                cause: "the event timer elapses early (its unit or its restart is wrong)".to_owned(),
+            },
+        )
     } else {
-        Finding::pass(format!("{} TPDOs, none later than the timer", frames.len()))
+        Finding::pass(format!(
+            "{} TPDOs, none later than the timer and none sooner with the same data",
+            frames.len()
+        ))
     })
 }
 
