@@ -235,6 +235,7 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         // them on the demo device).
         Fault::TpdoConfigSilent | Fault::TpdoConfigRefused => &[
             "cia301.pdo.3",
+            "cia301.pdo.8",
             "cia301.pdo.15",
             "cia301.pdo.6",
             "cia301.pdo.7",
@@ -243,7 +244,7 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
             "cia313.perf.3",
             "cia313.perf.4",
         ],
-        Fault::MappingNotApplied => &[],
+        Fault::MappingNotApplied => &["cia301.pdo.8"],
         // On STORE_DEVICE, which can produce SYNC.
         Fault::SyncProducerFast => &[],
         Fault::TpdoEventTimerFast => &["cia301.pdo.6", "cia313.perf.3"],
@@ -334,6 +335,7 @@ const TPDO_CONFIGURING: &[&str] = &[
     "cia301.pdo.13",
     "cia301.pdo.14",
     "cia301.sync.5",
+    "cia301.pdo.8",
     "cia401.io.3",
     "cia401.io.4",
     "cia401.io.5",
