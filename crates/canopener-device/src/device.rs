@@ -79,7 +79,7 @@ use crate::od_build::{BuildNote, OdBuildError, build_od};
 use crate::pdo::{Direction, DummyUsage, Mapped, PdoConfigError, PdoEngine, PdoEvent, PdoRef};
 use crate::sdo_server::{self, SdoHooks, SdoServer};
 use crate::store::{MemoryStore, ParameterGroup, ParameterStore, StorageError, StoreEvent, StoreRestore};
-use crate::sync::{EMCY_SYNC_LENGTH, SyncEvent, SyncService};
+use crate::sync::{EMCY_SYNC_LENGTH, EMCY_SYNC_TIMEOUT, SyncEvent, SyncService};
 use crate::time_stamp::{ProduceError, TimeEvent, TimeService};
 
 /// EMCY error code of a heartbeat or life guarding event (CiA 301 emergency error codes:
@@ -521,6 +521,13 @@ impl Device {
                     );
                 }
                 SyncEvent::WindowClosed => self.pdo.window_closed(),
+                SyncEvent::Timeout => {
+                    self.emcy
+                        .raise(now, EMCY_SYNC_TIMEOUT, COMMUNICATION_ERROR, [0; 5]);
+                }
+                SyncEvent::Resumed => {
+                    self.emcy.clear(now, EMCY_SYNC_TIMEOUT);
+                }
             }
             self.events.push_back(DeviceEvent::Sync(event));
         }
