@@ -248,7 +248,8 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         // On STORE_DEVICE, which can produce SYNC.
         Fault::SyncProducerFast => &["cia301.sync.4"],
         Fault::TpdoEventTimerFast => &["cia301.pdo.6", "cia313.perf.3"],
-        Fault::EmcyGenericBitClear => &[],
+        // The error reset EMCY carries 00h, which the rule allows.
+        Fault::EmcyGenericBitClear => &["cia301.emcy.3"],
     }
 }
 
@@ -443,6 +444,50 @@ fn a_clean_run_leaves_no_error_behind_but_in_the_tests_that_provoke_one() {
         assert!(report.summary.fail == 0, "{name}: {:?}", report.summary);
         assert_eq!(errors, Some(vec![0]), "{name}: 1003h:00 after the run");
     }
+}
+
+#[test]
+fn each_emcy_error_register_is_checked_against_the_generic_bit_and_1001h() {
+    let path = canopener_testkit::corpus::eds(FAULT_DEVICE);
+    let only = ["cia301.emcy.3", "cia301.emcy.4"];
+    let clean = support::run_rewriting(&path, &only, &|f, _| *f);
+    assert!(
+        clean.tests.iter().all(|t| t.verdict == Verdict::Pass),
+        "{:?}",
+        clean.summary
+    );
+    assert!(
+        clean.tests[0].reason.contains("error register 11h"),
+        "{}",
+        clean.tests[0].reason
+    );
+    // A device whose 1001h does not hold what its EMCY said (1001h not updated when the error came,
+    // CCT Emergency 05): the answer to the upload of 1001h reads 00h.
+    let stale = support::run_rewriting(&path, &only, &|frame, sent| {
+        let data = frame.data();
+        if !sent && data.len() == 8 && data[..4] == [0x4F, 0x01, 0x10, 0x00] {
+            let mut bytes = data.to_vec();
+            bytes[4] = 0;
+            return canopener_can::CanFrame::new(frame.id(), &bytes).expect("frame");
+        }
+        *frame
+    });
+    let emcy3 = &stale.tests[0];
+    assert_eq!(emcy3.verdict, Verdict::Fail, "{}", emcy3.reason);
+    assert!(
+        emcy3
+            .reason
+            .contains("after EMCY 8210h with error register 11h, 1001h reads the value 00"),
+        "{}",
+        emcy3.reason
+    );
+    assert!(
+        emcy3.analysis.contains("Required: CiA 301 §7.5.2.2"),
+        "{}",
+        emcy3.analysis
+    );
+    // The error reset's 00h agrees with the rewritten 00h.
+    assert_eq!(stale.tests[1].verdict, Verdict::Pass, "{}", stale.tests[1].reason);
 }
 
 #[test]

@@ -8,8 +8,9 @@ use canopener_wire::NmtCommand;
 
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::emcy::emcy_producer;
 use crate::procedures::nmt::{observed_state, start_heartbeat, state_name};
-use crate::procedures::sdo::{download_text, expect_refusal, u32_of};
+use crate::procedures::sdo::{download_text, expect_refusal};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -100,16 +101,6 @@ fn error_behaviour(ctx: &mut Ctx<'_, '_>) -> Result<Result<(u8, u8), Finding>, S
     })
 }
 
-/// The EMCY COB-ID, when the EDS has an enabled EMCY producer.
-fn emcy_id(ctx: &mut Ctx<'_, '_>) -> Result<Option<u16>, Stop> {
-    if !ctx.model().has(0x1014) {
-        return Ok(None);
-    }
-    Ok(u32_of(&ctx.read(0x1014, 0)?)
-        .filter(|c| c & 0x8000_0000 == 0)
-        .map(|c| (c & 0x7FF) as u16))
-}
-
 fn writable(ctx: &Ctx<'_, '_>, sub: u8) -> bool {
     ctx.model().entry(0x1016, sub).is_some_and(|e| e.writable())
 }
@@ -169,13 +160,18 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !writable(ctx, 1) {
         return Ok(Finding::not_applicable("no writable 1016h:01"));
     }
-    let Some(emcy) = emcy_id(ctx)? else {
-        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
+    let emcy = match emcy_producer(ctx)? {
+        Ok(cob) => cob,
+        Err(finding) => return Ok(finding),
     };
-    if !start_heartbeat(ctx)? {
-        return Ok(Finding::not_applicable(
-            "no writable 1017h to observe the state by",
-        ));
+    match start_heartbeat(ctx)? {
+        Ok(true) => {}
+        Ok(false) => {
+            return Ok(Finding::not_applicable(
+                "the EDS has no writable 1017h to observe the state by",
+            ));
+        }
+        Err(failed) => return Ok(failed),
     }
     let (behaviour, expected_state) = match error_behaviour(ctx)? {
         Ok(pair) => pair,
@@ -262,8 +258,9 @@ fn life_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !writable_var(ctx, 0x100C) || !writable_var(ctx, 0x100D) {
         return Ok(Finding::not_applicable("100Ch/100Dh are not both writable"));
     }
-    let Some(emcy) = emcy_id(ctx)? else {
-        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
+    let emcy = match emcy_producer(ctx)? {
+        Ok(cob) => cob,
+        Err(finding) => return Ok(finding),
     };
     let (behaviour, expected_state) = match error_behaviour(ctx)? {
         Ok(pair) => pair,
@@ -390,8 +387,9 @@ fn consumer_after_reset(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "no writable 1016h:01 with a DefaultValue",
         ));
     };
-    let Some(emcy) = emcy_id(ctx)? else {
-        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
+    let emcy = match emcy_producer(ctx)? {
+        Ok(cob) => cob,
+        Err(finding) => return Ok(finding),
     };
     let producer = producer_node(ctx);
     let consumer = entry(producer, RESET_CONSUMER_MS);
