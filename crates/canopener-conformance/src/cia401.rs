@@ -183,11 +183,30 @@ fn device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         ));
     }
-    if value >> 16 == 0xFFFF {
-        return Ok(Finding::not_applicable(
-            "1000h names a multiple-device module (FFFFh); its I/O bits are in 67FFh, not checked",
-        ));
-    }
+    // A multiple-device module (FFFFh in bits 31..16) gives the I/O bits in 67FFh (CiA 401 §8.1 of
+    // the reference).
+    let (value, request) = if value >> 16 == 0xFFFF {
+        if !ctx.model().entry(0x67FF, 0).is_some_and(|e| e.readable()) {
+            return Ok(Finding::not_applicable(
+                "1000h names a multiple-device module (FFFFh), whose I/O bits are in 67FFh, and the EDS has no readable 67FFh",
+            ));
+        }
+        let module = match read_described(ctx, 0x67FF, 0, "the device type of the module (67FFh)")? {
+            Ok(value) => value,
+            Err(failed) => return Ok(failed),
+        };
+        let Some(module) = u32_of(&Reply::Done(module.clone())) else {
+            return Ok(refused_unexpectedly(
+                &upload_text((0x67FF, 0)),
+                &Reply::Done(module),
+                DEVICE_TYPE,
+                "67FFh does not read as 4 bytes",
+            ));
+        };
+        (module, format!("{request}, then {}", upload_text((0x67FF, 0))))
+    } else {
+        (value, request)
+    };
     let groups: [(u32, &str, &[u16]); 4] = [
         (0x01, "digital inputs", &[0x6000, 0x6020, 0x6100, 0x6120]),
         (0x02, "digital outputs", &[0x6200, 0x6220, 0x6300, 0x6320]),

@@ -10,7 +10,7 @@ use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::procedures::emcy::emcy_producer;
 use crate::procedures::nmt::{observed_state, start_heartbeat, state_name};
-use crate::procedures::sdo::{download_text, expect_refusal};
+use crate::procedures::sdo::{download_text, expect_refusal, read_described};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -80,14 +80,10 @@ pub fn tests() -> Vec<TestDef> {
 /// finding when it cannot be judged.
 fn error_behaviour(ctx: &mut Ctx<'_, '_>) -> Result<Result<(u8, u8), Finding>, Stop> {
     let behaviour = match ctx.model().entry(0x1029, 1) {
-        Some(_) => match ctx.read(0x1029, 1)? {
-            Reply::Done(d) if d.len() == 1 => d[0],
-            other => {
-                return Ok(Err(Finding::inconclusive(format!(
-                    "1029h:01 could not be read: {}",
-                    other.describe()
-                ))));
-            }
+        Some(_) => match read_described(ctx, 0x1029, 1, "the error behaviour 1029h:01")? {
+            // A longer expedited answer is cia301.sdo.14's to judge; the value is the first byte.
+            Ok(d) => d.first().copied().unwrap_or(0),
+            Err(failed) => return Ok(Err(failed)),
         },
         None => 0,
     };
