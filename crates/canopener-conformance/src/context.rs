@@ -113,6 +113,7 @@ pub struct Ctx<'r, 'l> {
     measurements: BTreeMap<String, Measurement>,
     performance: &'r Performance,
     stimulus: Option<Hook<'r>>,
+    no_criterion: bool,
 }
 
 /// The settings of a run that does not choose its own.
@@ -143,6 +144,7 @@ impl<'r, 'l> Ctx<'r, 'l> {
             measurements: BTreeMap::new(),
             performance: &DEFAULT_PERFORMANCE,
             stimulus: None,
+            no_criterion: false,
         }
     }
 
@@ -373,6 +375,17 @@ impl<'r, 'l> Ctx<'r, 'l> {
     /// The measurements taken.
     pub fn take_measurements(&mut self) -> BTreeMap<String, Measurement> {
         std::mem::take(&mut self.measurements)
+    }
+
+    /// Says that a measurement of the test was judged against no criterion: its `pass` is a
+    /// measurement, not a conformance pass, and the summaries count it apart.
+    pub fn judged_without_criterion(&mut self) {
+        self.no_criterion = true;
+    }
+
+    /// Whether [`Ctx::judged_without_criterion`] was called.
+    pub fn without_criterion(&self) -> bool {
+        self.no_criterion
     }
 
     /// The standard CAN-ID `raw` (callers pass 11-bit values).

@@ -149,7 +149,7 @@ pub fn run_stimulated(
                 current: Some(test),
             });
             let test_start = recorder.now();
-            let (finding, measurements, left, stopped) =
+            let (finding, measurements, no_criterion, left, stopped) =
                 run_one(&mut recorder, spec, performance, stimulus.as_mut(), test)?;
             report.left_modified.extend(left);
             let telegrams = telegrams(recorder.since(0), start, &mut decoder);
@@ -166,6 +166,7 @@ pub fn run_stimulated(
                 measurements,
                 duration_s: recorder.now().saturating_duration_since(test_start).as_secs_f64(),
                 telegrams,
+                no_criterion,
             });
             if stopped {
                 report.interrupted = true;
@@ -235,6 +236,7 @@ fn prepare(
 type OneResult = (
     Finding,
     std::collections::BTreeMap<String, crate::model::Measurement>,
+    bool,
     Vec<String>,
     bool,
 );
@@ -259,11 +261,12 @@ fn run_one(
         Err(Stop::Link(error)) => (Finding::inconclusive(format!("the bus failed: {error}")), true),
     };
     let measurements = ctx.take_measurements();
+    let no_criterion = ctx.without_criterion();
     // A test that put no frame on the bus (a precondition from the EDS alone said not_applicable)
     // changed nothing: no cleanup, which would cost each such test the settling time.
     let untouched = ctx.mark() == 0 && !stopped;
     if !test.needs_device() || untouched {
-        return Ok((finding, measurements, Vec::new(), stopped));
+        return Ok((finding, measurements, no_criterion, Vec::new(), stopped));
     }
     let interrupted = stopped && ctx.link_cancelled();
     if let Some(cancel) = spec.cancel.as_ref().filter(|_| interrupted) {
@@ -289,7 +292,7 @@ fn run_one(
             )]
         }
     };
-    Ok((finding, measurements, left, stopped))
+    Ok((finding, measurements, no_criterion, left, stopped))
 }
 
 fn telegrams(log: &[Logged], start: Instant, decoder: &mut Decoder) -> Vec<Telegram> {

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use super::{Criterion, Judged, judge, ms_between, standard_id};
+use super::{Clock, Criterion, Judged, judge, ms_between, standard_id};
 use crate::context::{Ctx, Reply};
 use crate::device_model::EntryModel;
 use crate::finding::{Evidence, Finding, Outcome};
@@ -89,6 +89,7 @@ pub(super) fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request,
             clause: req::PDO,
             cause: "the event timer runs off its period, or the TPDO is also sent on other events",
+            clock: Clock::Bus,
         },
         periods,
         Some(criterion),
@@ -120,7 +121,7 @@ pub(super) fn sync(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ctx.send(sync, &[])?;
         let frames = ctx.listen(SYNC_PERIOD, |f| standard_id(f) == Some(id) && !f.is_remote())?;
         if let Some(first) = frames.first() {
-            delays.push(ms_between(sent, first.at));
+            delays.push(ms_between(sent, first.link_time));
             stamps.push(first.at);
         }
         counts.push(frames.len());
@@ -168,6 +169,7 @@ pub(super) fn sync(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request,
             clause: req::PDO,
             cause: "the device sends the synchronous TPDO later after the SYNC than the criterion allows",
+            clock: Clock::Link,
         },
         delays,
         criterion,
@@ -240,6 +242,7 @@ pub(super) fn heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request,
             clause: req::HEARTBEAT,
             cause: "the heartbeat producer's timer deviates from 1017h, or sends extra heartbeats",
+            clock: Clock::Bus,
         },
         periods,
         Some(criterion),

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use super::{BOOT_UPS, Criterion, Judged, Outgoing, Timed, exchange, judge, standard_id, unusable};
+use super::{BOOT_UPS, Clock, Criterion, Judged, Outgoing, Timed, exchange, judge, standard_id, unusable};
 use crate::procedures::nmt::BOOT_UP_WAIT;
 use crate::procedures::nmt::back_to_pre_operational;
 use crate::procedures::sdo::{download_text, read_described, u32_of, upload_text};
@@ -157,6 +157,7 @@ fn sdo_repeated(
             ),
             clause: req::SDO_UPLOAD,
             cause: "the SDO server's turnaround is slower than the criterion",
+            clock: Clock::Link,
         },
         samples,
         criterion,
@@ -280,6 +281,7 @@ pub(super) fn rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request,
             clause: req::PDO,
             cause: "the device samples and sends the TPDO slower than the criterion",
+            clock: Clock::Link,
         },
         samples,
         criterion,
@@ -325,6 +327,7 @@ pub(super) fn boot_up(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request: format!("NMT reset node {node}, {} times", samples.len()),
             clause: req::BOOT_UP,
             cause: "the device's initialisation is slower than the criterion",
+            clock: Clock::Link,
         },
         samples,
         criterion,
@@ -463,6 +466,7 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 request: format!("LSS {what}, {} times", samples.len()),
                 clause: "CiA 305 v3.0",
                 cause: "the LSS slave answers slower than the criterion",
+                clock: Clock::Link,
             },
             samples,
             criterion,
@@ -482,7 +486,11 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Finding::pass(format!(
             "LSS response times, {repetitions} of each service, max: {} ms; {judged}{}",
             worst.join(", "),
-            super::stamps_note(ctx, Criterion::at_most(ctx, "lss.response_max_ms", max).as_ref())
+            super::stamps_note(
+                ctx,
+                Clock::Link,
+                Criterion::at_most(ctx, "lss.response_max_ms", max).as_ref()
+            )
         ))
     }))
 }
