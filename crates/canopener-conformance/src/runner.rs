@@ -126,7 +126,6 @@ pub fn run_stimulated(
         tests: Vec::new(),
         summary: Summary::default(),
     };
-    let mut decoder = Decoder::new();
     // The EDS check alone needs no device: nothing to reset, nobody to ask.
     let prepared = if tests.iter().all(|t| !t.needs_device()) {
         report
@@ -152,7 +151,9 @@ pub fn run_stimulated(
             let (finding, measurements, no_criterion, left, stopped) =
                 run_one(&mut recorder, spec, performance, stimulus.as_mut(), test)?;
             report.left_modified.extend(left);
-            let telegrams = telegrams(recorder.since(0), start, &mut decoder);
+            // Each test's log is decoded on its own: what an earlier test left open (a guarding
+            // request nobody answered) must not colour the next one's frames.
+            let telegrams = telegrams(recorder.since(0), start, &mut Decoder::new());
             recorder.clear();
             report.tests.push(TestReport {
                 id: test.id.to_owned(),
@@ -314,7 +315,7 @@ fn telegrams(log: &[Logged], start: Instant, decoder: &mut Decoder) -> Vec<Teleg
                         .join(" ")
                 },
                 remote: frame.is_remote(),
-                meaning: decoder.decode(&frame).to_string(),
+                meaning: decoder.decode_at(logged.link_time, &frame).to_string(),
                 at: logged.link_time,
                 frame,
             }

@@ -491,6 +491,31 @@ fn each_emcy_error_register_is_checked_against_the_generic_bit_and_1001h() {
 }
 
 #[test]
+fn unanswered_guarding_requests_do_not_turn_later_heartbeats_into_guarding_responses() {
+    // The demo device has no node guarding: cia301.ec.3's requests go unanswered while heartbeats
+    // run. No frame of that test, nor of the tests after it, is a guarding response.
+    let only = ["cia301.ec.3", "cia301.ec.8", "cia301.ec.1", "cia301.ec.2"];
+    let report = support::run(STORE_DEVICE, &[], &only);
+    assert_eq!(report.tests[0].id, "cia301.ec.1");
+    let requests = report
+        .tests
+        .iter()
+        .flat_map(|t| &t.telegrams)
+        .filter(|t| t.meaning.starts_with("Node guarding request"))
+        .count();
+    assert!(requests >= 3, "ec.3 sends guarding requests");
+    for test in &report.tests {
+        let responses: Vec<&str> = test
+            .telegrams
+            .iter()
+            .filter(|t| t.meaning.contains("guarding response"))
+            .map(|t| t.meaning.as_str())
+            .collect();
+        assert!(responses.is_empty(), "{}: {responses:?}", test.id);
+    }
+}
+
+#[test]
 fn a_device_slower_than_the_sdo_timeout_is_reported_silent() {
     // CiA 301 sets no SDO response time: a device slower than the tester's timeout cannot be tested
     // at that timeout; the CLI says so with exit code 7 and `--timeout` runs it.
