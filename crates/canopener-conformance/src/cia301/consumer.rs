@@ -252,7 +252,9 @@ pub const TEST_GUARD_MS: u16 = 50;
 fn life_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let writable_var = |ctx: &Ctx<'_, '_>, index| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
     if !writable_var(ctx, 0x100C) || !writable_var(ctx, 0x100D) {
-        return Ok(Finding::not_applicable("100Ch/100Dh are not both writable"));
+        return Ok(Finding::not_applicable(
+            "the EDS does not make 100Ch and 100Dh both writable (AccessType), or lacks them: life guarding cannot be set up",
+        ));
     }
     let emcy = match emcy_producer(ctx)? {
         Ok(cob) => cob,

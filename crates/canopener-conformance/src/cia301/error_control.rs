@@ -692,7 +692,9 @@ fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn guarding_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !ctx.model().has_guarding() {
-        return Ok(Finding::not_applicable("the EDS has no 100Ch/100Dh"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no 100Ch and 100Dh (node guarding)",
+        ));
     }
     if ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
         ctx.modify(0x1017, 0, vec![0, 0])?;
@@ -845,7 +847,9 @@ fn heartbeat_over_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn guarding_id_range(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !ctx.model().has_guarding() {
-        return Ok(Finding::not_applicable("the EDS has no 100Ch/100Dh"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no 100Ch and 100Dh (node guarding)",
+        ));
     }
     // Guarding is served while the heartbeat producer is off (CiA 301 §7.2.8.3.2).
     if ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {

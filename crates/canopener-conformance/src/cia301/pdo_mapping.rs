@@ -568,7 +568,9 @@ fn wrong_direction(ctx: &mut Ctx<'_, '_>) -> Outcome {
             )
         });
     let Some((entry, label)) = input else {
-        return Ok(Finding::not_applicable("no mappable ro object"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no object with AccessType=ro and PDOMapping=1",
+        ));
     };
     let Some(m) = prepared!(mappable(ctx, PdoDirection::Receive)?) else {
         return Ok(no_mappable(PdoDirection::Receive));
@@ -644,7 +646,9 @@ fn map_alone(
 fn input_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
     use canopener_eds::AccessType;
     let Some((entry, label)) = mappable_with_access(ctx, &[AccessType::Ro, AccessType::Rwr]) else {
-        return Ok(Finding::not_applicable("no mappable ro/rwr object"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no object with AccessType=ro or rwr and PDOMapping=1",
+        ));
     };
     let (request, reply) = match map_alone(ctx, PdoDirection::Transmit, entry)? {
         Ok(done) => done,
@@ -663,7 +667,9 @@ fn input_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn output_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let Some((entry, label)) = mappable_with_access(ctx, &[canopener_eds::AccessType::Wo]) else {
-        return Ok(Finding::not_applicable("no mappable wo object"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no object with AccessType=wo and PDOMapping=1",
+        ));
     };
     let (request, reply) = match map_alone(ctx, PdoDirection::Transmit, entry)? {
         Ok(done) => done,
