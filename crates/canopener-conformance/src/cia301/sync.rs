@@ -130,7 +130,9 @@ fn period_zero(ctx: &mut Ctx<'_, '_>) -> Prepared<()> {
 
 fn reserved_counter(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !writable(ctx, 0x1019) {
-        return Ok(Finding::not_applicable("no writable 1019h"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no writable 1019h (AccessType)",
+        ));
     }
     if let Err(finding) = period_zero(ctx)? {
         return Ok(finding);
