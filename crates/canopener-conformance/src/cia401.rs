@@ -524,6 +524,17 @@ struct Mapped {
     entries: Vec<u32>,
 }
 
+/// The valid TPDO that maps `object`, made event-driven with the event timer `event_timer`
+/// ([`event_driven`]); not applicable with `none` when no valid TPDO maps it.
+fn event_tpdo(ctx: &mut Ctx<'_, '_>, object: u32, none: &str, event_timer: u16) -> Prepared<Mapped> {
+    let pdo = match pdo_with(ctx, PdoDirection::Transmit, object)? {
+        Ok(Some(pdo)) => pdo,
+        Ok(None) => return Ok(Err(Finding::not_applicable(none))),
+        Err(failed) => return Ok(Err(failed)),
+    };
+    Ok(event_driven(ctx, &pdo, event_timer)?.map(|()| pdo))
+}
+
 /// Makes `pdo` event-driven (FFh) with no inhibit time and the event timer `event_timer` (0: none),
 /// each where the EDS makes it writable (type FFh, and the event timer when not 0, are needed). CiA
 /// 301 §7.5.2.35 allows the inhibit time to change only while the TPDO is invalid: with a writable
@@ -642,14 +653,10 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
         Ok(driver) => driver,
         Err(finding) => return Ok(finding),
     };
-    let pdo = match pdo_with(ctx, PdoDirection::Transmit, 0x6000_0108)? {
-        Ok(Some(pdo)) => pdo,
-        Ok(None) => return Ok(Finding::not_applicable(NO_DIGITAL_TPDO)),
-        Err(failed) => return Ok(failed),
+    let pdo = match event_tpdo(ctx, 0x6000_0108, NO_DIGITAL_TPDO, 0)? {
+        Ok(pdo) => pdo,
+        Err(finding) => return Ok(finding),
     };
-    if let Err(finding) = event_driven(ctx, &pdo, 0)? {
-        return Ok(finding);
-    }
     if ctx.model().entry(0x6002, 1).is_some_and(|e| e.writable()) {
         writes.push((0x6002, 1, 0));
     }
@@ -967,14 +974,10 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Ok(driver) => driver,
         Err(finding) => return Ok(finding),
     };
-    let pdo = match pdo_with(ctx, PdoDirection::Transmit, 0x6401_0110)? {
-        Ok(Some(pdo)) => pdo,
-        Ok(None) => return Ok(Finding::not_applicable(NO_ANALOG_TPDO)),
-        Err(failed) => return Ok(failed),
+    let pdo = match event_tpdo(ctx, 0x6401_0110, NO_ANALOG_TPDO, ANALOG_PERIOD_MS)? {
+        Ok(pdo) => pdo,
+        Err(finding) => return Ok(finding),
     };
-    if let Err(finding) = event_driven(ctx, &pdo, ANALOG_PERIOD_MS)? {
-        return Ok(finding);
-    }
     if ctx.model().entry(0x6423, 0).is_some_and(|e| e.writable()) {
         ctx.modify(0x6423, 0, vec![1])?;
     }
@@ -1170,14 +1173,10 @@ fn analog_interrupts(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Ok(driver) => driver,
         Err(finding) => return Ok(finding),
     };
-    let pdo = match pdo_with(ctx, PdoDirection::Transmit, 0x6401_0110)? {
-        Ok(Some(pdo)) => pdo,
-        Ok(None) => return Ok(Finding::not_applicable(NO_ANALOG_TPDO)),
-        Err(failed) => return Ok(failed),
+    let pdo = match event_tpdo(ctx, 0x6401_0110, NO_ANALOG_TPDO, 0)? {
+        Ok(pdo) => pdo,
+        Err(finding) => return Ok(finding),
     };
-    if let Err(finding) = event_driven(ctx, &pdo, 0)? {
-        return Ok(finding);
-    }
     // The input starts at 0 while the device is pre-operational, so no step starts from a stale value.
     if driver == Driver::Factory {
         ctx.modify(0x2002, 1, vec![0, 0])?;
