@@ -227,7 +227,7 @@ fn counter_while_running(ctx: &mut Ctx<'_, '_>) -> Outcome {
 /// choice; CiA 301 sets none).
 pub const SYNC_RATE_TOLERANCE: f64 = 0.1;
 /// How long `cia301.sync.4` counts SYNC frames.
-pub const SYNC_WATCH: Duration = Duration::from_millis(155);
+pub const SYNC_WATCH: Duration = Duration::from_millis(135);
 
 /// The SYNC producer set up in the order that has no side effect (CiA 301 §7.5.2.6/7/22): the
 /// counter while no period runs, the producer bit while the period is 0 (an idle producer), then
