@@ -4,12 +4,16 @@
 //!
 //! Every test is designed from CiA 301 (what the device must do at all) and the method of CiA 313 as
 //! the thesis (`seeds/001`, §4) applies it: a request seen on the bus, the answer seen on the bus,
-//! repeated, the statistics (min, mean, p50/p90/p99, max) of the samples in ms. The request's time is
-//! the tester's clock when it hands the frame to the link; the answer's is the link's receive stamp
-//! (virtual bus time, the kernel's RX time on SocketCAN, the hub's time on socketcand: the report's
-//! `bus.timestamps`). A response time therefore includes both frames' time on the wire: on an idle
-//! bus, the request frame + the device's turnaround + the answer frame. Periods are the differences of
-//! consecutive receive stamps of one producer, so they carry no tester latency.
+//! repeated, the statistics (min, mean, p50/p90/p99, max) of the samples in ms. Both stamps of a
+//! sample come from one clock. A response time is taken on the link's clock: the request when the
+//! tester hands it to the link, the answer when the link hands it over (virtual bus time on a
+//! simulated bus; the tester's clock on SocketCAN and socketcand, whose receive stamps come from the
+//! kernel's or the hub's clock, which the tester's send time cannot be compared with). It includes
+//! both frames' time on the wire and, on a real bus, the tester's own send and receive latency. A
+//! period is the difference of two receive stamps of one producer from the bus side (the report's
+//! `bus.timestamps`), so it carries no tester latency. A sample that is negative (an answer stamped
+//! before its request, a frame before the one received before it) or not finite is impossible:
+//! the test is inconclusive and says so, the sample is never clamped to 0.
 //!
 //! CiA 301 sets no response-time figures: without a criterion a response time is reported as a
 //! measurement with the verdict `pass` ("measured, no criterion"); a device that does not answer at
@@ -21,7 +25,7 @@ use std::time::Duration;
 use canopener_can::{CanFrame, CanId, Instant};
 use canopener_wire::NmtCommand;
 
-use canopener_runtime::link::Timestamps;
+use canopener_runtime::link::{TimestampSource, Timestamps};
 
 use crate::context::{Ctx, Reply};
 use crate::finding::{Evidence, Finding, Stop};
@@ -173,6 +177,38 @@ impl Criterion {
     }
 }
 
+/// Which clock a measurement's two stamps come from (see the [module docs](self)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Clock {
+    /// A response time: request and answer on the link's clock.
+    Link,
+    /// A period: two receive stamps of the bus side.
+    Bus,
+}
+
+impl Clock {
+    /// Who stamps `ctx`'s samples on this clock, and how finely.
+    fn stamps(self, ctx: &Ctx<'_, '_>) -> Timestamps {
+        let bus = ctx.timestamps();
+        match self {
+            Clock::Bus => bus,
+            Clock::Link => link_stamps(bus),
+        }
+    }
+}
+
+/// The link's own clock for a link whose bus side stamps with `bus`: the same on virtual time, the
+/// tester's (host) clock otherwise.
+fn link_stamps(bus: Timestamps) -> Timestamps {
+    match bus.source {
+        TimestampSource::Virtual => bus,
+        _ => Timestamps {
+            source: TimestampSource::Host,
+            resolution: Duration::from_micros(1),
+        },
+    }
+}
+
 /// What was measured, for the analysis of a failure.
 struct Judged<'a> {
     /// The measurement's name in the report.
@@ -185,10 +221,14 @@ struct Judged<'a> {
     clause: &'a str,
     /// The likely cause of a failure.
     cause: &'a str,
+    /// Where the two stamps of each sample come from.
+    clock: Clock,
 }
 
-/// Records `samples` (ms) as the measurement `judged.name` and judges them: against `criterion`
-/// when there is one, else `pass` with "measured, no criterion".
+/// Records `samples` (ms) as the measurement `judged.name` and judges them: inconclusive when one
+/// is impossible ([`impossible`]), else against `criterion` when there is one, else `pass` with
+/// "measured, no criterion", which the context records so that the summaries count it apart from
+/// the conformance passes.
 fn judge(
     ctx: &mut Ctx<'_, '_>,
     judged: Judged<'_>,
@@ -197,9 +237,14 @@ fn judge(
 ) -> Finding {
     let mut measurement = Measurement::new("ms", samples);
     let stats = stats_text(&measurement);
-    let stamps = stamps_note(ctx, criterion.as_ref());
+    let stamps = stamps_note(ctx, judged.clock, criterion.as_ref());
+    if let Some(why) = impossible(&measurement.samples, judged.clock) {
+        ctx.measure(judged.name, measurement);
+        return Finding::inconclusive(format!("{}: {why}; not judged{stamps}", judged.what));
+    }
     let Some(criterion) = criterion else {
         ctx.measure(judged.name, measurement);
+        ctx.judged_without_criterion();
         return Finding::pass(format!(
             "{}: {stats}; measured, no criterion{stamps}",
             judged.what
@@ -269,9 +314,33 @@ fn stats_text(measurement: &Measurement) -> String {
     }
 }
 
-/// `; stamps: virtual, 0.001 µs`, with a warning when they are too coarse for `criterion`.
-fn stamps_note(ctx: &Ctx<'_, '_>, criterion: Option<&Criterion>) -> String {
-    note_on(ctx.timestamps(), criterion)
+/// The first sample that cannot be (negative or not finite), as the reason says it; `None` when all
+/// can. A time cannot run backwards: such a sample says the two stamps are not comparable, and no
+/// criterion can judge it.
+fn impossible(samples: &[f64], clock: Clock) -> Option<String> {
+    let (i, sample) = samples
+        .iter()
+        .enumerate()
+        .find(|(_, s)| !s.is_finite() || **s < 0.0)?;
+    let what = match clock {
+        Clock::Link => "a latency below 0: the answer is stamped before its request was sent",
+        Clock::Bus => "a period below 0: a frame is stamped before the one received before it",
+    };
+    Some(format!(
+        "sample #{} of {} is {sample:.3} ms, an impossible value ({what}), so the stamps cannot be compared",
+        i + 1,
+        samples.len()
+    ))
+}
+
+/// `; stamps: virtual, 0.001 µs` (with who stamps a response time's request and answer), and a
+/// warning when they are too coarse for `criterion`.
+fn stamps_note(ctx: &Ctx<'_, '_>, clock: Clock, criterion: Option<&Criterion>) -> String {
+    let mut note = note_on(clock.stamps(ctx), criterion);
+    if clock == Clock::Link && ctx.timestamps().source != TimestampSource::Virtual {
+        note.push_str(" (request and answer on the tester's clock)");
+    }
+    note
 }
 
 /// [`stamps_note`] for `stamps`: a resolution above a tenth of the criterion's tolerance cannot tell
@@ -293,8 +362,8 @@ fn note_on(stamps: Timestamps, criterion: Option<&Criterion>) -> String {
     note
 }
 
-/// One timed exchange: the time from sending to the answer's receive stamp in ms, and the answer;
-/// `None` without an answer.
+/// One timed exchange: the time from sending to the answer's arrival, both on the link's clock, in
+/// ms, and the answer; `None` without an answer.
 type Timed = Result<Option<(f64, CanFrame)>, Stop>;
 
 /// Sends `frame` and waits up to `wait` for the first frame `answer` accepts.
@@ -312,7 +381,7 @@ fn exchange(
     }
     Ok(ctx
         .wait_for(wait, answer)?
-        .map(|logged| (ms_between(sent, logged.at), logged.frame)))
+        .map(|logged| (ms_between(sent, logged.link_time), logged.frame)))
 }
 
 /// What [`exchange`] sends.
@@ -323,9 +392,10 @@ enum Outgoing<'a> {
     Nmt(NmtCommand),
 }
 
-/// `to - from` in ms; 0 when a stamp from another clock precedes the sending time.
+/// `to - from` in ms, negative when `to` is earlier: never clamped, so that [`judge`] sees an
+/// impossible sample as one.
 fn ms_between(from: Instant, to: Instant) -> f64 {
-    to.saturating_duration_since(from).as_secs_f64() * 1000.0
+    (i128::from(to.as_nanos()) - i128::from(from.as_nanos())) as f64 / 1e6
 }
 
 /// The frame's standard CAN-ID, or `None`.
@@ -343,8 +413,6 @@ fn unusable(what: &str, reply: &Reply) -> Finding {
 
 #[cfg(test)]
 mod tests {
-    use canopener_runtime::link::TimestampSource;
-
     use super::*;
 
     fn stamps(source: TimestampSource, micros: u64) -> Timestamps {
@@ -379,6 +447,33 @@ mod tests {
         assert!(!note_on(stamps(TimestampSource::Kernel, 10), Some(&sdo)).contains("WARNING"));
         // Without a criterion there is nothing to be too coarse for.
         assert!(!note_on(stamps(TimestampSource::Host, 1000), None).contains("WARNING"));
+    }
+
+    #[test]
+    fn a_negative_or_infinite_sample_is_impossible_never_clamped() {
+        assert_eq!(impossible(&[0.0, 0.2, 1.5], Clock::Link), None);
+        let negative = impossible(&[0.2, -0.35, 0.1], Clock::Link).expect("impossible");
+        assert!(negative.starts_with("sample #2 of 3 is -0.350 ms"), "{negative}");
+        assert!(negative.contains("stamped before its request"), "{negative}");
+        let period = impossible(&[100.0, f64::NAN], Clock::Bus).expect("impossible");
+        assert!(period.contains("sample #2 of 2 is NaN ms"), "{period}");
+        assert_eq!(
+            ms_between(Instant::from_micros(5), Instant::from_micros(3)),
+            -0.002
+        );
+        // A response time is on the link's clock: the tester's (host) clock unless on virtual time.
+        assert_eq!(
+            link_stamps(stamps(TimestampSource::Hub, 1)).source,
+            TimestampSource::Host
+        );
+        assert_eq!(
+            link_stamps(stamps(TimestampSource::Kernel, 1)).source,
+            TimestampSource::Host
+        );
+        assert_eq!(
+            link_stamps(stamps(TimestampSource::Virtual, 0)).source,
+            TimestampSource::Virtual
+        );
     }
 
     #[test]

@@ -17,10 +17,11 @@ use std::time::Duration;
 use canopener_wire::NmtCommand;
 
 use crate::context::{Ctx, Reply, hex};
-use crate::device_model::PdoDirection;
-use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::device_model::{PdoDirection, PdoModel};
+use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::nmt::back_to_pre_operational;
-use crate::procedures::sdo::{download_text, refused_unexpectedly, u32_of, upload_text};
+use crate::procedures::sdo::{download_text, read_described, refused_unexpectedly, u32_of, upload_text};
+use crate::procedures::tpdo::{Setting, Step as ConfigStep, configure_tpdo, judge_step, not_writable};
 use crate::stimulus::InputChange;
 use crate::test_def::TestDef;
 
@@ -42,6 +43,14 @@ pub const DEFAULT_PDOS: &str =
     "CiA 401 (default PDO mapping: TPDO1 digital inputs, TPDO2 analogue inputs, RPDO1 digital outputs)";
 /// The thesis's factory test registers that drive the inputs.
 pub const FACTORY_REGISTERS: &str = "thesis §5.2 (factory test registers 2000h–2002h)";
+
+/// No TPDO to observe digital inputs on: CiA 401's default TPDO1 maps 6000h (its 1A00h), read from
+/// the device.
+const NO_DIGITAL_TPDO: &str =
+    "no TPDO whose COB-ID is valid (18xxh:01 bit 31 clear) maps 6000h:01 (1A00h–1BFFh as read)";
+/// No TPDO to observe analogue inputs on: CiA 401's default TPDO2 maps 6401h.
+const NO_ANALOG_TPDO: &str =
+    "no TPDO whose COB-ID is valid (18xxh:01 bit 31 clear) maps 6401h:01 (1A00h–1BFFh as read)";
 
 /// How long after a change of an input the tester waits for the event-driven TPDO: CiA 401 sets no
 /// bound; 50 ms is ample for a device with no inhibit time (which the test sets to 0).
@@ -174,11 +183,30 @@ fn device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         ));
     }
-    if value >> 16 == 0xFFFF {
-        return Ok(Finding::not_applicable(
-            "1000h names a multiple-device module (FFFFh); its I/O bits are in 67FFh, not checked",
-        ));
-    }
+    // A multiple-device module (FFFFh in bits 31..16) gives the I/O bits in 67FFh (CiA 401 §8.1 of
+    // the reference).
+    let (value, request) = if value >> 16 == 0xFFFF {
+        if !ctx.model().entry(0x67FF, 0).is_some_and(|e| e.readable()) {
+            return Ok(Finding::not_applicable(
+                "1000h names a multiple-device module (FFFFh), whose I/O bits are in 67FFh, and the EDS has no readable 67FFh",
+            ));
+        }
+        let module = match read_described(ctx, 0x67FF, 0, "the device type of the module (67FFh)")? {
+            Ok(value) => value,
+            Err(failed) => return Ok(failed),
+        };
+        let Some(module) = u32_of(&Reply::Done(module.clone())) else {
+            return Ok(refused_unexpectedly(
+                &upload_text((0x67FF, 0)),
+                &Reply::Done(module),
+                DEVICE_TYPE,
+                "67FFh does not read as 4 bytes",
+            ));
+        };
+        (module, format!("{request}, then {}", upload_text((0x67FF, 0))))
+    } else {
+        (value, request)
+    };
     let groups: [(u32, &str, &[u16]); 4] = [
         (0x01, "digital inputs", &[0x6000, 0x6020, 0x6100, 0x6120]),
         (0x02, "digital outputs", &[0x6200, 0x6220, 0x6300, 0x6320]),
@@ -432,40 +460,54 @@ fn restore_input(ctx: &mut Ctx<'_, '_>, driver: Driver, original: &Reply) -> Res
 }
 
 /// The TPDO (communication index, COB-ID) whose mapping holds `object` (index << 16 | sub << 8 |
-/// bits) and whose COB-ID is valid on the device.
-fn pdo_with(ctx: &mut Ctx<'_, '_>, direction: PdoDirection, object: u32) -> Result<Option<Mapped>, Stop> {
+/// bits) and whose COB-ID is valid on the device; a failure when the device does not serve a PDO
+/// parameter its EDS describes.
+fn pdo_with(ctx: &mut Ctx<'_, '_>, direction: PdoDirection, object: u32) -> Prepared<Option<Mapped>> {
     for pdo in ctx.model().pdos(direction) {
         let Some(mapping) = pdo.mapping else { continue };
-        let Some(count) = ctx.read(mapping, 0)?.single_byte() else {
+        let model = ctx.model();
+        let readable = |index: u16, sub: u8| model.entry(index, sub).is_some_and(|e| e.readable());
+        if !readable(mapping, 0) || !readable(pdo.comm, 1) {
             continue;
+        }
+        let count = match read_described(ctx, mapping, 0, "the number of mapped objects")? {
+            // A longer expedited answer is cia301.sdo.14's to judge; the count is the first byte.
+            Ok(value) => value.first().copied().unwrap_or(0),
+            Err(failed) => return Ok(Err(failed)),
         };
         let mut entries = Vec::new();
         for sub in 1..=count {
-            if let Some(entry) = u32_of(&ctx.read(mapping, sub)?) {
-                entries.push(entry);
+            if !readable(mapping, sub) {
+                continue;
+            }
+            match read_described(ctx, mapping, sub, "a mapping entry")? {
+                Ok(value) => entries.extend(u32_of(&Reply::Done(value))),
+                Err(failed) => return Ok(Err(failed)),
             }
         }
         let Some(position) = entries.iter().position(|&e| e == object) else {
             continue;
         };
-        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+        let cob_id = match read_described(ctx, pdo.comm, 1, "the PDO's COB-ID")? {
+            Ok(value) => u32_of(&Reply::Done(value)),
+            Err(failed) => return Ok(Err(failed)),
+        };
+        let Some(cob_id) = cob_id.filter(|c| c & 0x8000_0000 == 0) else {
             continue;
         };
-        if cob & 0x8000_0000 != 0 {
-            continue;
-        }
         let offset = entries[..position].iter().map(|e| (e & 0xFF) as usize / 8).sum();
         let length = entries.iter().map(|e| (e & 0xFF) as usize / 8).sum();
-        return Ok(Some(Mapped {
+        return Ok(Ok(Some(Mapped {
             comm: pdo.comm,
             number: pdo.number,
-            cob: (cob & 0x7FF) as u16,
+            cob: (cob_id & 0x7FF) as u16,
+            cob_id,
             offset,
             length,
             entries,
-        }));
+        })));
     }
-    Ok(None)
+    Ok(Ok(None))
 }
 
 /// A PDO that maps the object a test needs.
@@ -473,6 +515,8 @@ struct Mapped {
     comm: u16,
     number: u16,
     cob: u16,
+    /// The whole COB-ID 18xxh:01 as read.
+    cob_id: u32,
     /// Byte offset of the object in the PDO.
     offset: usize,
     /// The PDO's length in bytes.
@@ -480,45 +524,62 @@ struct Mapped {
     entries: Vec<u32>,
 }
 
-trait SingleByte {
-    fn single_byte(&self) -> Option<u8>;
+/// The valid TPDO that maps `object`, made event-driven with the event timer `event_timer`
+/// ([`event_driven`]); not applicable with `none` when no valid TPDO maps it.
+fn event_tpdo(ctx: &mut Ctx<'_, '_>, object: u32, none: &str, event_timer: u16) -> Prepared<Mapped> {
+    let pdo = match pdo_with(ctx, PdoDirection::Transmit, object)? {
+        Ok(Some(pdo)) => pdo,
+        Ok(None) => return Ok(Err(Finding::not_applicable(none))),
+        Err(failed) => return Ok(Err(failed)),
+    };
+    Ok(event_driven(ctx, &pdo, event_timer)?.map(|()| pdo))
 }
 
-impl SingleByte for Reply {
-    fn single_byte(&self) -> Option<u8> {
-        match self {
-            Reply::Done(data) if data.len() == 1 => Some(data[0]),
-            _ => None,
-        }
-    }
-}
-
-/// Makes `pdo` event-driven (FFh) with no inhibit time and no event timer, where those are
-/// writable; the refusal's text otherwise.
-fn event_driven(ctx: &mut Ctx<'_, '_>, pdo: &Mapped, event_timer: u16) -> Result<Option<String>, Stop> {
-    let settings = [
-        (2u8, vec![0xFFu8]),
-        (3, vec![0, 0]),
-        (5, event_timer.to_le_bytes().to_vec()),
+/// Makes `pdo` event-driven (FFh) with no inhibit time and the event timer `event_timer` (0: none),
+/// each where the EDS makes it writable (type FFh, and the event timer when not 0, are needed). CiA
+/// 301 §7.5.2.35 allows the inhibit time to change only while the TPDO is invalid: with a writable
+/// COB-ID the TPDO is disabled, set and enabled again ([`configure_tpdo`]); without one only the
+/// type and the event timer are written and the inhibit time is left as it is. The finding ends the
+/// test (not applicable only for an EDS key or a value the device refuses as unsupported).
+fn event_driven(ctx: &mut Ctx<'_, '_>, pdo: &Mapped, event_timer: u16) -> Prepared<()> {
+    let wanted = [
+        (2u8, vec![0xFFu8], "event-driven transmission (type FFh)", true),
+        (3, vec![0, 0], "an inhibit time of 0", false),
+        (
+            5,
+            event_timer.to_le_bytes().to_vec(),
+            "the event timer (18xxh:05) at this value",
+            event_timer != 0,
+        ),
     ];
-    for (sub, value) in settings {
-        let writable = ctx.model().entry(pdo.comm, sub).is_some_and(|e| e.writable());
-        if !writable {
-            if sub == 2 || (sub == 5 && event_timer != 0) {
-                return Ok(Some(format!("{:04X}h:{sub:02X} is not writable", pdo.comm)));
+    let mut settings = Vec::new();
+    for (sub, value, feature, needed) in wanted {
+        match not_writable(ctx, pdo.comm, sub, Some(&value)) {
+            None => settings.push(Setting::new(sub, value, feature)),
+            Some(why) if needed => {
+                return Ok(Err(Finding::not_applicable(format!("TPDO{}: {why}", pdo.number))));
             }
-            continue;
-        }
-        let reply = ctx.modify(pdo.comm, sub, value.clone())?;
-        if !matches!(reply, Reply::Done(_)) {
-            return Ok(Some(format!(
-                "{} got {}",
-                download_text((pdo.comm, sub), &value),
-                reply.describe()
-            )));
+            Some(_) => {}
         }
     }
-    Ok(None)
+    let model = PdoModel {
+        direction: PdoDirection::Transmit,
+        number: pdo.number,
+        comm: pdo.comm,
+        mapping: None,
+    };
+    if not_writable(ctx, pdo.comm, 1, None).is_none() {
+        return configure_tpdo(ctx, &model, pdo.cob_id, &settings, false);
+    }
+    for setting in settings.iter().filter(|s| s.sub != 3) {
+        let request = download_text((pdo.comm, setting.sub), &setting.value);
+        let reply = ctx.modify(pdo.comm, setting.sub, setting.value.clone())?;
+        let label = format!("TPDO{}", pdo.number);
+        if let Some(finding) = judge_step(&label, ConfigStep::Setting(setting.feature), &request, &reply) {
+            return Ok(Err(finding));
+        }
+    }
+    Ok(Ok(()))
 }
 
 /// Brings the input `zero` names to zero while the device is still pre-operational (so the change
@@ -592,15 +653,10 @@ fn interrupt_test(ctx: &mut Ctx<'_, '_>, masks: [u8; 3], steps: &[Step], what: &
         Ok(driver) => driver,
         Err(finding) => return Ok(finding),
     };
-    let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6000_0108)? else {
-        return Ok(Finding::not_applicable("no valid TPDO maps 6000h:01"));
+    let pdo = match event_tpdo(ctx, 0x6000_0108, NO_DIGITAL_TPDO, 0)? {
+        Ok(pdo) => pdo,
+        Err(finding) => return Ok(finding),
     };
-    if let Some(refused) = event_driven(ctx, &pdo, 0)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot be made event-driven: {refused}",
-            pdo.number
-        )));
-    }
     if ctx.model().entry(0x6002, 1).is_some_and(|e| e.writable()) {
         writes.push((0x6002, 1, 0));
     }
@@ -815,11 +871,15 @@ fn digital_outputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if back != Reply::Done(vec![0x5A]) {
         return Ok(read_back_failure((0x6200, 1), 0x5A, &back));
     }
-    let Some(pdo) = pdo_with(ctx, PdoDirection::Receive, 0x6200_0108)? else {
-        return Ok(Finding::pass(format!(
-            "6200h:01 took 5Ah by SDO{}; no valid RPDO maps 6200h:01, so the RPDO part was not run",
-            params_text(&done)
-        )));
+    let pdo = match pdo_with(ctx, PdoDirection::Receive, 0x6200_0108)? {
+        Ok(Some(pdo)) => pdo,
+        Ok(None) => {
+            return Ok(Finding::pass(format!(
+                "6200h:01 took 5Ah by SDO{}; no valid RPDO maps 6200h:01, so the RPDO part was not run",
+                params_text(&done)
+            )));
+        }
+        Err(failed) => return Ok(failed),
     };
     // The RPDO carries the current value of every other mapped object, so only 6200h:01 changes.
     let mut data = Vec::with_capacity(pdo.length);
@@ -914,15 +974,10 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Ok(driver) => driver,
         Err(finding) => return Ok(finding),
     };
-    let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6401_0110)? else {
-        return Ok(Finding::not_applicable("no valid TPDO maps 6401h:01"));
+    let pdo = match event_tpdo(ctx, 0x6401_0110, NO_ANALOG_TPDO, ANALOG_PERIOD_MS)? {
+        Ok(pdo) => pdo,
+        Err(finding) => return Ok(finding),
     };
-    if let Some(refused) = event_driven(ctx, &pdo, ANALOG_PERIOD_MS)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot send cyclically: {refused}",
-            pdo.number
-        )));
-    }
     if ctx.model().entry(0x6423, 0).is_some_and(|e| e.writable()) {
         ctx.modify(0x6423, 0, vec![1])?;
     }
@@ -1118,15 +1173,10 @@ fn analog_interrupts(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Ok(driver) => driver,
         Err(finding) => return Ok(finding),
     };
-    let Some(pdo) = pdo_with(ctx, PdoDirection::Transmit, 0x6401_0110)? else {
-        return Ok(Finding::not_applicable("no valid TPDO maps 6401h:01"));
+    let pdo = match event_tpdo(ctx, 0x6401_0110, NO_ANALOG_TPDO, 0)? {
+        Ok(pdo) => pdo,
+        Err(finding) => return Ok(finding),
     };
-    if let Some(refused) = event_driven(ctx, &pdo, 0)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot be made event-driven: {refused}",
-            pdo.number
-        )));
-    }
     // The input starts at 0 while the device is pre-operational, so no step starts from a stale value.
     if driver == Driver::Factory {
         ctx.modify(0x2002, 1, vec![0, 0])?;

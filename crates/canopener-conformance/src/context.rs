@@ -88,6 +88,18 @@ pub fn hex(data: &[u8]) -> String {
 
 /// How often a value is written back while the answers break the SDO protocol.
 const WRITE_BACK_TRIES: usize = 3;
+/// Whether writing `value` to `index`:`sub` switches a timed service off: the SYNC period 1006h, the
+/// heartbeat producer time 1017h, the guard time 100Ch or a heartbeat consumer entry 1016h:xx set to
+/// 0 (no monitoring, no production).
+pub fn stops_a_timer(index: u16, sub: u8, value: &[u8]) -> bool {
+    let zero = value.iter().all(|b| *b == 0);
+    match index {
+        0x1006 | 0x1017 | 0x100C => sub == 0 && zero,
+        // A consumer entry is off when its time (bits 15..0) or node-ID (bits 23..16) is 0.
+        0x1016 => sub != 0 && matches!(value, [t0, t1, n, _] if (*t0 == 0 && *t1 == 0) || *n == 0),
+        _ => false,
+    }
+}
 
 /// One value to write back.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -111,6 +123,7 @@ pub struct Ctx<'r, 'l> {
     stimulus: Option<Hook<'r>>,
     broken: Vec<Junk>,
     unanswered: Vec<String>,
+    no_criterion: bool,
 }
 
 /// The settings of a run that does not choose its own.
@@ -143,6 +156,7 @@ impl<'r, 'l> Ctx<'r, 'l> {
             stimulus: None,
             broken: Vec::new(),
             unanswered: Vec::new(),
+            no_criterion: false,
         }
     }
 
@@ -276,8 +290,17 @@ impl<'r, 'l> Ctx<'r, 'l> {
     }
 
     /// Writes back every value [`Ctx::modify`] changed, newest first (so a PDO's mapping is restored
-    /// before its COB-ID enables it again). Returns the entries that could not be written back.
+    /// before its COB-ID enables it again), after first writing back, newest first, every value
+    /// that switches a timed service off ([`stops_a_timer`]): CiA 301's rule for changing a running
+    /// service (switch it off, change it, switch it on last) applied to the write-back, so that no
+    /// service runs with half-restored parameters (a SYNC consumer with a period and no producer
+    /// times out, EMCY 8100h on CANopenNode). Returns the entries that could not be written back.
     pub fn restore(&mut self) -> Result<Vec<String>, Stop> {
+        let (first, rest): (Vec<Restore>, Vec<Restore>) = std::mem::take(&mut self.restores)
+            .into_iter()
+            .partition(|r| stops_a_timer(r.index, r.sub, &r.value));
+        self.restores = rest;
+        self.restores.extend(first);
         let mut left = Vec::new();
         while let Some(restore) = self.restores.pop() {
             let mut reply = self.write(restore.index, restore.sub, restore.value.clone())?;
@@ -423,6 +446,17 @@ impl<'r, 'l> Ctx<'r, 'l> {
         found
     }
 
+    /// Says that a measurement of the test was judged against no criterion: its `pass` is a
+    /// measurement, not a conformance pass, and the summaries count it apart.
+    pub fn judged_without_criterion(&mut self) {
+        self.no_criterion = true;
+    }
+
+    /// Whether [`Ctx::judged_without_criterion`] was called.
+    pub fn without_criterion(&self) -> bool {
+        self.no_criterion
+    }
+
     /// The standard CAN-ID `raw` (callers pass 11-bit values).
     pub fn id(&self, raw: u16) -> CanId {
         CanId::Standard(StandardId::new(raw & 0x7FF).unwrap_or(StandardId::ZERO))
@@ -563,5 +597,25 @@ fn reply_of(result: Result<Vec<u8>, SdoError>) -> Result<Reply, Stop> {
             code: 0,
             reason: error.to_string(),
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_values_that_switch_a_timed_service_off_are_known() {
+        assert!(stops_a_timer(0x1006, 0, &[0; 4]));
+        assert!(!stops_a_timer(0x1006, 0, &10_000u32.to_le_bytes()));
+        assert!(stops_a_timer(0x1017, 0, &[0, 0]));
+        assert!(stops_a_timer(0x100C, 0, &[0, 0]));
+        // 1016h:01: node 6, 0 ms, or node 0: unused; node 6 with 250 ms: monitoring.
+        assert!(stops_a_timer(0x1016, 1, &[0, 0, 6, 0]));
+        assert!(stops_a_timer(0x1016, 1, &[0xFA, 0, 0, 0]));
+        assert!(!stops_a_timer(0x1016, 1, &[0xFA, 0, 6, 0]));
+        // 1005h without bit 30 makes a producer a consumer: not "off" while 1006h runs.
+        assert!(!stops_a_timer(0x1005, 0, &0x80u32.to_le_bytes()));
+        assert!(!stops_a_timer(0x1800, 5, &[0, 0]));
     }
 }

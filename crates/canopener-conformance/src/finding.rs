@@ -89,3 +89,7 @@ pub enum Stop {
 
 /// What a test function returns.
 pub type Outcome = Result<Finding, Stop>;
+
+/// What a step before the measurement returns: what the test goes on with, or the finding that
+/// ends it there (not applicable, a failure, inconclusive).
+pub type Prepared<T> = Result<Result<T, Finding>, Stop>;

@@ -185,6 +185,17 @@ pub struct TestReport {
     pub duration_s: f64,
     /// Every frame sent and received while the test ran, decoded.
     pub telegrams: Vec<Telegram>,
+    /// A `pass` whose measurement no criterion judged ("measured, no criterion"): not a conformance
+    /// pass, counted apart in [`Summary::measured_no_criterion`].
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub no_criterion: bool,
+}
+
+impl TestReport {
+    /// Whether this is a `pass` no criterion judged.
+    pub fn measured_no_criterion(&self) -> bool {
+        self.verdict == Verdict::Pass && self.no_criterion
+    }
 }
 
 /// The device under test.
@@ -233,12 +244,16 @@ pub struct Summary {
     pub inconclusive: usize,
     /// Not applicable.
     pub not_applicable: usize,
+    /// Of the passes, those whose measurement no criterion judged: measured, not conformance
+    /// passes.
+    pub measured_no_criterion: usize,
 }
 
 impl Summary {
     /// The counts of `tests`.
     pub fn of<'a>(tests: impl IntoIterator<Item = &'a TestReport>) -> Summary {
         tests.into_iter().fold(Summary::default(), |mut s, t| {
+            s.measured_no_criterion += usize::from(t.measured_no_criterion());
             match t.verdict {
                 Verdict::Pass => s.pass += 1,
                 Verdict::Fail => s.fail += 1,
@@ -252,6 +267,12 @@ impl Summary {
     /// Whether every applicable test passed (nothing failed, nothing undecided).
     pub fn all_passed(&self) -> bool {
         self.fail == 0 && self.inconclusive == 0
+    }
+
+    /// The passes a criterion or a CiA requirement decided: [`Summary::pass`] without the
+    /// measurements no criterion judged.
+    pub fn conformance_passes(&self) -> usize {
+        self.pass - self.measured_no_criterion
     }
 }
 

@@ -2,6 +2,7 @@
 //! a test can be read with this module and its own file open. Nothing here decides a test's
 //! verdict by itself except the refusal and confirmation checks in [`sdo`].
 
+pub mod emcy;
 pub mod entries;
 pub mod intervals;
 pub mod lss;

@@ -39,6 +39,8 @@ pub const EDS_OBJECTS: &str = "CiA 306 §4.6.3 (object descriptions)";
 pub const EMCY: &str = "CiA 301 §7.2.7 (EMCY)";
 /// CiA 301 §7.5.2: error register 1001h and pre-defined error field 1003h.
 pub const ERROR_OBJECTS: &str = "CiA 301 §7.5.2 (1001h error register, 1003h pre-defined error field)";
+/// CiA 301 §7.5.2.2: the error register 1001h and its generic bit.
+pub const ERROR_REGISTER: &str = "CiA 301 §7.5.2.2 (1001h error register)";
 /// CiA 301 §7.2.5: SYNC.
 pub const SYNC: &str = "CiA 301 §7.2.5 (SYNC)";
 /// CiA 301 §7.5.2: SYNC objects 1005h, 1006h, 1007h, 1019h.

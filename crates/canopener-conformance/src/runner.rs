@@ -129,7 +129,6 @@ pub fn run_stimulated(
         tests: Vec::new(),
         summary: Summary::default(),
     };
-    let mut decoder = Decoder::new();
     // The EDS check alone needs no device: nothing to reset, nobody to ask.
     let prepared = if tests.iter().all(|t| !t.needs_device()) {
         report
@@ -153,10 +152,12 @@ pub fn run_stimulated(
                 finished: report.tests.last(),
             });
             let test_start = recorder.now();
-            let (finding, measurements, left, stopped) =
+            let (finding, measurements, no_criterion, left, stopped) =
                 run_one(&mut recorder, spec, performance, stimulus.as_mut(), test)?;
             report.left_modified.extend(left);
-            let telegrams = telegrams(recorder.since(0), start, &mut decoder);
+            // Each test's log is decoded on its own: what an earlier test left open (a guarding
+            // request nobody answered) must not colour the next one's frames.
+            let telegrams = telegrams(recorder.since(0), start, &mut Decoder::new());
             recorder.clear();
             report.tests.push(TestReport {
                 id: test.id.to_owned(),
@@ -170,6 +171,7 @@ pub fn run_stimulated(
                 measurements,
                 duration_s: recorder.now().saturating_duration_since(test_start).as_secs_f64(),
                 telegrams,
+                no_criterion,
             });
             if stopped {
                 report.interrupted = true;
@@ -254,6 +256,7 @@ fn prepare(
 type OneResult = (
     Finding,
     std::collections::BTreeMap<String, crate::model::Measurement>,
+    bool,
     Vec<String>,
     bool,
 );
@@ -279,11 +282,12 @@ fn run_one(
         Err(Stop::Unsendable(reason)) => (Finding::inconclusive(reason), false),
     };
     let measurements = ctx.take_measurements();
+    let no_criterion = ctx.without_criterion();
     // A test that put no frame on the bus (a precondition from the EDS alone said not_applicable)
     // changed nothing: no cleanup, which would cost each such test the settling time.
     let untouched = ctx.mark() == 0 && !stopped;
     if !test.needs_device() || untouched {
-        return Ok((finding, measurements, Vec::new(), stopped));
+        return Ok((finding, measurements, no_criterion, Vec::new(), stopped));
     }
     let interrupted = stopped && ctx.link_cancelled();
     if let Some(cancel) = spec.cancel.as_ref().filter(|_| interrupted) {
@@ -329,7 +333,7 @@ fn run_one(
             )]
         }
     };
-    Ok((finding, measurements, left, stopped))
+    Ok((finding, measurements, no_criterion, left, stopped))
 }
 
 /// Whatever a test concluded, junk on the device's CAN-IDs keeps it from passing
@@ -363,7 +367,7 @@ fn telegrams(log: &[Logged], start: Instant, decoder: &mut Decoder) -> Vec<Teleg
                         .join(" ")
                 },
                 remote: frame.is_remote(),
-                meaning: decoder.decode(&frame).to_string(),
+                meaning: decoder.decode_at(logged.link_time, &frame).to_string(),
                 at: logged.link_time,
                 frame,
             }

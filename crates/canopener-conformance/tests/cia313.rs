@@ -222,9 +222,14 @@ fn a_criterion_decides_and_is_named_and_without_one_the_time_is_only_measured() 
         unjudged.reason
     );
     assert!(unjudged.measurements["sdo_read_response"].limits.is_none());
+    assert!(
+        unjudged.measured_no_criterion(),
+        "a pass no criterion judged is marked so"
+    );
     // Two 8-byte frames at 1 Mbit/s take about 0.22 ms: 1 ms passes, 0.1 ms fails.
     let loose = judged("[sdo]\nread_max_ms = 1\n");
     assert_eq!(loose.verdict, Verdict::Pass, "{}", loose.reason);
+    assert!(!loose.no_criterion, "a criterion decided this pass");
     assert!(
         loose.reason.contains("sdo.read_max_ms from limits.toml"),
         "{}",
@@ -297,4 +302,52 @@ fn the_performance_suite_stays_within_fifteen_virtual_seconds_at_default_repetit
         "cia313 on a simulated PRL120: {virtual_s:.1} of {:.1} virtual seconds, {samples} samples",
         report.duration_s
     );
+}
+
+#[test]
+fn the_summaries_count_a_measurement_without_criterion_apart_from_the_passes() {
+    let setup = bit_accurate(
+        Performance {
+            repetitions: 5,
+            ..Performance::default()
+        },
+        Duration::from_millis(500),
+    );
+    // perf.1 without a criterion, perf.8 against the documented heartbeat default.
+    let report = support::run_setup(&setup, CIA401, &[], &["cia313.perf.1", "cia313.perf.8"]);
+    assert_eq!(report.summary.pass, 2);
+    assert_eq!(report.summary.measured_no_criterion, 1);
+    assert_eq!(report.summary.conformance_passes(), 1);
+    let human = canopener_conformance::render::human::render(&report);
+    assert!(
+        human.contains("Performance Test (CiA 313) (2): 1 passed, 1 measured, no criterion"),
+        "{human}"
+    );
+    assert!(
+        human.contains("2 tests: 1 passed, 1 measured, no criterion, 0 failed"),
+        "{human}"
+    );
+    assert!(human.contains("not conformance passes"), "{human}");
+    let junit = canopener_conformance::render::junit::render(&report);
+    let doc = roxmltree::Document::parse(&junit).expect("JUnit XML");
+    let suite = doc.root_element();
+    assert_eq!(suite.attribute("skipped"), Some("1"));
+    let skipped: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("skipped"))
+        .filter_map(|n| n.attribute("message"))
+        .collect();
+    assert_eq!(skipped.len(), 1);
+    assert!(
+        skipped[0].starts_with("measured, no criterion: "),
+        "{}",
+        skipped[0]
+    );
+    let property = |name: &str| {
+        doc.descendants()
+            .find(|n| n.has_tag_name("property") && n.attribute("name") == Some(name))
+            .and_then(|n| n.attribute("value"))
+    };
+    assert_eq!(property("passed"), Some("1"));
+    assert_eq!(property("measured_no_criterion"), Some("1"));
 }

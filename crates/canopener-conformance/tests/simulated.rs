@@ -229,6 +229,27 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         // Not a CiA 301 violation (CiA 301 sets no SDO response time): the performance suite
         // catches it against a response-time criterion.
         Fault::SdoSlow => &["cia313.perf.1", "cia313.perf.2"],
+        // Every test that sets a TPDO up fails, none says "not applicable"; the PRL120 describes no
+        // inhibit time and no 1019h, so pdo.12 and pdo.14 are not applicable there for those EDS
+        // keys (`a_pdo_configuration_timeout_or_refusal_fails_and_is_never_not_applicable` runs
+        // them on the demo device).
+        Fault::TpdoConfigSilent | Fault::TpdoConfigRefused => &[
+            "cia301.pdo.3",
+            "cia301.pdo.8",
+            "cia301.pdo.15",
+            "cia301.pdo.6",
+            "cia301.pdo.7",
+            "cia301.pdo.13",
+            "cia301.sync.5",
+            "cia313.perf.3",
+            "cia313.perf.4",
+        ],
+        Fault::MappingNotApplied => &["cia301.pdo.8"],
+        // On STORE_DEVICE, which can produce SYNC.
+        Fault::SyncProducerFast => &["cia301.sync.4"],
+        Fault::TpdoEventTimerFast => &["cia301.pdo.6", "cia313.perf.3"],
+        // The error reset EMCY carries 00h, which the rule allows.
+        Fault::EmcyGenericBitClear => &["cia301.emcy.3"],
     }
 }
 
@@ -264,7 +285,7 @@ fn every_fault_fails_exactly_its_tests() {
     let mut mismatches = Vec::new();
     for fault in Fault::ALL {
         let device = match fault {
-            Fault::StoreIgnored | Fault::SyncCounterMissing => STORE_DEVICE,
+            Fault::StoreIgnored | Fault::SyncCounterMissing | Fault::SyncProducerFast => STORE_DEVICE,
             _ => FAULT_DEVICE,
         };
         let report = if fault == Fault::SdoSlow {
@@ -302,6 +323,196 @@ fn mismatch<'e>(
     let mut failed = device_failures(report);
     failed.sort();
     (failed != expected).then(|| format!("{}: failed {failed:?}, expected {expected:?}", fault.name()))
+}
+
+/// Every test that sets a TPDO up (`procedures::tpdo`), on the bundled CiA 401 demo device where
+/// each of them applies.
+const TPDO_CONFIGURING: &[&str] = &[
+    "cia301.pdo.3",
+    "cia301.pdo.15",
+    "cia301.pdo.6",
+    "cia301.pdo.7",
+    "cia301.pdo.12",
+    "cia301.pdo.13",
+    "cia301.pdo.14",
+    "cia301.sync.5",
+    "cia301.pdo.8",
+    "cia401.io.3",
+    "cia401.io.4",
+    "cia401.io.5",
+    "cia401.io.6",
+    "cia401.io.8",
+    "cia401.io.9",
+    "cia313.perf.3",
+    "cia313.perf.4",
+];
+
+#[test]
+fn a_pdo_configuration_timeout_or_refusal_fails_and_is_never_not_applicable() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("test_data/cia401_full_io.eds");
+    let bytes = canopener_testkit::fixture::read(&path).expect("the demo EDS");
+    let clean = support::run_edited(&bytes, "cia401_full_io.eds", &[], TPDO_CONFIGURING);
+    let passed: Vec<&str> = clean
+        .tests
+        .iter()
+        .filter(|t| t.verdict == Verdict::Pass)
+        .map(|t| t.id.as_str())
+        .collect();
+    assert_eq!(passed, TPDO_CONFIGURING, "the clean demo device passes them all");
+    for fault in [Fault::TpdoConfigSilent, Fault::TpdoConfigRefused] {
+        let report = support::run_edited(&bytes, "cia401_full_io.eds", &[fault], TPDO_CONFIGURING);
+        let mut failed = device_failures(&report);
+        failed.sort();
+        let mut expected: Vec<String> = TPDO_CONFIGURING.iter().map(|s| (*s).to_owned()).collect();
+        expected.sort();
+        assert_eq!(failed, expected, "{}", fault.name());
+        for test in &report.tests {
+            let answer = if fault == Fault::TpdoConfigSilent {
+                "no answer within the SDO timeout"
+            } else {
+                "abort 0800 0000h"
+            };
+            assert!(test.reason.contains(answer), "{}: {}", test.id, test.reason);
+            assert!(
+                test.analysis.contains("Required: CiA 301 §7.5.2.35–38"),
+                "{}",
+                test.analysis
+            );
+        }
+    }
+}
+
+/// The tests that provoke a device error on purpose, and so an EMCY and a 1003h entry
+/// (`docs/conformance.md` names them): too short RPDOs (8210h) and lost heartbeats or guarding
+/// (8130h).
+const PROVOKING: &[&str] = &[
+    "cia301.emcy.3",
+    "cia301.emcy.4",
+    "cia301.emcy.5",
+    "cia301.ec.6",
+    "cia301.ec.7",
+];
+
+/// The EMCYs with an error code (not 0000h, error reset) among `test`'s telegrams.
+fn errors_raised(test: &canopener_conformance::model::TestReport) -> Vec<String> {
+    let emcy = format!("0x{:03X}", 0x80 + u16::from(support::NODE));
+    test.telegrams
+        .iter()
+        .filter(|t| t.id == emcy && !t.data.is_empty() && !t.data.starts_with("00 00"))
+        .map(|t| t.data.clone())
+        .collect()
+}
+
+#[test]
+fn a_clean_run_leaves_no_error_behind_but_in_the_tests_that_provoke_one() {
+    let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("test_data/cia401_full_io.eds");
+    let mut devices: Vec<(String, Vec<u8>)> = CLEAN
+        .iter()
+        .map(|(name, _)| {
+            let bytes =
+                canopener_testkit::fixture::read(canopener_testkit::corpus::eds(name)).expect("corpus file");
+            ((*name).to_owned(), bytes)
+        })
+        .collect();
+    devices.push((
+        "cia401_full_io.eds".to_owned(),
+        canopener_testkit::fixture::read(&demo).expect("the demo EDS"),
+    ));
+    for (name, bytes) in &devices {
+        // Every EMCY with an error code comes from a test that provokes the error on purpose.
+        let report = support::run_edited(bytes, name, &[], &[]);
+        let stray: Vec<String> = report
+            .tests
+            .iter()
+            .filter(|t| !PROVOKING.contains(&t.id.as_str()))
+            .flat_map(|t| {
+                errors_raised(t)
+                    .into_iter()
+                    .map(|e| format!("{}: EMCY {e}", t.id))
+            })
+            .collect();
+        assert!(stray.is_empty(), "{name}: {stray:#?}");
+        // And without those, 1003h holds no error after the whole run.
+        let model = canopener_conformance::device_model::DeviceModel::new(
+            &canopener_eds::load(bytes).eds,
+            support::NODE,
+        );
+        if model.entry(0x1003, 0).is_none() {
+            continue;
+        }
+        let (report, errors) = support::run_then_read(bytes, name, PROVOKING, (0x1003, 0));
+        assert!(report.summary.fail == 0, "{name}: {:?}", report.summary);
+        assert_eq!(errors, Some(vec![0]), "{name}: 1003h:00 after the run");
+    }
+}
+
+#[test]
+fn each_emcy_error_register_is_checked_against_the_generic_bit_and_1001h() {
+    let path = canopener_testkit::corpus::eds(FAULT_DEVICE);
+    let only = ["cia301.emcy.3", "cia301.emcy.4"];
+    let clean = support::run_rewriting(&path, &only, &|f, _| *f);
+    assert!(
+        clean.tests.iter().all(|t| t.verdict == Verdict::Pass),
+        "{:?}",
+        clean.summary
+    );
+    assert!(
+        clean.tests[0].reason.contains("error register 11h"),
+        "{}",
+        clean.tests[0].reason
+    );
+    // A device whose 1001h does not hold what its EMCY said (1001h not updated when the error came,
+    // CCT Emergency 05): the answer to the upload of 1001h reads 00h.
+    let stale = support::run_rewriting(&path, &only, &|frame, sent| {
+        let data = frame.data();
+        if !sent && data.len() == 8 && data[..4] == [0x4F, 0x01, 0x10, 0x00] {
+            let mut bytes = data.to_vec();
+            bytes[4] = 0;
+            return canopener_can::CanFrame::new(frame.id(), &bytes).expect("frame");
+        }
+        *frame
+    });
+    let emcy3 = &stale.tests[0];
+    assert_eq!(emcy3.verdict, Verdict::Fail, "{}", emcy3.reason);
+    assert!(
+        emcy3
+            .reason
+            .contains("after EMCY 8210h with error register 11h, 1001h reads the value 00"),
+        "{}",
+        emcy3.reason
+    );
+    assert!(
+        emcy3.analysis.contains("Required: CiA 301 §7.5.2.2"),
+        "{}",
+        emcy3.analysis
+    );
+    // The error reset's 00h agrees with the rewritten 00h.
+    assert_eq!(stale.tests[1].verdict, Verdict::Pass, "{}", stale.tests[1].reason);
+}
+
+#[test]
+fn unanswered_guarding_requests_do_not_turn_later_heartbeats_into_guarding_responses() {
+    // The demo device has no node guarding: cia301.ec.3's requests go unanswered while heartbeats
+    // run. No frame of that test, nor of the tests after it, is a guarding response.
+    let only = ["cia301.ec.3", "cia301.ec.8", "cia301.ec.1", "cia301.ec.2"];
+    let report = support::run(STORE_DEVICE, &[], &only);
+    assert_eq!(report.tests[0].id, "cia301.ec.1");
+    let requests = report
+        .tests
+        .iter()
+        .flat_map(|t| &t.telegrams)
+        .filter(|t| t.meaning.starts_with("Node guarding request"))
+        .count();
+    assert!(requests >= 3, "ec.3 sends guarding requests");
+    for test in &report.tests {
+        let responses: Vec<&str> = test
+            .telegrams
+            .iter()
+            .filter(|t| t.meaning.contains("guarding response"))
+            .map(|t| t.meaning.as_str())
+            .collect();
+        assert!(responses.is_empty(), "{}: {responses:?}", test.id);
+    }
 }
 
 #[test]

@@ -79,7 +79,7 @@ use crate::od_build::{BuildNote, OdBuildError, build_od};
 use crate::pdo::{Direction, DummyUsage, Mapped, PdoConfigError, PdoEngine, PdoEvent, PdoRef};
 use crate::sdo_server::{self, SdoHooks, SdoServer};
 use crate::store::{MemoryStore, ParameterGroup, ParameterStore, StorageError, StoreEvent, StoreRestore};
-use crate::sync::{EMCY_SYNC_LENGTH, SyncEvent, SyncService};
+use crate::sync::{EMCY_SYNC_LENGTH, EMCY_SYNC_TIMEOUT, SyncEvent, SyncService};
 use crate::time_stamp::{ProduceError, TimeEvent, TimeService};
 
 /// EMCY error code of a heartbeat or life guarding event (CiA 301 emergency error codes:
@@ -213,6 +213,9 @@ pub struct Device {
     overrides: Vec<(ObjectKey, Vec<u8>)>,
     /// Objects the application adds, re-added when the defaults are rebuilt.
     extension: Option<OdExtension>,
+    /// The PDO mappings as at the last reset communication: what `mapping-not-applied` keeps
+    /// transmitting with.
+    applied_mappings: Vec<(ObjectKey, Vec<u8>)>,
     app: Box<dyn Application>,
     /// Sources of the active 8130h EMCY: consumed nodes lost, and 0 for life guarding.
     lost: BTreeSet<u8>,
@@ -295,6 +298,7 @@ impl Device {
             configured,
             pristine: od.clone(),
             od,
+            applied_mappings: Vec::new(),
             eds: None,
             notes: Vec::new(),
             node,
@@ -517,6 +521,13 @@ impl Device {
                     );
                 }
                 SyncEvent::WindowClosed => self.pdo.window_closed(),
+                SyncEvent::Timeout => {
+                    self.emcy
+                        .raise(now, EMCY_SYNC_TIMEOUT, COMMUNICATION_ERROR, [0; 5]);
+                }
+                SyncEvent::Resumed => {
+                    self.emcy.clear(now, EMCY_SYNC_TIMEOUT);
+                }
             }
             self.events.push_back(DeviceEvent::Sync(event));
         }
@@ -591,6 +602,23 @@ impl Device {
             self.faults.outbound(now, source, frame, &mut frames);
         }
         self.transmit.extend(frames);
+    }
+
+    /// The PDOs reloaded from the dictionary, or from the view `mapping-not-applied` and
+    /// `tpdo-event-timer-fast` give them.
+    fn reload_pdos(&mut self, now: Instant) {
+        match crate::faults::pdo_view(self.faults.faults(), &self.od, &self.applied_mappings) {
+            Some(view) => self.pdo.reload(now, &view),
+            None => self.pdo.reload(now, &self.od),
+        }
+    }
+
+    /// The SYNC service reloaded from the dictionary; `sync-producer-fast` halves its period.
+    fn load_sync(&mut self, now: Instant) {
+        self.sync.load_od(now, &self.od);
+        if self.faults.has(Fault::SyncProducerFast) {
+            self.sync.set_period(now, self.sync.period_us() / 2);
+        }
     }
 
     /// `guarding-and-heartbeat`: a node guarding request is answered even while heartbeat runs
@@ -739,8 +767,8 @@ impl Device {
         let u32_value = <[u8; 4]>::try_from(value.as_slice()).map(u32::from_le_bytes).ok();
         let u16_value = <[u8; 2]>::try_from(value.as_slice()).map(u16::from_le_bytes).ok();
         match key.index {
-            0x1400..=0x1BFF => self.pdo.reload(now, &self.od),
-            0x1005..=0x1007 | 0x1019 => self.sync.load_od(now, &self.od),
+            0x1400..=0x1BFF => self.reload_pdos(now),
+            0x1005..=0x1007 | 0x1019 => self.load_sync(now),
             0x1012 => self.time.load_od(&self.od),
             0x1014 => {
                 if let Some(value) = u32_value {
@@ -905,11 +933,12 @@ impl Device {
         }
 
         self.sync = SyncService::new();
-        self.sync.load_od(now, &self.od);
+        self.load_sync(now);
         self.time = TimeService::new();
         self.time.load_od(&self.od);
         self.pdo = PdoEngine::new().with_dummy_usage(self.dummies);
-        self.pdo.reload(now, &self.od);
+        self.applied_mappings = crate::faults::mappings_of(&self.od);
+        self.reload_pdos(now);
         self.load_sdo_servers();
 
         // CiA 302-2 1F80h bit 2 = 0: a self-starting device enters Operational on its own after the
@@ -1142,6 +1171,11 @@ struct Hooks<'a> {
 
 impl SdoHooks for Hooks<'_> {
     fn check_download(&mut self, key: ObjectKey, data: &[u8], od: &DynamicOd) -> Result<(), u32> {
+        if self.faults.contains(Fault::TpdoConfigRefused)
+            && crate::faults::is_tpdo_setting(key.index, key.sub)
+        {
+            return Err(abort::GENERAL_ERROR);
+        }
         match self.pdo.check_write(key, data, od) {
             Err(PdoConfigError::NotMappable { .. }) if self.faults.contains(Fault::UnmappableAccepted) => {}
             Err(PdoConfigError::RestrictedCanId { .. }) if self.faults.contains(Fault::PdoCobIdUnchecked) => {

@@ -27,6 +27,7 @@ use std::str::FromStr;
 use std::time::Duration;
 
 use canopener_can::{CanFrame, Instant, StandardId};
+use canopener_od::{DynamicOd, ObjectKey};
 use canopener_wire::{ERROR_CONTROL_BASE, LSS_MASTER_TO_SLAVE_ID, NMT_ID, NodeId, abort};
 
 /// The SDO response delay of [`Fault::SdoSlow`] unless [`FaultSet::with_sdo_delay`] says
@@ -87,11 +88,23 @@ pub enum Fault {
     NoLss,
     /// The LSS slave never leaves the waiting state.
     LssStateNotChanged,
+    /// SDO downloads to TPDO parameters 18xxh:02–06 are never answered.
+    TpdoConfigSilent,
+    /// SDO downloads to TPDO parameters 18xxh:02–06 are refused with the general error.
+    TpdoConfigRefused,
+    /// A new PDO mapping is stored and confirmed but not applied until reset communication.
+    MappingNotApplied,
+    /// The SYNC producer runs at twice the rate 1006h sets.
+    SyncProducerFast,
+    /// A TPDO event timer elapses after half the time 18xxh:05 sets.
+    TpdoEventTimerFast,
+    /// The error register byte of every EMCY has the generic bit (bit 0) clear.
+    EmcyGenericBitClear,
 }
 
 impl Fault {
     /// Every fault, in catalogue order.
-    pub const ALL: [Fault; 24] = [
+    pub const ALL: [Fault; 30] = [
         Fault::NoBootUp,
         Fault::BootUpWrongId,
         Fault::HeartbeatStateWrong,
@@ -116,6 +129,12 @@ impl Fault {
         Fault::SyncCounterMissing,
         Fault::NoLss,
         Fault::LssStateNotChanged,
+        Fault::TpdoConfigSilent,
+        Fault::TpdoConfigRefused,
+        Fault::MappingNotApplied,
+        Fault::SyncProducerFast,
+        Fault::TpdoEventTimerFast,
+        Fault::EmcyGenericBitClear,
     ];
 
     /// The stable kebab-case name (`canopener sim --fault NAME`).
@@ -145,6 +164,12 @@ impl Fault {
             Fault::SyncCounterMissing => "sync-counter-missing",
             Fault::NoLss => "no-lss",
             Fault::LssStateNotChanged => "lss-state-not-changed",
+            Fault::TpdoConfigSilent => "tpdo-config-silent",
+            Fault::TpdoConfigRefused => "tpdo-config-refused",
+            Fault::MappingNotApplied => "mapping-not-applied",
+            Fault::SyncProducerFast => "sync-producer-fast",
+            Fault::TpdoEventTimerFast => "tpdo-event-timer-fast",
+            Fault::EmcyGenericBitClear => "emcy-generic-bit-clear",
         }
     }
 
@@ -277,6 +302,44 @@ impl Fault {
                  configuration commands are not answered and `lss scan --assign` configures nothing. \
                  A test should switch to configuration (each way) and configure the node-ID. From the \
                  EnergyBus paper (missing state change in the LSS state machine during configuration)."
+            }
+            Fault::TpdoConfigSilent => {
+                "SDO downloads to a TPDO's transmission type, inhibit time, reserved sub-index, event \
+                 timer or SYNC start value (1800h–19FFh sub-index 2–6) get no answer, as from a \
+                 server task that blocks while it rebuilds the PDO. A test must treat the timeout as a \
+                 failure, never as a missing feature. Field experience (issue 22: a timeout became \
+                 'not applicable')."
+            }
+            Fault::TpdoConfigRefused => {
+                "SDO downloads to 1800h–19FFh sub-index 2–6 are aborted with the general error \
+                 0800 0000h, a code that does not say the value is unsupported (0609 0030h would). A \
+                 test must fail it, not call the feature optional. Field experience (issue 22: \
+                 0800 0000h became 'not applicable')."
+            }
+            Fault::MappingNotApplied => {
+                "Writes to a PDO mapping (1600h–17FFh, 1A00h–1BFFh) are stored and confirmed and read \
+                 back, but the PDOs keep the mapping they had at the last reset communication, as \
+                 in a stack that builds its PDOs only at start-up. A test should map something \
+                 different and observe the PDO. Field experience (issue 22: a mapping test that \
+                 rewrote the existing mapping passed such a device)."
+            }
+            Fault::SyncProducerFast => {
+                "The SYNC producer sends at twice the rate 1006h sets (a period read in the wrong \
+                 unit). A test should bound the SYNC rate on both sides. Field experience (issue 22: \
+                 a SYNC producer at twice the rate passed)."
+            }
+            Fault::TpdoEventTimerFast => {
+                "An event-driven TPDO's event timer elapses after half the time 18xxh:05 sets, so the \
+                 TPDO comes at twice the rate with the same data. A test should catch intervals \
+                 shorter than the timer as well as longer ones. Field experience (issue 22: too short \
+                 intervals were taken for application events)."
+            }
+            Fault::EmcyGenericBitClear => {
+                "Every EMCY carries the error register with bit 0 (generic error) clear, although \
+                 1001h has it set: CANopenNode sends EMCY 8210h with 10h. CiA 301 §7.5.2.2 requires \
+                 the generic bit whenever any error bit is set. A test should check each EMCY's \
+                 error register byte against that rule and against 1001h read after it. From \
+                 CANopenNode's demo device (issue 22)."
             }
         }
     }
@@ -493,6 +556,14 @@ impl FaultLayer {
         {
             return None;
         }
+        if sdo_request
+            && self.has(Fault::TpdoConfigSilent)
+            && let [first, lo, hi, sub, ..] = *data
+            && first >> 5 == 1
+            && is_tpdo_setting(u16::from_le_bytes([lo, hi]), sub)
+        {
+            return None;
+        }
         if sdo_request && let Some(&first) = data.first() {
             if first & 0xE3 == 0xA0 {
                 self.block = BlockUpload::Initiated;
@@ -570,6 +641,11 @@ impl FaultLayer {
                 }
                 if self.has(Fault::EmcyNoErrorReset) && bytes.len() >= 2 && bytes[..2] == [0, 0] {
                     return;
+                }
+                if self.has(Fault::EmcyGenericBitClear)
+                    && let Some(register) = bytes.get_mut(2)
+                {
+                    *register &= !0x01;
                 }
             }
             Source::Sync => {
@@ -679,6 +755,59 @@ impl FaultLayer {
     pub(crate) fn poll_timeout(&self) -> Option<Instant> {
         self.delayed.front().map(|(due, _)| *due)
     }
+}
+
+/// A TPDO communication parameter sub-index [`Fault::TpdoConfigSilent`] and
+/// [`Fault::TpdoConfigRefused`] act on: transmission type, inhibit time, reserved, event timer,
+/// SYNC start value (1800h–19FFh sub-index 2–6).
+pub(crate) fn is_tpdo_setting(index: u16, sub: u8) -> bool {
+    (0x1800..=0x19FF).contains(&index) && (2..=6).contains(&sub)
+}
+
+/// The dictionary the PDO engine is to load its PDOs from under [`Fault::MappingNotApplied`] and
+/// [`Fault::TpdoEventTimerFast`]: `od` with the mappings of `applied` (the last reset communication)
+/// and the TPDO event timers halved; `None` when neither fault is set (the PDOs load from `od`).
+pub(crate) fn pdo_view(
+    faults: FaultSet,
+    od: &DynamicOd,
+    applied: &[(ObjectKey, Vec<u8>)],
+) -> Option<DynamicOd> {
+    let mapping = faults.contains(Fault::MappingNotApplied);
+    let timer = faults.contains(Fault::TpdoEventTimerFast);
+    if !mapping && !timer {
+        return None;
+    }
+    let mut view = od.clone();
+    if mapping {
+        for (key, value) in applied {
+            let _ = view.set_value(*key, value);
+        }
+    }
+    if timer {
+        for entry in od.iter() {
+            let key = entry.key();
+            if (0x1800..=0x19FF).contains(&key.index)
+                && key.sub == 5
+                && let &[a, b] = entry.value()
+            {
+                let _ = view.set_value(key, &(u16::from_le_bytes([a, b]) / 2).to_le_bytes());
+            }
+        }
+    }
+    Some(view)
+}
+
+/// A PDO mapping parameter: 1600h–17FFh or 1A00h–1BFFh.
+pub(crate) fn is_mapping(index: u16) -> bool {
+    matches!(index, 0x1600..=0x17FF | 0x1A00..=0x1BFF)
+}
+
+/// The mapping parameters of `od` as they are now (what [`Fault::MappingNotApplied`] keeps applying).
+pub(crate) fn mappings_of(od: &DynamicOd) -> Vec<(ObjectKey, Vec<u8>)> {
+    od.iter()
+        .filter(|e| is_mapping(e.key().index))
+        .map(|e| (e.key(), e.value().to_vec()))
+        .collect()
 }
 
 #[cfg(test)]

@@ -26,6 +26,13 @@
 //!
 //! SYNC runs in Pre-operational and Operational only (CiA 301 table of services per NMT state).
 //!
+//! A consumer with 1006h ≠ 0 monitors the SYNC as CANopenNode does (reference §4.1): once a SYNC
+//! was received or produced, no SYNC within 1.5 × 1006h is reported as [`SyncEvent::Timeout`]
+//! (the `Device` raises EMCY [`EMCY_SYNC_TIMEOUT`], 8100h), and the next SYNC as
+//! [`SyncEvent::Resumed`] (the error clears). So a producer switched back to consumer (1005h bit
+//! 30 cleared) while 1006h still holds a period times out, as CANopenNode does: a tester must set
+//! 1006h to 0 before it clears bit 30.
+//!
 //! Choice where sources disagree or are silent: the counter restarts at 1 whenever production
 //! (re)starts — 1005h bit 30 set, 1006h changed from 0, or the node (re)entering Pre-operational
 //! or Operational — as CANopenNode and lely do (CiA 301's wording on this is unconfirmed). Writing
@@ -50,6 +57,9 @@ pub const SYNC_DONT_CARE: u32 = 0x8000_0000;
 /// The EMCY error code the `Device` raises for [`SyncEvent::WrongLength`]: unexpected SYNC data
 /// length (CiA 301 EMCY error codes).
 pub const EMCY_SYNC_LENGTH: u16 = 0x8240;
+/// The EMCY error code the `Device` raises for [`SyncEvent::Timeout`]: communication, generic (the
+/// code CANopenNode reports its SYNC timeout with).
+pub const EMCY_SYNC_TIMEOUT: u16 = 0x8100;
 
 /// The COB-ID SYNC object.
 pub const COB_ID_SYNC: u16 = 0x1005;
@@ -132,6 +142,11 @@ pub enum SyncEvent {
         /// The data length received.
         received: u8,
     },
+    /// A consumer with 1006h ≠ 0 got no SYNC within 1.5 × 1006h of the last one; the `Device`
+    /// raises EMCY [`EMCY_SYNC_TIMEOUT`].
+    Timeout,
+    /// A SYNC came after a [`SyncEvent::Timeout`]; the `Device` clears the error.
+    Resumed,
 }
 
 /// The SYNC consumer and producer of one node.
@@ -148,6 +163,11 @@ pub struct SyncService {
     next_sync: Option<Instant>,
     /// When the synchronous window after the last SYNC closes.
     window_end: Option<Instant>,
+    /// When the last SYNC was received or produced (the consumer's timeout counts from it); `None`
+    /// before the first, which arms the monitoring.
+    last_sync: Option<Instant>,
+    /// A [`SyncEvent::Timeout`] was reported and no SYNC has come since.
+    timed_out: bool,
     transmit: VecDeque<CanFrame>,
     events: VecDeque<SyncEvent>,
 }
@@ -172,6 +192,8 @@ impl SyncService {
             next_counter: 1,
             next_sync: None,
             window_end: None,
+            last_sync: None,
+            timed_out: false,
             transmit: VecDeque::new(),
             events: VecDeque::new(),
         }
@@ -328,10 +350,33 @@ impl SyncService {
             self.window_end = None;
             self.transmit.clear();
         }
+        // The timeout counts from a state change, as CANopenNode restarts its timer outside
+        // Pre-operational and Operational.
+        if self.last_sync.is_some() {
+            self.last_sync = Some(now);
+        }
         self.reschedule(now, !was);
     }
 
+    /// When a consumer with 1006h ≠ 0 that has seen a SYNC reports [`SyncEvent::Timeout`]: 1.5 ×
+    /// 1006h after the last SYNC.
+    fn timeout_due(&self) -> Option<Instant> {
+        let monitoring = !self.is_producer()
+            && self.period_us != 0
+            && !self.timed_out
+            && self.state.is_active(CommService::Sync);
+        let period = Duration::from_micros(u64::from(self.period_us));
+        self.last_sync
+            .filter(|_| monitoring)
+            .map(|last| last + period + period / 2)
+    }
+
     fn synchronise(&mut self, now: Instant, counter: Option<u8>) {
+        self.last_sync = Some(now);
+        if self.timed_out {
+            self.timed_out = false;
+            self.events.push_back(SyncEvent::Resumed);
+        }
         self.events.push_back(SyncEvent::Sync { counter });
         self.window_end =
             (self.window_us != 0).then(|| now + Duration::from_micros(u64::from(self.window_us)));
@@ -385,6 +430,10 @@ impl Core for SyncService {
             self.window_end = None;
             self.events.push_back(SyncEvent::WindowClosed);
         }
+        if self.timeout_due().is_some_and(|due| due <= now) {
+            self.timed_out = true;
+            self.events.push_back(SyncEvent::Timeout);
+        }
         let Some(due) = self.next_sync else { return };
         if due > now {
             return;
@@ -420,12 +469,13 @@ impl Core for SyncService {
         self.events.pop_front()
     }
 
-    /// When the next SYNC is produced or the synchronous window closes, whichever is first.
+    /// When the next SYNC is produced, the synchronous window closes or the consumer times out,
+    /// whichever is first.
     fn poll_timeout(&self) -> Option<Instant> {
-        match (self.next_sync, self.window_end) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        [self.next_sync, self.window_end, self.timeout_due()]
+            .into_iter()
+            .flatten()
+            .min()
     }
 }
 
@@ -482,6 +532,52 @@ mod tests {
             trace.sent(),
             ["0.250 080#", "0.500 080#", "0.750 080#", "1.000 080#"]
         );
+    }
+
+    #[test]
+    fn a_consumer_with_a_period_times_out_after_one_and_a_half_periods_once_it_saw_a_sync() {
+        let mut trace = booted();
+        trace.core.set_period(Instant::ZERO, 10_000);
+        // Not armed before the first SYNC: no timeout at all.
+        trace.advance(ms(100));
+        assert!(trace.events().is_empty());
+        trace.rx(ms(100), "080#");
+        trace.advance(ms(114));
+        assert_eq!(trace.events(), ["100.000 Sync { counter: None }"]);
+        trace.advance(ms(116));
+        assert_eq!(trace.events(), ["115.000 Timeout"]);
+        // Reported once; the next SYNC clears it.
+        trace.advance(ms(200));
+        assert!(trace.events().is_empty());
+        trace.rx(ms(200), "080#");
+        assert_eq!(
+            trace.events(),
+            ["200.000 Resumed", "200.000 Sync { counter: None }"]
+        );
+        // 1006h = 0: no monitoring.
+        trace.core.set_period(ms(201), 0);
+        trace.advance(ms(400));
+        assert!(trace.events().is_empty());
+    }
+
+    #[test]
+    fn a_producer_switched_to_consumer_with_the_period_set_times_out_but_not_with_the_period_first() {
+        // CANopenNode's behaviour the conformance write-back must respect: bit 30 cleared while
+        // 1006h still runs makes the node a consumer that misses its SYNC.
+        let mut trace = producer(10_000, 0);
+        trace.advance(ms(25));
+        trace.events();
+        trace.core.set_cob_id(ms(25), 0x80).unwrap();
+        trace.advance(ms(40));
+        assert_eq!(trace.events(), ["35.000 Timeout"]);
+        // 1006h to 0 first, then bit 30: nothing.
+        let mut trace = producer(10_000, 0);
+        trace.advance(ms(25));
+        trace.events();
+        trace.core.set_period(ms(25), 0);
+        trace.core.set_cob_id(ms(25), 0x80).unwrap();
+        trace.advance(ms(100));
+        assert!(trace.events().is_empty());
     }
 
     #[test]

@@ -742,3 +742,24 @@ fn a_device_locked_in_operational_refuses_downloads_with_0800_0022h() {
         ]
     );
 }
+
+#[test]
+fn a_sync_consumer_that_misses_its_sync_raises_emcy_8100h_and_clears_it_on_the_next() {
+    // CANopenNode's SYNC timeout: 1.5 × 1006h after the last SYNC, EMCY 8100h with the
+    // communication bit, recorded in 1003h; the next SYNC resets it.
+    let mut bus = booted(ds301_device(10));
+    bus.rx(ms(1), &download(10, 0x1006, 0, &10_000u32.to_le_bytes()));
+    bus.rx(ms(2), "080#");
+    bus.advance(ms(30));
+    bus.rx(ms(30), "080#");
+    let sent = bus.sent();
+    assert!(
+        sent.contains(&"17.000 08A#0081110000000000".to_owned()),
+        "{sent:?}"
+    );
+    assert!(
+        sent.contains(&"30.000 08A#0000000000000000".to_owned()),
+        "{sent:?}"
+    );
+    assert_eq!(bus.value(0x1003, 1)[..2], [0x00, 0x81]);
+}

@@ -633,6 +633,162 @@ fn lss_state_not_changed() {
 }
 
 #[test]
+fn tpdo_config_silent() {
+    let scenario = |bus: &mut Bus| {
+        bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1800, 2, &[0xFE]));
+        bus.rx(ms(3), &download(5, 0x1800, 5, &100u16.to_le_bytes()));
+    };
+    let (ok, bad) = base(Fault::TpdoConfigSilent, scenario);
+    assert_eq!(
+        ok[1..],
+        [
+            "1.000 585#6000180100000000",
+            "2.000 585#6000180200000000",
+            "3.000 585#6000180500000000"
+        ]
+    );
+    // The COB-ID (sub-index 1) is still served; the settings get no answer and stay as they were.
+    assert_eq!(bad[1..], ["1.000 585#6000180100000000"]);
+    let mut faulty = booted(device(BASE, 5, Fault::TpdoConfigSilent.into()));
+    scenario(&mut faulty);
+    assert_eq!(faulty.value(0x1800, 2), [0xFF]);
+}
+
+#[test]
+fn tpdo_config_refused() {
+    let (ok, bad) = base(Fault::TpdoConfigRefused, |bus| {
+        bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1800, 2, &[0xFE]));
+        bus.rx(ms(3), &download(5, 0x1800, 3, &[0, 0]));
+    });
+    assert_eq!(
+        ok[2..],
+        ["2.000 585#6000180200000000", "3.000 585#6000180300000000"]
+    );
+    // The general error, which does not say the value is unsupported.
+    assert_eq!(
+        bad[1..],
+        [
+            "1.000 585#6000180100000000",
+            "2.000 585#8000180200000008",
+            "3.000 585#8000180300000008"
+        ]
+    );
+}
+
+#[test]
+fn mapping_not_applied() {
+    // TPDO1 mapped to 1001h:00 instead of 6000h:01 with the mapping procedure, then an error sets
+    // 1001h to 11h, and a remote frame asks for TPDO1.
+    let scenario = |bus: &mut Bus| {
+        bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1A00, 0, &[0]));
+        bus.rx(ms(3), &download(5, 0x1A00, 1, &0x1001_0008u32.to_le_bytes()));
+        bus.rx(ms(4), &download(5, 0x1A00, 0, &[1]));
+        bus.rx(ms(5), &download(5, 0x1800, 1, &0x0000_0185u32.to_le_bytes()));
+        bus.rx(ms(6), "000#0105");
+        bus.rx(ms(7), "205#");
+        bus.rx(ms(8), "185#R1");
+    };
+    let (ok, bad) = base(Fault::MappingNotApplied, scenario);
+    let tpdos =
+        |trace: &[String]| -> Vec<String> { trace.iter().filter(|s| s.contains(" 185#")).cloned().collect() };
+    assert_eq!(tpdos(&ok), ["6.000 185#00", "8.000 185#11"]);
+    // Every write was confirmed and reads back, yet TPDO1 still carries 6000h:01.
+    assert_eq!(ok[1..6], bad[1..6]);
+    assert_eq!(tpdos(&bad), ["6.000 185#00", "8.000 185#00"]);
+    let mut faulty = booted(device(BASE, 5, Fault::MappingNotApplied.into()));
+    scenario(&mut faulty);
+    assert_eq!(faulty.value(0x1A00, 1), 0x1001_0008u32.to_le_bytes());
+    // A reset communication applies what is stored.
+    faulty.sent();
+    faulty.rx(ms(10), "000#8205");
+    faulty.rx(ms(11), "000#0105");
+    faulty.rx(ms(12), "185#R1");
+    assert!(
+        faulty
+            .sent()
+            .iter()
+            .any(|s| s.starts_with("11.000 185#") || s.starts_with("12.000 185#")),
+        "TPDO1 after the reset"
+    );
+}
+
+#[test]
+fn sync_producer_fast() {
+    let (ok, bad) = both(&DS301, 10, Fault::SyncProducerFast, |bus| {
+        bus.rx(ms(1), &download(10, 0x1019, 0, &[3]));
+        bus.rx(ms(2), &download(10, 0x1006, 0, &10_000u32.to_le_bytes()));
+        bus.rx(ms(3), &download(10, 0x1005, 0, &0x4000_0080u32.to_le_bytes()));
+        bus.advance(ms(45));
+    });
+    let syncs =
+        |trace: &[String]| -> Vec<String> { trace.iter().filter(|s| s.contains(" 080#")).cloned().collect() };
+    assert_eq!(
+        syncs(&ok),
+        ["13.000 080#01", "23.000 080#02", "33.000 080#03", "43.000 080#01"]
+    );
+    // Every 5 ms, the counter still right.
+    assert_eq!(
+        syncs(&bad),
+        [
+            "8.000 080#01",
+            "13.000 080#02",
+            "18.000 080#03",
+            "23.000 080#01",
+            "28.000 080#02",
+            "33.000 080#03",
+            "38.000 080#01",
+            "43.000 080#02"
+        ]
+    );
+}
+
+#[test]
+fn tpdo_event_timer_fast() {
+    let (ok, bad) = base(Fault::TpdoEventTimerFast, |bus| {
+        bus.rx(ms(1), &download(5, 0x1800, 5, &100u16.to_le_bytes()));
+        bus.rx(ms(2), "000#0105");
+        bus.advance(ms(305));
+    });
+    let tpdos =
+        |trace: &[String]| -> Vec<String> { trace.iter().filter(|s| s.contains(" 185#")).cloned().collect() };
+    assert_eq!(
+        tpdos(&ok),
+        [
+            "2.000 185#00",
+            "102.000 185#00",
+            "202.000 185#00",
+            "302.000 185#00"
+        ]
+    );
+    assert_eq!(tpdos(&bad).len(), 7, "{:?}", tpdos(&bad));
+    assert_eq!(tpdos(&bad)[1], "52.000 185#00");
+    let mut faulty = booted(device(BASE, 5, Fault::TpdoEventTimerFast.into()));
+    faulty.rx(ms(1), &download(5, 0x1800, 5, &100u16.to_le_bytes()));
+    assert_eq!(faulty.value(0x1800, 5), 100u16.to_le_bytes());
+}
+
+#[test]
+fn emcy_generic_bit_clear() {
+    let (ok, bad) = base(Fault::EmcyGenericBitClear, rpdo_length_error);
+    assert_eq!(
+        ok[2..],
+        ["2.000 085#1082110100000000", "3.000 085#0000000000000000"]
+    );
+    // 10h as CANopenNode sends it: the communication bit without the generic bit.
+    assert_eq!(
+        bad[2..],
+        ["2.000 085#1082100100000000", "3.000 085#0000000000000000"]
+    );
+    let mut faulty = booted(device(BASE, 5, Fault::EmcyGenericBitClear.into()));
+    faulty.rx(ms(1), "000#0105");
+    faulty.rx(ms(2), "205#");
+    assert_eq!(faulty.value(0x1001, 0), [0x11]);
+}
+
+#[test]
 fn without_faults_nothing_changes() {
     let mut plain = booted(Device::from_eds(&eds(BASE), 5, Box::new(NoApplication)).expect("device"));
     let mut none = booted(device(BASE, 5, FaultSet::none()));

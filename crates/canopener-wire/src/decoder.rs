@@ -11,7 +11,9 @@
 //! far as possible and the broken rule is listed in [`Decoded::anomalies`]. Nothing here panics on any
 //! frame or sequence of frames.
 
-use canopener_can::CanFrame;
+use std::time::Duration;
+
+use canopener_can::{CanFrame, Instant};
 
 use crate::cob::{LSS_MASTER_TO_SLAVE_ID, Service, classify};
 use crate::crc::crc16_ccitt_update;
@@ -35,6 +37,12 @@ const N_NODE_SLOTS: usize = 128;
 
 /// The largest SYNC counter value (CiA 301 object 1019h: 2 to 240).
 const MAX_SYNC_COUNTER: u8 = 240;
+
+/// How long after a node guarding request (an RTR on 700h + node-ID) an error control frame of that
+/// node is taken as its answer, when [`Decoder::decode_at`] knows the time: CiA 301 names no bound;
+/// a master waits about this long (canopener's conformance tests wait 100 ms). A later frame is a
+/// heartbeat, whatever came before.
+pub const GUARD_RESPONSE_WINDOW: Duration = Duration::from_millis(100);
 
 /// Decodes frames one after another, keeping the context that SDO transfers and node guarding need.
 ///
@@ -67,8 +75,21 @@ impl Decoder {
         }
     }
 
-    /// Decodes one frame and updates the context.
+    /// Decodes one frame and updates the context. Without the time a node guarding request stays
+    /// open until an error control frame of its node comes; [`Decoder::decode_at`] closes it after
+    /// [`GUARD_RESPONSE_WINDOW`].
     pub fn decode(&mut self, frame: &CanFrame) -> Decoded {
+        self.decode_inner(None, frame)
+    }
+
+    /// [`Decoder::decode`] of a frame seen at `at` (any clock, as long as it is the same for every
+    /// frame): a guarding response is a reply to a request within [`GUARD_RESPONSE_WINDOW`], so a
+    /// heartbeat after an unanswered request is not taken for its answer.
+    pub fn decode_at(&mut self, at: Instant, frame: &CanFrame) -> Decoded {
+        self.decode_inner(Some(at), frame)
+    }
+
+    fn decode_inner(&mut self, at: Option<Instant>, frame: &CanFrame) -> Decoded {
         let class = classify(frame.id());
         let mut anomalies = Vec::new();
         if class.node == Some(0) {
@@ -108,7 +129,9 @@ impl Decoder {
                 let slot = slot_index(class.node);
                 self.decode_sdo(slot, class.service == Service::SdoRx, frame, &mut anomalies)
             }
-            Service::ErrorControl => self.decode_error_control(slot_index(class.node), frame, &mut anomalies),
+            Service::ErrorControl => {
+                self.decode_error_control(slot_index(class.node), at, frame, &mut anomalies)
+            }
             Service::Lss => decode_lss(frame, &mut anomalies),
         };
         Decoded {
@@ -174,6 +197,7 @@ impl Decoder {
     fn decode_error_control(
         &mut self,
         slot: usize,
+        at: Option<Instant>,
         frame: &CanFrame,
         anomalies: &mut Vec<String>,
     ) -> Payload {
@@ -183,7 +207,14 @@ impl Decoder {
         };
         if frame.is_remote() {
             guarding.request_pending = true;
+            guarding.request_at = at;
             return Payload::ErrorControl(ErrorControlPayload::GuardRequest);
+        }
+        if let (Some(now), Some(asked)) = (at, guarding.request_at)
+            && now.saturating_duration_since(asked) > GUARD_RESPONSE_WINDOW
+        {
+            guarding.request_pending = false;
+            guarding.request_at = None;
         }
         let data = frame.data();
         if data.len() != 1 {
@@ -455,6 +486,8 @@ fn report_reserved(bytes: &[u8; 8], mask: &[u8; 8], anomalies: &mut Vec<String>)
 struct Guarding {
     /// A remote request was seen and not answered yet.
     request_pending: bool,
+    /// When that request was seen, if the decoder was told.
+    request_at: Option<Instant>,
     /// The toggle bit of the last response since guarding (re)started.
     last_toggle: Option<bool>,
 }
@@ -1547,6 +1580,33 @@ mod tests {
                 .is_empty()
         );
         assert!(!decoder.decode(&frame("705#33")).anomalies.is_empty());
+    }
+
+    #[test]
+    fn a_guarding_response_is_a_reply_within_the_window_after_the_request() {
+        let mut decoder = Decoder::new();
+        let at = |ms: u64| Instant::from_millis(ms);
+        let mut decode = |ms: u64, compact: &str| decoder.decode_at(at(ms), &frame(compact)).to_string();
+        // A request nobody answers (heartbeats run), then the next heartbeat 200 ms later.
+        assert_eq!(decode(0, "705#R1"), "Node guarding request node 5");
+        assert_eq!(decode(200, "705#7F"), "Heartbeat node 5: PRE-OPERATIONAL");
+        assert_eq!(decode(400, "705#7F"), "Heartbeat node 5: PRE-OPERATIONAL");
+        // An answer within the window is one.
+        assert_eq!(decode(500, "705#R1"), "Node guarding request node 5");
+        assert_eq!(
+            decode(502, "705#7F"),
+            "Node guarding response node 5: PRE-OPERATIONAL toggle=0"
+        );
+        assert_eq!(GUARD_RESPONSE_WINDOW, Duration::from_millis(100));
+        // Without the time the request stays open (the old reading).
+        let mut untimed = Decoder::new();
+        untimed.decode(&frame("705#R1"));
+        assert!(
+            untimed
+                .decode(&frame("705#7F"))
+                .to_string()
+                .starts_with("Node guarding response")
+        );
     }
 
     #[test]

@@ -55,7 +55,7 @@ pub use decoded::{
     CrcCheck, Decoded, EmcyPayload, ErrorControlPayload, LssPayload, Payload, SdoFrame, SdoPayload,
     TransferKind, TransferProgress,
 };
-pub use decoder::Decoder;
+pub use decoder::{Decoder, GUARD_RESPONSE_WINDOW};
 pub use emcy::{
     EMCY_CODES, ERROR_REGISTER_BITS, ERROR_REGISTER_GENERIC, ERROR_REGISTER_RESERVED, EmcyError, EmcyMessage,
     emcy_code_text, error_register_text,

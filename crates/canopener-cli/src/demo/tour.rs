@@ -149,9 +149,10 @@ impl Run {
         }
         let _ = writeln!(
             out,
-            "   {} tests: {} passed, {} failed, {} inconclusive, {} not applicable ({:.1} s of bus time)",
+            "   {} tests: {} passed, {} measured, no criterion, {} failed, {} inconclusive, {} not applicable ({:.1} s of bus time)",
             self.report.tests.len(),
-            s.pass,
+            s.conformance_passes(),
+            s.measured_no_criterion,
             s.fail,
             s.inconclusive,
             s.not_applicable,

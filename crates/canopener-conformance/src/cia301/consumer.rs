@@ -8,8 +8,9 @@ use canopener_wire::NmtCommand;
 
 use crate::context::{Ctx, Reply, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::emcy::emcy_producer;
 use crate::procedures::nmt::{observed_state, start_heartbeat, state_name};
-use crate::procedures::sdo::{download_text, expect_refusal, u32_of};
+use crate::procedures::sdo::{download_text, expect_refusal, read_described};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -79,14 +80,10 @@ pub fn tests() -> Vec<TestDef> {
 /// finding when it cannot be judged.
 fn error_behaviour(ctx: &mut Ctx<'_, '_>) -> Result<Result<(u8, u8), Finding>, Stop> {
     let behaviour = match ctx.model().entry(0x1029, 1) {
-        Some(_) => match ctx.read(0x1029, 1)? {
-            Reply::Done(d) if d.len() == 1 => d[0],
-            other => {
-                return Ok(Err(Finding::inconclusive(format!(
-                    "1029h:01 could not be read: {}",
-                    other.describe()
-                ))));
-            }
+        Some(_) => match read_described(ctx, 0x1029, 1, "the error behaviour 1029h:01")? {
+            // A longer expedited answer is cia301.sdo.14's to judge; the value is the first byte.
+            Ok(d) => d.first().copied().unwrap_or(0),
+            Err(failed) => return Ok(Err(failed)),
         },
         None => 0,
     };
@@ -98,16 +95,6 @@ fn error_behaviour(ctx: &mut Ctx<'_, '_>) -> Result<Result<(u8, u8), Finding>, S
             "1029h:01 = {other} is manufacturer-specific"
         ))),
     })
-}
-
-/// The EMCY COB-ID, when the EDS has an enabled EMCY producer.
-fn emcy_id(ctx: &mut Ctx<'_, '_>) -> Result<Option<u16>, Stop> {
-    if !ctx.model().has(0x1014) {
-        return Ok(None);
-    }
-    Ok(u32_of(&ctx.read(0x1014, 0)?)
-        .filter(|c| c & 0x8000_0000 == 0)
-        .map(|c| (c & 0x7FF) as u16))
 }
 
 fn writable(ctx: &Ctx<'_, '_>, sub: u8) -> bool {
@@ -169,13 +156,18 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !writable(ctx, 1) {
         return Ok(Finding::not_applicable("no writable 1016h:01"));
     }
-    let Some(emcy) = emcy_id(ctx)? else {
-        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
+    let emcy = match emcy_producer(ctx)? {
+        Ok(cob) => cob,
+        Err(finding) => return Ok(finding),
     };
-    if !start_heartbeat(ctx)? {
-        return Ok(Finding::not_applicable(
-            "no writable 1017h to observe the state by",
-        ));
+    match start_heartbeat(ctx)? {
+        Ok(true) => {}
+        Ok(false) => {
+            return Ok(Finding::not_applicable(
+                "the EDS has no writable 1017h to observe the state by",
+            ));
+        }
+        Err(failed) => return Ok(failed),
     }
     let (behaviour, expected_state) = match error_behaviour(ctx)? {
         Ok(pair) => pair,
@@ -260,10 +252,13 @@ pub const TEST_GUARD_MS: u16 = 50;
 fn life_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let writable_var = |ctx: &Ctx<'_, '_>, index| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
     if !writable_var(ctx, 0x100C) || !writable_var(ctx, 0x100D) {
-        return Ok(Finding::not_applicable("100Ch/100Dh are not both writable"));
+        return Ok(Finding::not_applicable(
+            "the EDS does not make 100Ch and 100Dh both writable (AccessType), or lacks them: life guarding cannot be set up",
+        ));
     }
-    let Some(emcy) = emcy_id(ctx)? else {
-        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
+    let emcy = match emcy_producer(ctx)? {
+        Ok(cob) => cob,
+        Err(finding) => return Ok(finding),
     };
     let (behaviour, expected_state) = match error_behaviour(ctx)? {
         Ok(pair) => pair,
@@ -390,8 +385,9 @@ fn consumer_after_reset(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "no writable 1016h:01 with a DefaultValue",
         ));
     };
-    let Some(emcy) = emcy_id(ctx)? else {
-        return Ok(Finding::not_applicable("no enabled EMCY producer (1014h)"));
+    let emcy = match emcy_producer(ctx)? {
+        Ok(cob) => cob,
+        Err(finding) => return Ok(finding),
     };
     let producer = producer_node(ctx);
     let consumer = entry(producer, RESET_CONSUMER_MS);

@@ -6,10 +6,11 @@ use std::time::Duration;
 use canopener_wire::NmtCommand;
 
 use crate::context::{Ctx, Reply, hex};
-use crate::finding::{Evidence, Finding, Outcome};
+use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::procedures::emcy::emcy_producer;
 use crate::procedures::intervals::{intervals_text, measure_intervals};
 use crate::procedures::nmt::{TEST_HEARTBEAT_MS, start_heartbeat};
-use crate::procedures::sdo::{download_text, refused_unexpectedly, u32_of, upload_text};
+use crate::procedures::sdo::{download_text, read_described, refused_unexpectedly, u32_of, upload_text};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -24,6 +25,9 @@ pub const TIMING_HEARTBEAT_MS: u16 = 100;
 
 /// The heartbeat period while `cia301.ec.3` sends guarding requests, in ms.
 pub const GUARD_CHECK_HEARTBEAT_MS: u16 = 200;
+
+/// Why the heartbeat tests do not apply.
+const NO_WRITABLE_1017: &str = "the EDS has no writable 1017h (producer heartbeat time)";
 
 /// The emergency tests.
 pub fn emcy_tests() -> Vec<TestDef> {
@@ -43,7 +47,7 @@ pub fn emcy_tests() -> Vec<TestDef> {
             suite: "cia301",
             group: "emcy",
             title: "1001h (error register) reads as one byte",
-            references: &[req::ERROR_OBJECTS, "CCT Emergency 02", "CCT Emergency 05"],
+            references: &[req::ERROR_OBJECTS, "CCT Emergency 02"],
             precondition: "always (1001h is mandatory)",
             tags: &["emcy"],
             run: error_register,
@@ -52,8 +56,15 @@ pub fn emcy_tests() -> Vec<TestDef> {
             id: "cia301.emcy.3",
             suite: "cia301",
             group: "emcy",
-            title: "A too short RPDO raises EMCY 8210h",
-            references: &[req::EMCY, req::PDO, "CCT Emergency 04", "CCT Emergency 06"],
+            title: "A too short RPDO raises EMCY 8210h whose error register has the generic bit and equals 1001h read after it",
+            references: &[
+                req::EMCY,
+                req::PDO,
+                req::ERROR_REGISTER,
+                "CCT Emergency 04",
+                "CCT Emergency 05",
+                "CCT Emergency 06",
+            ],
             precondition: "an enabled RPDO with mapped data, and an EMCY producer (1014h)",
             tags: &["emcy", "pdo", "nmt"],
             run: rpdo_length_emcy,
@@ -62,8 +73,8 @@ pub fn emcy_tests() -> Vec<TestDef> {
             id: "cia301.emcy.4",
             suite: "cia301",
             group: "emcy",
-            title: "When the RPDO length error is gone, EMCY 0000h (error reset) follows",
-            references: &[req::EMCY, "CCT Emergency 04"],
+            title: "When the RPDO length error is gone, EMCY 0000h (error reset) follows with the error register 1001h holds",
+            references: &[req::EMCY, req::ERROR_REGISTER, "CCT Emergency 04"],
             precondition: "as cia301.emcy.3, and the device raised 8210h",
             tags: &["emcy", "pdo", "nmt"],
             run: emcy_error_reset,
@@ -229,35 +240,42 @@ enum Look {
 /// Sends a too short RPDO and looks for EMCY 8210h, then at what `look` says.
 fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
     let error_reset = look == Look::ErrorReset;
-    if !ctx.model().has(0x1014) {
-        return Ok(Finding::not_applicable("the EDS has no EMCY producer (1014h)"));
-    }
-    let emcy_cob = match u32_of(&ctx.read(0x1014, 0)?) {
-        Some(cob) if cob & 0x8000_0000 == 0 => (cob & 0x7FF) as u16,
-        _ => {
-            return Ok(Finding::not_applicable(
-                "the EMCY producer is disabled (1014h bit 31) or unreadable",
-            ));
-        }
+    let emcy_cob = match emcy_producer(ctx)? {
+        Ok(cob) => cob,
+        Err(finding) => return Ok(finding),
     };
     // The first enabled RPDO with at least one byte mapped.
     let mut chosen = None;
     for pdo in ctx.model().pdos(crate::device_model::PdoDirection::Receive) {
         let Some(mapping) = pdo.mapping else { continue };
-        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
-            continue;
-        };
-        if cob & 0x8000_0000 != 0 {
+        let model = ctx.model();
+        let readable = |index: u16, sub: u8| model.entry(index, sub).is_some_and(|e| e.readable());
+        if !readable(pdo.comm, 1) || !readable(mapping, 0) {
             continue;
         }
-        let Reply::Done(count) = ctx.read(mapping, 0)? else {
+        let cob = match read_described(ctx, pdo.comm, 1, "the RPDO's COB-ID")? {
+            Ok(value) => u32_of(&Reply::Done(value)),
+            Err(failed) => return Ok(failed),
+        };
+        let Some(cob) = cob.filter(|c| c & 0x8000_0000 == 0) else {
             continue;
+        };
+        let count = match read_described(ctx, mapping, 0, "the number of mapped objects")? {
+            Ok(value) => value.first().copied().unwrap_or(0),
+            Err(failed) => return Ok(failed),
         };
         // Every entry must read: a length summed over part of the mapping would make the "correct"
         // RPDO that clears the error too short as well, and leave the error to the next tests.
         let mut bits = Some(0u32);
-        for sub in 1..=count.first().copied().unwrap_or(0) {
-            let entry = u32_of(&ctx.read(mapping, sub)?);
+        for sub in 1..=count {
+            let entry = if readable(mapping, sub) {
+                match read_described(ctx, mapping, sub, "a mapping entry")? {
+                    Ok(d) => u32_of(&Reply::Done(d)),
+                    Err(failed) => return Ok(failed),
+                }
+            } else {
+                None
+            };
             bits = bits.zip(entry).map(|(sum, entry)| sum + (entry & 0xFF));
         }
         let Some(bits) = bits else { continue };
@@ -267,7 +285,9 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
         }
     }
     let Some((number, cob, bytes)) = chosen else {
-        return Ok(Finding::not_applicable("no enabled RPDO with mapped data"));
+        return Ok(Finding::not_applicable(
+            "no RPDO is valid (14xxh:01 bit 31 clear) with at least 8 bits mapped (16xxh as read): no RPDO to send too short",
+        ));
     };
     if bytes > 8 {
         // A PDO carries at most 64 bits (CiA 301 §7.5.2.36): no shorter PDO can be sent.
@@ -293,8 +313,8 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
     );
     if error_reset {
         if !seen.iter().any(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
-            return Ok(Finding::not_applicable(
-                "the device raised no EMCY 8210h (cia301.emcy.3 judges that)",
+            return Ok(Finding::inconclusive(
+                "the device raised no EMCY 8210h, so there is no error to look at (cia301.emcy.3 judges that)",
             ));
         }
         ctx.send(cob, &vec![0u8; bytes])?;
@@ -304,9 +324,16 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
             })?
             .into_iter()
             .collect();
+        let reset = format!("{request}, then RPDO{number} with {bytes} bytes");
         return Ok(
             match after.iter().find(|l| l.frame.data().starts_with(&[0x00, 0x00])) {
-                Some(_) => Finding::pass("EMCY 0000h after a correct RPDO"),
+                Some(emcy) => match register_agrees(ctx, emcy.frame.data(), false, &reset)? {
+                    Some(failed) => failed,
+                    None => Finding::pass(format!(
+                        "EMCY 0000h after a correct RPDO, error register {:02X}h as 1001h reads",
+                        emcy.frame.data().get(2).copied().unwrap_or(0)
+                    )),
+                },
                 None => Finding::fail(
                     "no EMCY 0000h (error reset) after the RPDO length error was gone",
                     Evidence {
@@ -328,8 +355,8 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
     }
     if look == Look::History {
         if !seen.iter().any(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
-            return Ok(Finding::not_applicable(
-                "the device raised no EMCY 8210h (cia301.emcy.3 judges that)",
+            return Ok(Finding::inconclusive(
+                "the device raised no EMCY 8210h, so there is no error to look at (cia301.emcy.3 judges that)",
             ));
         }
         let finding = error_history(ctx, &request)?;
@@ -337,12 +364,24 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
         ctx.listen(Duration::from_millis(50), |_| false)?;
         return Ok(finding);
     }
+    // The error register byte of the EMCY, and 1001h read while the error is still there (CCT
+    // Emergency 05).
+    let register = match seen.iter().find(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
+        Some(emcy) => register_agrees(ctx, emcy.frame.data(), true, &request)?,
+        None => None,
+    };
     // Leave no error behind for the next test: a PDO of the right length clears the condition.
     ctx.send(cob, &vec![0u8; bytes])?;
     ctx.listen(Duration::from_millis(50), |_| false)?;
+    if let Some(failed) = register {
+        return Ok(failed);
+    }
     Ok(
         match seen.iter().find(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
-            Some(_) => Finding::pass("EMCY 8210h"),
+            Some(emcy) => Finding::pass(format!(
+                "EMCY 8210h, error register {:02X}h (generic bit set) as 1001h reads after it",
+                emcy.frame.data().get(2).copied().unwrap_or(0)
+            )),
             None => Finding::fail(
                 "no EMCY 8210h after a too short RPDO",
                 Evidence {
@@ -363,9 +402,77 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
     )
 }
 
+/// The error register byte (D2) of the EMCY `emcy` against CiA 301 §7.5.2.2 and 1001h: its bit 0
+/// (generic error) is set whenever any bit is, and, for an error (`error`: not an error reset), at
+/// least bit 0 is set; 1001h, read right after the EMCY, holds the same byte. The failure, if any.
+fn register_agrees(
+    ctx: &mut Ctx<'_, '_>,
+    emcy: &[u8],
+    error: bool,
+    request: &str,
+) -> Result<Option<Finding>, Stop> {
+    let code = emcy.get(..2).map_or(0, |c| u16::from_le_bytes([c[0], c[1]]));
+    let Some(&register) = emcy.get(2) else {
+        return Ok(Some(Finding::fail(
+            format!("EMCY {} carries no error register byte", hex(emcy)),
+            Evidence {
+                request: request.to_owned(),
+                requirement: format!(
+                    "{}: an EMCY carries the error register 1001h in byte 2",
+                    req::EMCY
+                ),
+                answer: format!("EMCY {}", hex(emcy)),
+                cause: "the EMCY frame is too short".to_owned(),
+            },
+        )));
+    };
+    let rule = format!(
+        "{}: bit 0 (generic error) is set whenever any error is present, so whenever any other bit is; an EMCY carries 1001h as it is then",
+        req::ERROR_REGISTER
+    );
+    if (register != 0 || error) && register & 0x01 == 0 {
+        return Ok(Some(Finding::fail(
+            format!(
+                "EMCY {code:04X}h carries the error register {register:02X}h: the generic bit (bit 0) is clear"
+            ),
+            Evidence {
+                request: request.to_owned(),
+                requirement: rule,
+                answer: format!("EMCY {}", hex(emcy)),
+                cause: "the error register sets a class bit (or reports an error) without the generic bit"
+                    .to_owned(),
+            },
+        )));
+    }
+    let read = ctx.read(0x1001, 0)?;
+    match read {
+        // A longer expedited answer is cia301.sdo.14's (and emcy.2's) to judge: the value is the
+        // first byte.
+        Reply::Done(ref d)
+            if d.split_first()
+                .is_some_and(|(first, rest)| *first == register && rest.iter().all(|b| *b == 0)) =>
+        {
+            Ok(None)
+        }
+        other => Ok(Some(Finding::fail(
+            format!(
+                "after EMCY {code:04X}h with error register {register:02X}h, 1001h reads {}",
+                other.describe()
+            ),
+            Evidence {
+                request: format!("{request}; after the EMCY, {}", upload_text((0x1001, 0))),
+                requirement: rule,
+                answer: format!("EMCY {}; 1001h: {}", hex(emcy), other.describe()),
+                cause: "1001h and the EMCY's error register byte disagree (one of them is not updated)"
+                    .to_owned(),
+            },
+        ))),
+    }
+}
+
 /// After EMCY 8210h: 1003h:01 holds 8210h in its low 16 bits (the newest error first), and the
 /// sub-index after the number of errors has no data (CiA 301 §7.5.2.4).
-fn error_history(ctx: &mut Ctx<'_, '_>, request: &str) -> Result<Finding, crate::finding::Stop> {
+fn error_history(ctx: &mut Ctx<'_, '_>, request: &str) -> Result<Finding, Stop> {
     let Some(highest) = ctx.model().objects.get(&0x1003).map(|o| o.highest_sub()) else {
         return Ok(Finding::not_applicable("the EDS has no 1003h"));
     };
@@ -427,7 +534,7 @@ fn error_history(ctx: &mut Ctx<'_, '_>, request: &str) -> Result<Finding, crate:
 
 fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
-        return Ok(Finding::not_applicable("no writable 1017h"));
+        return Ok(Finding::not_applicable(NO_WRITABLE_1017));
     }
     let reply = ctx.modify(0x1017, 0, TIMING_HEARTBEAT_MS.to_le_bytes().to_vec())?;
     if !matches!(reply, Reply::Done(_)) {
@@ -503,8 +610,10 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn heartbeat_off(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    if !start_heartbeat(ctx)? {
-        return Ok(Finding::not_applicable("no writable 1017h"));
+    match start_heartbeat(ctx)? {
+        Ok(true) => {}
+        Ok(false) => return Ok(Finding::not_applicable(NO_WRITABLE_1017)),
+        Err(failed) => return Ok(failed),
     }
     let reply = ctx.write(0x1017, 0, vec![0, 0])?;
     if !matches!(reply, Reply::Done(_)) {
@@ -538,15 +647,17 @@ fn heartbeat_off(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
-        return Ok(Finding::not_applicable("no writable 1017h"));
+        return Ok(Finding::not_applicable(NO_WRITABLE_1017));
     }
     // A long period: a heartbeat would have to come 90 % early to fall into the answer window.
     let reply = ctx.modify(0x1017, 0, GUARD_CHECK_HEARTBEAT_MS.to_le_bytes().to_vec())?;
     if !matches!(reply, Reply::Done(_)) {
-        return Ok(Finding::inconclusive(format!(
-            "1017h = {GUARD_CHECK_HEARTBEAT_MS} ms got {}",
-            reply.describe()
-        )));
+        return Ok(refused_unexpectedly(
+            &download_text((0x1017, 0), &GUARD_CHECK_HEARTBEAT_MS.to_le_bytes()),
+            &reply,
+            req::HEARTBEAT,
+            "1017h is writable in the EDS",
+        ));
     }
     let node = u16::from(ctx.node());
     let id = ctx.id(0x700 + node);
@@ -595,7 +706,9 @@ fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn guarding_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !ctx.model().has_guarding() {
-        return Ok(Finding::not_applicable("the EDS has no 100Ch/100Dh"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no 100Ch and 100Dh (node guarding)",
+        ));
     }
     if ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {
         ctx.modify(0x1017, 0, vec![0, 0])?;
@@ -677,7 +790,7 @@ fn heartbeat_over_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     let writable = |ctx: &Ctx<'_, '_>, index: u16| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
     if !writable(ctx, 0x1017) {
-        return Ok(Finding::not_applicable("1017h is not writable"));
+        return Ok(Finding::not_applicable(NO_WRITABLE_1017));
     }
     let mut phases: Vec<(&str, Writes)> = Vec::new();
     if writable(ctx, 0x100C) {
@@ -748,7 +861,9 @@ fn heartbeat_over_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn guarding_id_range(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !ctx.model().has_guarding() {
-        return Ok(Finding::not_applicable("the EDS has no 100Ch/100Dh"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no 100Ch and 100Dh (node guarding)",
+        ));
     }
     // Guarding is served while the heartbeat producer is off (CiA 301 §7.2.8.3.2).
     if ctx.model().entry(0x1017, 0).is_some_and(|e| e.writable()) {

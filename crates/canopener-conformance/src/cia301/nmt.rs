@@ -132,10 +132,13 @@ fn boot_up(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 /// Observes the state after each command of `steps`; the first wrong one fails.
 fn walk(ctx: &mut Ctx<'_, '_>, broadcast: bool) -> Outcome {
-    let heartbeat = start_heartbeat(ctx)?;
+    let heartbeat = match start_heartbeat(ctx)? {
+        Ok(started) => started,
+        Err(failed) => return Ok(failed),
+    };
     if !heartbeat && !ctx.model().has_guarding() {
         return Ok(Finding::not_applicable(
-            "neither a writable 1017h nor node guarding to observe the state",
+            "the EDS has neither a writable 1017h nor 100Ch and 100Dh: no way to observe the state",
         ));
     }
     let steps = [
@@ -234,10 +237,13 @@ fn broadcast_transitions(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn stopped_services(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let heartbeat = start_heartbeat(ctx)?;
+    let heartbeat = match start_heartbeat(ctx)? {
+        Ok(started) => started,
+        Err(failed) => return Ok(failed),
+    };
     if !heartbeat && !ctx.model().has_guarding() {
         return Ok(Finding::not_applicable(
-            "neither a writable 1017h nor node guarding",
+            "the EDS has neither a writable 1017h nor 100Ch and 100Dh: no way to observe the state",
         ));
     }
     ctx.nmt(NmtCommand::StopRemoteNode, false)?;

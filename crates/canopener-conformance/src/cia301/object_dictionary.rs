@@ -323,7 +323,7 @@ fn read_write_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ),
         );
     }
-    Ok(walk.finding("wo entries"))
+    Ok(walk.finding("entries with AccessType=wo"))
 }
 
 fn limits(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -414,7 +414,7 @@ fn limits(ctx: &mut Ctx<'_, '_>) -> Outcome {
             );
         }
     }
-    Ok(walk.finding("limits"))
+    Ok(walk.finding("entries with LowLimit or HighLimit"))
 }
 
 fn highest_sub(ctx: &mut Ctx<'_, '_>) -> Outcome {

@@ -7,10 +7,10 @@ use canopener_wire::NmtCommand;
 
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{PdoDirection, PdoModel};
-use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::nmt::back_to_pre_operational;
-use crate::procedures::sdo::{download_text, expect_refusal, u32_of, upload_text};
-use crate::procedures::tpdo::{configurable_tpdo, configure_tpdo};
+use crate::procedures::sdo::{download_text, expect_refusal, read_described, u32_of, upload_text};
+use crate::procedures::tpdo::{Setting, Step, judge_step, open_mapping, set_up_tpdo};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -43,7 +43,7 @@ pub fn tests() -> Vec<TestDef> {
             group: "pdo",
             title: "Operational: a TPDO that allows RTR answers a remote frame",
             references: &[req::PDO, "CCT PDO 03", "CCT PDO 15"],
-            precondition: "a TPDO set up for RTR (type FCh/FDh, bit 30 = 0) or whose COB-ID and type are writable; a refusal to set one up is not_applicable (RTR is optional)",
+            precondition: "a TPDO set up for RTR (type FCh/FDh, bit 30 = 0) or whose COB-ID and type the EDS makes writable; not_applicable only when the device refuses bit 30 = 0 or type FDh with 0609 0030h/0031h/0032h (RTR is optional); any other refusal or a timeout fails",
             tags: &["pdo", "nmt"],
             run: tpdo_rtr,
         },
@@ -203,33 +203,35 @@ fn default_mappings(ctx: &mut Ctx<'_, '_>) -> Outcome {
 type RtrTpdo = (u16, u16, u8);
 
 /// A TPDO already set up for RTR-only transmission (FCh/FDh) with RTR allowed, else the first TPDO
-/// whose parameters the EDS makes writable, configured so; `Err` is the not_applicable finding.
-fn rtr_tpdo(ctx: &mut Ctx<'_, '_>) -> Result<Result<RtrTpdo, Finding>, Stop> {
+/// whose parameters the EDS makes writable and that takes RTR-only transmission, configured so.
+fn rtr_tpdo(ctx: &mut Ctx<'_, '_>) -> Prepared<RtrTpdo> {
     for pdo in ctx.model().pdos(PdoDirection::Transmit) {
-        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+        let readable = |sub: u8| ctx.model().entry(pdo.comm, sub).is_some_and(|e| e.readable());
+        if !readable(1) || !readable(2) {
             continue;
+        }
+        let cob = match read_described(ctx, pdo.comm, 1, "the TPDO's COB-ID")? {
+            Ok(value) => u32_of(&Reply::Done(value)),
+            Err(failed) => return Ok(Err(failed)),
         };
-        let kind = match ctx.read(pdo.comm, 2)? {
-            Reply::Done(d) if d.len() == 1 => d[0],
-            _ => continue,
+        let kind = match read_described(ctx, pdo.comm, 2, "the TPDO's transmission type")? {
+            Ok(value) => value.first().copied().filter(|_| value.len() == 1),
+            Err(failed) => return Ok(Err(failed)),
         };
-        if cob & 0xC000_0000 == 0 && (kind == 0xFC || kind == 0xFD) {
+        if let (Some(cob), Some(kind)) = (cob, kind)
+            && cob & 0xC000_0000 == 0
+            && (kind == 0xFC || kind == 0xFD)
+        {
             return Ok(Ok((pdo.number, (cob & 0x7FF) as u16, kind)));
         }
     }
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
-        return Ok(Err(Finding::not_applicable(
-            "no TPDO set up for RTR, and none whose COB-ID and transmission type are writable",
-        )));
-    };
     // RTR-only transmission and RTR on PDOs are optional (CiA 301 §7.2.2.2.1).
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![0xFD])], true)? {
-        return Ok(Err(Finding::not_applicable(format!(
-            "TPDO{} cannot be set up for RTR: {refused}",
-            pdo.number
-        ))));
-    }
-    Ok(Ok((pdo.number, (cob & 0x7FF) as u16, 0xFD)))
+    let settings = [Setting::new(
+        2,
+        vec![0xFD],
+        "RTR-only transmission (type FDh), which CiA 301 leaves optional",
+    )];
+    Ok(set_up_tpdo(ctx, &settings, true)?.map(|(pdo, cob)| (pdo.number, (cob & 0x7FF) as u16, 0xFD)))
 }
 
 /// Sends a remote frame on `cob` and returns the TPDO that answers within 100 ms.
@@ -268,43 +270,50 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
     })
 }
 
-/// The first TPDO whose COB-ID the EDS makes writable, with its current COB-ID.
-fn writable_tpdo(ctx: &mut Ctx<'_, '_>) -> Result<Option<(PdoModel, u32)>, Stop> {
+/// The first TPDO whose COB-ID the EDS makes writable, with its current COB-ID; `Ok(Err(None))`
+/// when the EDS has none, a failure when the device does not serve a COB-ID its EDS describes.
+fn writable_tpdo(ctx: &mut Ctx<'_, '_>) -> Prepared<Option<(PdoModel, u32)>> {
     for pdo in ctx.model().pdos(PdoDirection::Transmit) {
-        if !ctx.model().entry(pdo.comm, 1).is_some_and(|e| e.writable()) {
+        if !ctx
+            .model()
+            .entry(pdo.comm, 1)
+            .is_some_and(|e| e.writable() && e.readable())
+        {
             continue;
         }
-        if let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) {
-            return Ok(Some((pdo, cob)));
+        match read_described(ctx, pdo.comm, 1, "the TPDO's COB-ID")? {
+            Ok(value) => {
+                if let Some(cob) = u32_of(&Reply::Done(value)) {
+                    return Ok(Ok(Some((pdo, cob))));
+                }
+            }
+            Err(failed) => return Ok(Err(failed)),
         }
     }
-    Ok(None)
+    Ok(Ok(None))
 }
 
+const NO_WRITABLE_COB_ID: &str = "the EDS makes no TPDO COB-ID (18xxh:01) readable and writable (AccessType)";
+
 fn restricted_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = writable_tpdo(ctx)? else {
-        return Ok(Finding::not_applicable("no TPDO with a writable COB-ID"));
+    let (pdo, cob) = match writable_tpdo(ctx)? {
+        Ok(Some(found)) => found,
+        Ok(None) => return Ok(Finding::not_applicable(NO_WRITABLE_COB_ID)),
+        Err(failed) => return Ok(failed),
     };
     // Disable first: CiA 301 §7.5.2.37 forbids changing the CAN-ID of a valid PDO.
     let disabled = cob | 0x8000_0000;
+    let disable = download_text((pdo.comm, 1), &disabled.to_le_bytes());
     let reply = ctx.modify(pdo.comm, 1, disabled.to_le_bytes().to_vec())?;
-    if !matches!(reply, Reply::Done(_)) {
-        return Ok(Finding::inconclusive(format!(
-            "disabling TPDO{} got {}",
-            pdo.number,
-            reply.describe()
-        )));
+    if let Some(failed) = judge_step(&format!("TPDO{}", pdo.number), Step::Disable, &disable, &reply) {
+        return Ok(failed);
     }
     // Keep bit 30 as it was: only the CAN-ID is under test.
     let value = (cob & 0x4000_0000) | 0x701;
     let data = value.to_le_bytes().to_vec();
     let reply = ctx.modify(pdo.comm, 1, data.clone())?;
     Ok(expect_refusal(
-        &format!(
-            "{}, then {}",
-            download_text((pdo.comm, 1), &disabled.to_le_bytes()),
-            download_text((pdo.comm, 1), &data)
-        ),
+        &format!("{disable}, then {}", download_text((pdo.comm, 1), &data)),
         &reply,
         req::INVALID_VALUE,
         req::RESTRICTED_IDS,
@@ -314,29 +323,26 @@ fn restricted_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn unmappable(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if ctx.model().entry(0x1000, 0).is_none_or(|e| e.pdo_mapping) {
-        return Ok(Finding::not_applicable("1000h is mappable in this EDS"));
+        return Ok(Finding::not_applicable(
+            "the EDS gives 1000h PDOMapping=1 (or has no 1000h): no object with PDOMapping=0 to try",
+        ));
     }
-    let Some((pdo, cob)) = writable_tpdo(ctx)? else {
-        return Ok(Finding::not_applicable("no TPDO with a writable COB-ID"));
+    let (pdo, cob) = match writable_tpdo(ctx)? {
+        Ok(Some(found)) => found,
+        Ok(None) => return Ok(Finding::not_applicable(NO_WRITABLE_COB_ID)),
+        Err(failed) => return Ok(failed),
     };
     let writable = |m: u16, sub: u8| ctx.model().entry(m, sub).is_some_and(|e| e.writable());
     let Some(mapping) = pdo.mapping.filter(|m| writable(*m, 0) && writable(*m, 1)) else {
-        return Ok(Finding::not_applicable("no TPDO with a writable mapping"));
+        return Ok(Finding::not_applicable(format!(
+            "the EDS has no writable {:04X}h:00 and :01 (AccessType) for TPDO{}",
+            pdo.comm + 0x200,
+            pdo.number
+        )));
     };
     // The mapping procedure (CiA 301 §7.5.2.38): disable the PDO, set 0 entries, write the entry.
-    let disabled = cob | 0x8000_0000;
-    for (index, sub, data) in [
-        (pdo.comm, 1u8, disabled.to_le_bytes().to_vec()),
-        (mapping, 0, vec![0]),
-    ] {
-        let reply = ctx.modify(index, sub, data.clone())?;
-        if !matches!(reply, Reply::Done(_)) {
-            return Ok(Finding::inconclusive(format!(
-                "{} got {}",
-                download_text((index, sub), &data),
-                reply.describe()
-            )));
-        }
+    if let Err(failed) = open_mapping(ctx, &pdo, cob, mapping)? {
+        return Ok(failed);
     }
     let entry = 0x1000_0020u32.to_le_bytes().to_vec();
     let reply = ctx.modify(mapping, 1, entry.clone())?;

@@ -2,10 +2,16 @@
 //! CiA 301 §7.5.2.38 describes, and the refusals of a mapping written without it, too long, or in
 //! the wrong direction, with the abort codes the CCT accepts (reference §3.4).
 
-use crate::context::{Ctx, Reply};
+use std::time::Duration;
+
+use canopener_wire::NmtCommand;
+
+use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{EntryModel, PdoDirection, PdoModel};
-use crate::finding::{Evidence, Finding, Outcome, Stop};
-use crate::procedures::sdo::{download_text, expect_refusal, refused_unexpectedly, u32_of};
+use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
+use crate::model::Verdict;
+use crate::procedures::sdo::{download_text, expect_refusal, read_described, refused_unexpectedly, u32_of};
+use crate::procedures::tpdo::{Setting, configure_tpdo, open_mapping};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -16,9 +22,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.8",
             suite: "cia301",
             group: "pdo",
-            title: "A correct mapping written with the mapping procedure is accepted and reads back",
+            title: "A different mapping written with the mapping procedure is accepted, reads back and is what the TPDO carries",
             references: &[req::PDO_PARAMETERS, "CCT PDO 22"],
-            precondition: "a TPDO with writable COB-ID and mapping and at least one mapped object",
+            precondition: "a TPDO with writable COB-ID, transmission type and mapping, a CAN-ID, and a readable mappable object of another length than the TPDO has; a transmission type the tester can trigger (type 1, else FFh with an event timer, else FDh)",
             tags: &["pdo", "writes"],
             run: correct_mapping,
         },
@@ -94,74 +100,195 @@ struct Mappable {
     entries: Vec<u32>,
 }
 
-fn mappable(ctx: &mut Ctx<'_, '_>, direction: PdoDirection) -> Result<Option<Mappable>, Stop> {
+/// The first PDO of `direction` whose COB-ID and mapping (sub-indices 0 and 1) the EDS makes
+/// writable (`also` more sub-indices of its communication parameter), read from the device; a
+/// failure when the device does not serve what its EDS describes.
+fn mappable_with(ctx: &mut Ctx<'_, '_>, direction: PdoDirection, also: &[u8]) -> Prepared<Option<Mappable>> {
     for pdo in ctx.model().pdos(direction) {
         let Some(mapping) = pdo.mapping else { continue };
-        let writable = |index: u16, sub: u8| ctx.model().entry(index, sub).is_some_and(EntryModel::writable);
-        if !(writable(pdo.comm, 1) && writable(mapping, 0) && writable(mapping, 1)) {
+        let model = ctx.model();
+        let writable = |index: u16, sub: u8| model.entry(index, sub).is_some_and(EntryModel::writable);
+        let readable = |index: u16, sub: u8| model.entry(index, sub).is_some_and(EntryModel::readable);
+        let described = writable(pdo.comm, 1)
+            && writable(mapping, 0)
+            && writable(mapping, 1)
+            && also.iter().all(|sub| writable(pdo.comm, *sub))
+            && readable(pdo.comm, 1)
+            && readable(mapping, 0);
+        if !described {
             continue;
         }
-        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
-            continue;
+        let cob = match read_described(ctx, pdo.comm, 1, "the PDO's COB-ID")? {
+            Ok(value) => u32_of(&Reply::Done(value)),
+            Err(failed) => return Ok(Err(failed)),
         };
-        let Reply::Done(count) = ctx.read(mapping, 0)? else {
-            continue;
+        let Some(cob) = cob else { continue };
+        // A longer expedited answer is cia301.sdo.14's to judge; the count is the first byte.
+        let count = match read_described(ctx, mapping, 0, "the number of mapped objects")? {
+            Ok(value) => value.first().copied().unwrap_or(0),
+            Err(failed) => return Ok(Err(failed)),
         };
         let mut entries = Vec::new();
-        for sub in 1..=count.first().copied().unwrap_or(0) {
-            match u32_of(&ctx.read(mapping, sub)?) {
-                Some(entry) => entries.push(entry),
-                None => break,
+        for sub in 1..=count {
+            if !readable(mapping, sub) {
+                break;
+            }
+            match read_described(ctx, mapping, sub, "a mapping entry")? {
+                Ok(value) => match u32_of(&Reply::Done(value)) {
+                    Some(entry) => entries.push(entry),
+                    None => break,
+                },
+                Err(failed) => return Ok(Err(failed)),
             }
         }
-        return Ok(Some(Mappable {
+        return Ok(Ok(Some(Mappable {
             pdo,
             mapping,
             cob,
             entries,
-        }));
+        })));
     }
-    Ok(None)
+    Ok(Ok(None))
 }
 
-/// Disables the PDO and sets its mapping to 0 entries (CiA 301 §7.5.2.38 steps 1 and 2), every value
-/// written back after the test; the refusal that stopped it, if any.
-fn open_mapping(ctx: &mut Ctx<'_, '_>, m: &Mappable) -> Result<Option<String>, Stop> {
-    for (index, sub, data) in [
-        (m.pdo.comm, 1u8, (m.cob | 0x8000_0000).to_le_bytes().to_vec()),
-        (m.mapping, 0, vec![0]),
-    ] {
-        let reply = ctx.modify(index, sub, data.clone())?;
-        if !matches!(reply, Reply::Done(_)) {
-            return Ok(Some(format!(
-                "{} got {}",
-                download_text((index, sub), &data),
-                reply.describe()
-            )));
+/// [`mappable_with`] needing only the COB-ID and the mapping.
+fn mappable(ctx: &mut Ctx<'_, '_>, direction: PdoDirection) -> Prepared<Option<Mappable>> {
+    mappable_with(ctx, direction, &[])
+}
+
+/// `Err(finding)` from a [`Prepared`] step, as an early return of a test.
+macro_rules! prepared {
+    ($step:expr) => {
+        match $step {
+            Ok(value) => value,
+            Err(finding) => return Ok(finding),
         }
-    }
-    Ok(None)
+    };
+}
+
+/// No PDO of `direction` whose mapping the EDS makes writable: the keys that say so.
+fn no_mappable(direction: PdoDirection) -> Finding {
+    let (comm, mapping) = match direction {
+        PdoDirection::Transmit => ("18xxh", "1Axxh"),
+        PdoDirection::Receive => ("14xxh", "16xxh"),
+    };
+    Finding::not_applicable(format!(
+        "the EDS makes no {}'s {comm}:01, {mapping}:00 and {mapping}:01 all writable (AccessType)",
+        direction.name()
+    ))
+}
+
+/// How `cia301.pdo.8` makes the remapped TPDO go out: the transmission type (and settings) it
+/// writes, and whether it then sends a SYNC or a remote frame, or waits for the event timer.
+struct Trigger {
+    settings: Vec<Setting>,
+    rtr: bool,
+    how: How,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum How {
+    Sync,
+    EventTimer,
+    Remote,
+}
+
+/// The event timer `cia301.pdo.8` sets when it observes the TPDO on its timer, in ms.
+pub const MAPPING_EVENT_TIMER_MS: u16 = 100;
+
+fn triggers() -> [Trigger; 3] {
+    [
+        Trigger {
+            settings: vec![Setting::new(
+                2,
+                vec![1],
+                "cyclic synchronous transmission (type 1)",
+            )],
+            rtr: false,
+            how: How::Sync,
+        },
+        Trigger {
+            settings: vec![
+                Setting::new(2, vec![0xFF], "event-driven transmission (type FFh)"),
+                Setting::new(
+                    5,
+                    MAPPING_EVENT_TIMER_MS.to_le_bytes().to_vec(),
+                    "the event timer (18xxh:05) at this value",
+                ),
+            ],
+            rtr: false,
+            how: How::EventTimer,
+        },
+        Trigger {
+            settings: vec![Setting::new(
+                2,
+                vec![0xFD],
+                "RTR-only transmission (type FDh), which CiA 301 leaves optional",
+            )],
+            rtr: true,
+            how: How::Remote,
+        },
+    ]
+}
+
+/// A readable object with PDOMapping=1 of 1, 2 or 4 bytes other than `bytes` long, as a mapping
+/// entry, with its label: mapped alone it changes the TPDO's length, which shows on the bus whether
+/// the device applies the new mapping.
+fn other_length_object(ctx: &Ctx<'_, '_>, bytes: usize) -> Option<(u32, usize, String)> {
+    use canopener_eds::AccessType;
+    // Process inputs (ro, rwr) first, then rw; rww is a process output, which devices may refuse in
+    // a TPDO.
+    let candidates = |access: &'static [AccessType]| {
+        ctx.model().entries.values().filter(move |e| {
+            e.pdo_mapping
+                && e.access.is_some_and(|a| access.contains(&a))
+                && e.index >= 0x1000
+                && e.size().is_some_and(|s| matches!(s, 1 | 2 | 4) && s != bytes)
+        })
+    };
+    let inputs: &[AccessType] = &[AccessType::Ro, AccessType::Rwr];
+    candidates(inputs)
+        .find(|e| e.index >= 0x2000)
+        .or_else(|| candidates(inputs).next())
+        .or_else(|| candidates(&[AccessType::Rw]).next())
+        .and_then(|e| Some((entry_value(e)?, e.size()?, e.label())))
 }
 
 fn correct_mapping(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some(m) = mappable(ctx, PdoDirection::Transmit)?.filter(|m| !m.entries.is_empty()) else {
+    let Some(m) = prepared!(mappable_with(ctx, PdoDirection::Transmit, &[2])?) else {
         return Ok(Finding::not_applicable(
-            "no TPDO with a writable, non-empty mapping",
+            "the EDS makes no TPDO's 18xxh:01, 18xxh:02, 1Axxh:00 and 1Axxh:01 all writable (AccessType)",
         ));
     };
-    if let Some(refused) = open_mapping(ctx, &m)? {
-        return Ok(Finding::inconclusive(format!(
-            "the mapping procedure could not start: {refused}"
+    if m.cob & 0x7FF == 0 {
+        return Ok(Finding::not_applicable(format!(
+            "{:04X}h:01 = {:#010X} has no CAN-ID",
+            m.pdo.comm, m.cob
         )));
     }
-    let mut steps = Vec::new();
-    for (i, entry) in m.entries.iter().enumerate() {
-        steps.push((m.mapping, i as u8 + 1, entry.to_le_bytes().to_vec()));
-    }
-    steps.push((m.mapping, 0, vec![m.entries.len() as u8]));
-    steps.push((m.pdo.comm, 1, m.cob.to_le_bytes().to_vec()));
-    let requests: Vec<String> = steps.iter().map(|(i, s, d)| download_text((*i, *s), d)).collect();
+    let old_bytes = m
+        .entries
+        .iter()
+        .map(|e| (e & 0xFF) as usize)
+        .sum::<usize>()
+        .div_ceil(8);
+    let Some((entry, bytes, label)) = other_length_object(ctx, old_bytes) else {
+        return Ok(Finding::not_applicable(format!(
+            "the EDS has no ro, rwr or rw object with PDOMapping=1 of 1, 2 or 4 bytes other than the {old_bytes} bytes TPDO{} carries now",
+            m.pdo.number
+        )));
+    };
+    prepared!(open_mapping(ctx, &m.pdo, m.cob, m.mapping)?);
+    let steps = [
+        (m.mapping, 1u8, entry.to_le_bytes().to_vec()),
+        (m.mapping, 0, vec![1]),
+    ];
+    let mut requests = vec![
+        download_text((m.pdo.comm, 1), &(m.cob | 0x8000_0000).to_le_bytes()),
+        download_text((m.mapping, 0), &[0]),
+    ];
     for (index, sub, data) in steps {
+        requests.push(download_text((index, sub), &data));
         let reply = ctx.modify(index, sub, data.clone())?;
         if !matches!(reply, Reply::Done(_)) {
             return Ok(Finding::fail(
@@ -171,26 +298,29 @@ fn correct_mapping(ctx: &mut Ctx<'_, '_>) -> Outcome {
                     download_text((index, sub), &data)
                 ),
                 Evidence {
-                    request: format!("disable, 0 entries, then {}", requests.join(", ")),
+                    request: format!("{} ({label})", requests.join(", ")),
                     requirement: format!(
                         "{}: a correct mapping written with the mapping procedure is accepted",
                         req::PDO_PARAMETERS
                     ),
                     answer: reply.describe(),
-                    cause: "the device refuses its own default mapping, or a step of the procedure"
+                    cause: "the device refuses a mappable object its EDS marks PDOMapping=1, or a step of the procedure"
                         .to_owned(),
                 },
             ));
         }
     }
-    for (i, entry) in m.entries.iter().enumerate() {
-        let back = ctx.read(m.mapping, i as u8 + 1)?;
-        if u32_of(&back) != Some(*entry) {
+    for (sub, expected) in [(1u8, entry), (0, 1)] {
+        let back = ctx.read(m.mapping, sub)?;
+        let value = match &back {
+            Reply::Done(d) if sub == 0 => d.first().map(|b| u32::from(*b)),
+            other => u32_of(other),
+        };
+        if value != Some(expected) {
             return Ok(Finding::fail(
                 format!(
-                    "{:04X}h:{:02X} reads {} after the mapping procedure",
+                    "{:04X}h:{sub:02X} reads {} after the mapping procedure",
                     m.mapping,
-                    i + 1,
                     back.describe()
                 ),
                 Evidence {
@@ -205,21 +335,133 @@ fn correct_mapping(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ));
         }
     }
+    // The new mapping must be what the TPDO carries: enabled with a transmission type the tester can
+    // trigger (SYNC, else the event timer, else a remote frame).
+    let mut passed_over = Vec::new();
+    let mut chosen = None;
+    for trigger in triggers() {
+        match configure_tpdo(ctx, &m.pdo, m.cob, &trigger.settings, trigger.rtr)? {
+            Ok(()) => {
+                chosen = Some(trigger);
+                break;
+            }
+            Err(finding) if finding.verdict == Verdict::NotApplicable => passed_over.push(finding.reason),
+            Err(failed) => return Ok(failed),
+        }
+    }
+    let Some(trigger) = chosen else {
+        return Ok(Finding::not_applicable(format!(
+            "the new mapping reads back, but TPDO{} takes no transmission type the tester can trigger: {}",
+            m.pdo.number,
+            passed_over.join("; ")
+        )));
+    };
+    let value_before = ctx.read((entry >> 16) as u16, (entry >> 8) as u8)?;
+    let cob = (m.cob & 0x7FF) as u16;
+    let id = ctx.id(cob);
+    ctx.nmt(NmtCommand::StartRemoteNode, false)?;
+    let tpdo = match trigger.how {
+        How::Sync => {
+            ctx.listen(Duration::from_millis(20), |_| false)?;
+            let sync = match u32_of(&ctx.read(0x1005, 0)?) {
+                Some(cob) => (cob & 0x7FF) as u16,
+                None => 0x80,
+            };
+            ctx.send(sync, &[])?;
+            ctx.wait_for(Duration::from_millis(100), |f| f.id() == id && !f.is_remote())?
+        }
+        How::EventTimer => ctx.wait_for(
+            Duration::from_millis(u64::from(MAPPING_EVENT_TIMER_MS) * 5 / 2),
+            |f| f.id() == id && !f.is_remote(),
+        )?,
+        How::Remote => {
+            ctx.listen(Duration::from_millis(20), |_| false)?;
+            ctx.send_remote(cob, 0)?;
+            ctx.wait_for(Duration::from_millis(100), |f| f.id() == id && !f.is_remote())?
+        }
+    };
+    let value_after = ctx.read((entry >> 16) as u16, (entry >> 8) as u8)?;
+    crate::procedures::nmt::back_to_pre_operational(ctx)?;
+    let how = match trigger.how {
+        How::Sync => "type 1 and a SYNC",
+        How::EventTimer => "type FFh and its event timer",
+        How::Remote => "type FDh and a remote frame",
+    };
+    let request = format!(
+        "{}, then TPDO{} enabled with {how}; NMT start",
+        requests.join(", "),
+        m.pdo.number
+    );
+    let requirement = format!(
+        "{}: once enabled, the TPDO carries the objects its mapping names (here {label} alone: {bytes} data bytes)",
+        req::PDO_PARAMETERS
+    );
+    let Some(tpdo) = tpdo else {
+        return Ok(Finding::fail(
+            format!(
+                "TPDO{} ({cob:#X}) did not come after the new mapping, with {how}",
+                m.pdo.number
+            ),
+            Evidence {
+                request,
+                requirement,
+                answer: "no TPDO".to_owned(),
+                cause: "the PDO is not rebuilt from the new mapping, or not sent at all".to_owned(),
+            },
+        ));
+    };
+    let data = tpdo.frame.data();
+    // The value on the bus must be the object's value when it did not change meanwhile.
+    let stable = match (&value_before, &value_after) {
+        (Reply::Done(a), Reply::Done(b)) if a == b => Some(a.clone()),
+        _ => None,
+    };
+    if data.len() != bytes || stable.as_ref().is_some_and(|v| v.as_slice() != data) {
+        return Ok(Finding::fail(
+            format!(
+                "TPDO{} ({cob:#X}) carries {} after mapping the {bytes}-byte {label} alone",
+                m.pdo.number,
+                if data.is_empty() {
+                    "no data".to_owned()
+                } else {
+                    format!("{} ({} bytes)", hex(data), data.len())
+                }
+            ),
+            Evidence {
+                request,
+                requirement,
+                answer: format!(
+                    "TPDO {}; the object reads {}",
+                    hex(data),
+                    stable
+                        .as_deref()
+                        .map_or("differently before and after".to_owned(), hex)
+                ),
+                cause: "the mapping is stored and confirmed but the PDO keeps the mapping it had".to_owned(),
+            },
+        ));
+    }
     Ok(Finding::pass(format!(
-        "TPDO{}: {} entries mapped again and read back",
+        "TPDO{} mapped to {label} alone (was {old_bytes} bytes) reads back and carries {}",
         m.pdo.number,
-        m.entries.len()
+        hex(data)
     )))
 }
 
 fn without_procedure(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some(m) =
-        mappable(ctx, PdoDirection::Transmit)?.filter(|m| !m.entries.is_empty() && m.cob & 0x8000_0000 == 0)
-    else {
-        return Ok(Finding::not_applicable(
-            "no valid TPDO with a writable, non-empty mapping",
-        ));
+    let Some(m) = prepared!(mappable(ctx, PdoDirection::Transmit)?) else {
+        return Ok(no_mappable(PdoDirection::Transmit));
     };
+    if m.entries.is_empty() || m.cob & 0x8000_0000 != 0 {
+        return Ok(Finding::not_applicable(format!(
+            "TPDO{} is not valid ({:04X}h:01 = {:#010X}) or maps nothing ({:04X}h:00 = {}): nothing to write while it is valid",
+            m.pdo.number,
+            m.pdo.comm,
+            m.cob,
+            m.mapping,
+            m.entries.len()
+        )));
+    }
     let data = m.entries[0].to_le_bytes().to_vec();
     let reply = ctx.modify(m.mapping, 1, data.clone())?;
     Ok(expect_refusal(
@@ -262,8 +504,8 @@ fn mappable_object(ctx: &Ctx<'_, '_>, direction: PdoDirection) -> Option<(u32, u
 }
 
 fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some(m) = mappable(ctx, PdoDirection::Transmit)? else {
-        return Ok(Finding::not_applicable("no TPDO with a writable mapping"));
+    let Some(m) = prepared!(mappable(ctx, PdoDirection::Transmit)?) else {
+        return Ok(no_mappable(PdoDirection::Transmit));
     };
     let Some((entry, bits)) = mappable_object(ctx, PdoDirection::Transmit) else {
         return Ok(Finding::not_applicable(
@@ -278,11 +520,7 @@ fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
             m.mapping
         )));
     }
-    if let Some(refused) = open_mapping(ctx, &m)? {
-        return Ok(Finding::inconclusive(format!(
-            "the mapping procedure could not start: {refused}"
-        )));
-    }
+    prepared!(open_mapping(ctx, &m.pdo, m.cob, m.mapping)?);
     let data = entry.to_le_bytes().to_vec();
     let mut requests = Vec::new();
     // The refusal may come at the entry that exceeds 64 bits or at sub-index 0.
@@ -330,16 +568,14 @@ fn wrong_direction(ctx: &mut Ctx<'_, '_>) -> Outcome {
             )
         });
     let Some((entry, label)) = input else {
-        return Ok(Finding::not_applicable("no mappable ro object"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no object with AccessType=ro and PDOMapping=1",
+        ));
     };
-    let Some(m) = mappable(ctx, PdoDirection::Receive)? else {
-        return Ok(Finding::not_applicable("no RPDO with a writable mapping"));
+    let Some(m) = prepared!(mappable(ctx, PdoDirection::Receive)?) else {
+        return Ok(no_mappable(PdoDirection::Receive));
     };
-    if let Some(refused) = open_mapping(ctx, &m)? {
-        return Ok(Finding::inconclusive(format!(
-            "the mapping procedure could not start: {refused}"
-        )));
-    }
+    prepared!(open_mapping(ctx, &m.pdo, m.cob, m.mapping)?);
     let data = entry.to_le_bytes().to_vec();
     let reply = ctx.modify(m.mapping, 1, data.clone())?;
     Ok(expect_refusal(
@@ -379,16 +615,13 @@ fn map_alone(
     direction: PdoDirection,
     entry: u32,
 ) -> Result<Result<(String, Reply), Finding>, Stop> {
-    let Some(m) = mappable(ctx, direction)? else {
-        return Ok(Err(Finding::not_applicable(format!(
-            "no {} with a writable mapping",
-            direction.name()
-        ))));
+    let m = match mappable(ctx, direction)? {
+        Ok(Some(m)) => m,
+        Ok(None) => return Ok(Err(no_mappable(direction))),
+        Err(failed) => return Ok(Err(failed)),
     };
-    if let Some(refused) = open_mapping(ctx, &m)? {
-        return Ok(Err(Finding::inconclusive(format!(
-            "the mapping procedure could not start: {refused}"
-        ))));
+    if let Err(failed) = open_mapping(ctx, &m.pdo, m.cob, m.mapping)? {
+        return Ok(Err(failed));
     }
     let mut requests = Vec::new();
     let mut last = Reply::Done(Vec::new());
@@ -413,7 +646,9 @@ fn map_alone(
 fn input_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
     use canopener_eds::AccessType;
     let Some((entry, label)) = mappable_with_access(ctx, &[AccessType::Ro, AccessType::Rwr]) else {
-        return Ok(Finding::not_applicable("no mappable ro/rwr object"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no object with AccessType=ro or rwr and PDOMapping=1",
+        ));
     };
     let (request, reply) = match map_alone(ctx, PdoDirection::Transmit, entry)? {
         Ok(done) => done,
@@ -432,7 +667,9 @@ fn input_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn output_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let Some((entry, label)) = mappable_with_access(ctx, &[canopener_eds::AccessType::Wo]) else {
-        return Ok(Finding::not_applicable("no mappable wo object"));
+        return Ok(Finding::not_applicable(
+            "the EDS has no object with AccessType=wo and PDOMapping=1",
+        ));
     };
     let (request, reply) = match map_alone(ctx, PdoDirection::Transmit, entry)? {
         Ok(done) => done,

@@ -5,11 +5,14 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::context::{Ctx, Reply};
-use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::context::{Ctx, Reply, hex};
+use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::intervals::{intervals_text, measure_intervals};
 use crate::procedures::nmt::back_to_pre_operational;
-use crate::procedures::tpdo::{configurable_tpdo, configure_tpdo};
+use crate::procedures::sdo::{download_text, read_described, refused_unexpectedly, u32_of};
+use crate::procedures::tpdo::{
+    Setting, configurable_tpdo_at, configure_tpdo, none_configurable, not_writable, set_up_tpdo,
+};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -25,6 +28,14 @@ pub const SYNC_SPACING: Duration = Duration::from_millis(20);
 /// How far an event timer interval may stray: as for heartbeats, a tenth (canopener's choice).
 pub const EVENT_TIMER_TOLERANCE: f64 = 0.1;
 
+/// The optional features the tests' settings stand for, as a "not applicable" reason names them.
+const EVENT_DRIVEN: &str = "event-driven transmission (type FFh)";
+const EVENT_TIMER: &str = "the event timer (18xxh:05) at this value";
+const INHIBIT_TIME: &str = "the inhibit time (18xxh:03) at this value";
+const SYNCHRONOUS_CYCLIC: &str = "cyclic synchronous transmission at this type";
+const SYNCHRONOUS_ACYCLIC: &str = "acyclic synchronous transmission (type 0)";
+const START_VALUE: &str = "the SYNC start value (18xxh:06) at this value";
+
 /// The transmission type tests.
 pub fn tests() -> Vec<TestDef> {
     vec![
@@ -32,7 +43,7 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.6",
             suite: "cia301",
             group: "pdo",
-            title: "Event timer: an event-driven TPDO with 100 ms in 18xxh:05 comes every 100 ms",
+            title: "Event timer: an event-driven TPDO with 100 ms in 18xxh:05 comes every 100 ms, never later, and sooner only with new data",
             references: &[
                 req::PDO,
                 req::PDO_PARAMETERS,
@@ -117,18 +128,14 @@ pub fn tests() -> Vec<TestDef> {
 }
 
 fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 5])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID, transmission type and event timer",
-        ));
+    let settings = [
+        Setting::new(2, vec![0xFF], EVENT_DRIVEN),
+        Setting::new(5, TEST_EVENT_TIMER_MS.to_le_bytes().to_vec(), EVENT_TIMER),
+    ];
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
     };
-    let settings = [(2u8, vec![0xFF]), (5, TEST_EVENT_TIMER_MS.to_le_bytes().to_vec())];
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot use an event timer: {refused}",
-            pdo.number
-        )));
-    }
     let id = ctx.id((cob & 0x7FF) as u16);
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     let frames = ctx.listen(
@@ -149,11 +156,17 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         req::PDO,
         EVENT_TIMER_TOLERANCE * 100.0
     );
-    // Intervals shorter than the timer are allowed: an application event also triggers the TPDO.
     let late = intervals
         .iter()
         .copied()
         .find(|i| *i > period * (1.0 + EVENT_TIMER_TOLERANCE));
+    // A shorter interval is an application event (CiA 301 §7.2.2.2.1: type FFh is also sent on the
+    // profile's events, a change of the mapped data), so it must bring other data; the same data
+    // sooner than the timer means the timer elapsed early.
+    let early = intervals.iter().copied().enumerate().find(|(i, interval)| {
+        *interval < period * (1.0 - EVENT_TIMER_TOLERANCE)
+            && frames[i + 1].frame.data() == frames[*i].frame.data()
+    });
     Ok(if frames.len() < 5 {
         Finding::fail(
             format!(
@@ -177,23 +190,35 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 cause: "the event timer runs late".to_owned(),
             },
         )
+    } else if let Some((i, early)) = early {
+        Finding::fail(
+            format!(
+                "a TPDO {early:.1} ms after the previous one with the same data ({}) and a {TEST_EVENT_TIMER_MS} ms event timer",
+                hex(frames[i + 1].frame.data())
+            ),
+            Evidence {
+                request,
+                requirement: format!(
+                    "{requirement}; an interval shorter than the timer is an application event, which changes the data"
+                ),
+                answer: format!("intervals {}", intervals_text(&intervals)),
+                cause: "the event timer elapses early (its unit or its restart is wrong)".to_owned(),
+            },
+        )
     } else {
-        Finding::pass(format!("{} TPDOs, none later than the timer", frames.len()))
+        Finding::pass(format!(
+            "{} TPDOs, none later than the timer and none sooner with the same data",
+            frames.len()
+        ))
     })
 }
 
 fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID and transmission type",
-        ));
+    let settings = [Setting::new(2, vec![TEST_SYNC_EVERY], SYNCHRONOUS_CYCLIC)];
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
     };
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![TEST_SYNC_EVERY])], false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot be synchronous: {refused}",
-            pdo.number
-        )));
-    }
     let sync = sync_id(ctx)?;
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
@@ -257,22 +282,15 @@ pub const TEST_START_VALUE: u8 = 5;
 pub const TEST_START_EVERY: u8 = 2;
 
 fn inhibit_time(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 3, 5])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID, transmission type, inhibit time and event timer",
-        ));
-    };
     let settings = [
-        (2u8, vec![0xFF]),
-        (3, TEST_INHIBIT_100US.to_le_bytes().to_vec()),
-        (5, TEST_SHORT_EVENT_TIMER_MS.to_le_bytes().to_vec()),
+        Setting::new(2, vec![0xFF], EVENT_DRIVEN),
+        Setting::new(3, TEST_INHIBIT_100US.to_le_bytes().to_vec(), INHIBIT_TIME),
+        Setting::new(5, TEST_SHORT_EVENT_TIMER_MS.to_le_bytes().to_vec(), EVENT_TIMER),
     ];
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot use an inhibit time with an event timer: {refused}",
-            pdo.number
-        )));
-    }
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
+    };
     let id = ctx.id((cob & 0x7FF) as u16);
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     let frames = ctx.listen(WATCH, |f| f.id() == id && !f.is_remote())?;
@@ -330,17 +348,11 @@ fn inhibit_time(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn synchronous_acyclic(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID and transmission type",
-        ));
+    let settings = [Setting::new(2, vec![0], SYNCHRONOUS_ACYCLIC)];
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
     };
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![0])], false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot be synchronous acyclic: {refused}",
-            pdo.number
-        )));
-    }
     let sync = sync_id(ctx)?;
     let id = ctx.id((cob & 0x7FF) as u16);
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
@@ -393,33 +405,59 @@ fn synchronous_acyclic(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    if !ctx.model().entry(0x1019, 0).is_some_and(|e| e.writable()) {
-        return Ok(Finding::not_applicable("no writable 1019h"));
+    if let Some(why) = not_writable(ctx, 0x1019, 0, Some(&[TEST_OVERFLOW])) {
+        return Ok(Finding::not_applicable(format!(
+            "{why}: the SYNC counter cannot be set to {TEST_OVERFLOW}"
+        )));
     }
-    if crate::procedures::sdo::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
+    if let Some(cob) = match described_u32(ctx, 0x1005, "the SYNC COB-ID")? {
+        Ok(cob) => cob,
+        Err(failed) => return Ok(failed),
+    } && cob & 0x4000_0000 != 0
+    {
         return Ok(Finding::not_applicable(
-            "the device produces SYNC (1005h bit 30): the tester cannot send the counter",
+            "1005h bit 30 is set: the device is the SYNC producer, so the tester cannot send the counter",
         ));
     }
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 6])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID, transmission type and SYNC start value",
-        ));
-    };
+    // 1019h may change only while the SYNC period 1006h is 0 (CiA 301 §7.5.2.22, CCT Synchronization 09).
+    if let Some(period) = match described_u32(ctx, 0x1006, "the communication cycle period")? {
+        Ok(period) => period,
+        Err(failed) => return Ok(failed),
+    } && period != 0
+    {
+        if let Some(why) = not_writable(ctx, 0x1006, 0, Some(&[0; 4])) {
+            return Ok(Finding::not_applicable(format!(
+                "1006h = {period} µs and {why}: 1019h cannot change while the SYNC period runs"
+            )));
+        }
+        let reply = ctx.modify(0x1006, 0, vec![0; 4])?;
+        if !matches!(reply, Reply::Done(_)) {
+            return Ok(refused_unexpectedly(
+                &download_text((0x1006, 0), &[0; 4]),
+                &reply,
+                req::SYNC_OBJECTS,
+                "1006h refuses 0 (no SYNC period), a value CiA 301 allows",
+            ));
+        }
+    }
     let overflow = ctx.modify(0x1019, 0, vec![TEST_OVERFLOW])?;
     if !matches!(overflow, Reply::Done(_)) {
-        return Ok(Finding::not_applicable(format!(
-            "1019h does not take {TEST_OVERFLOW}: {}",
-            overflow.describe()
-        )));
+        // CiA 301 allows 2..240 in 1019h, and the EDS makes it writable.
+        return Ok(refused_unexpectedly(
+            &download_text((0x1019, 0), &[TEST_OVERFLOW]),
+            &overflow,
+            req::SYNC_OBJECTS,
+            "1019h refuses a counter overflow value CiA 301 allows (2..240) while 1006h is 0",
+        ));
     }
-    let settings = [(2u8, vec![TEST_START_EVERY]), (6, vec![TEST_START_VALUE])];
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot use a SYNC start value: {refused}",
-            pdo.number
-        )));
-    }
+    let settings = [
+        Setting::new(2, vec![TEST_START_EVERY], SYNCHRONOUS_CYCLIC),
+        Setting::new(6, vec![TEST_START_VALUE], START_VALUE),
+    ];
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
+    };
     let sync = sync_id(ctx)?;
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
@@ -473,9 +511,18 @@ fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
     })
 }
 
+/// `index`:00 as UNSIGNED32 when the EDS describes it readable (`None` when it does not); a failure
+/// when the device does not serve it.
+fn described_u32(ctx: &mut Ctx<'_, '_>, index: u16, what: &str) -> Prepared<Option<u32>> {
+    if !ctx.model().entry(index, 0).is_some_and(|e| e.readable()) {
+        return Ok(Ok(None));
+    }
+    Ok(read_described(ctx, index, 0, what)?.map(|value| u32_of(&Reply::Done(value))))
+}
+
 /// The SYNC CAN-ID from 1005h (80h when it cannot be read).
 fn sync_id(ctx: &mut Ctx<'_, '_>) -> Result<u16, Stop> {
-    Ok(match crate::procedures::sdo::u32_of(&ctx.read(0x1005, 0)?) {
+    Ok(match u32_of(&ctx.read(0x1005, 0)?) {
         Some(cob) => (cob & 0x7FF) as u16,
         None => 0x80,
     })
@@ -533,53 +580,70 @@ pub const CONSUMER_SYNCS: usize = 5;
 
 fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let writable = |ctx: &Ctx<'_, '_>, index: u16| ctx.model().entry(index, 0).is_some_and(|e| e.writable());
-    // Make the device a SYNC consumer where the EDS allows it (CCT Synchronization 04).
+    // Make the device a SYNC consumer where the EDS allows it (CCT Synchronization 04): the period
+    // off first, then the producer bit, so that the device is never a consumer with a period it
+    // would monitor (a SYNC timeout EMCY); the write-back undoes it in the reverse order.
+    let sync_cob = match described_u32(ctx, 0x1005, "the SYNC COB-ID")? {
+        Ok(cob) => cob,
+        Err(failed) => return Ok(failed),
+    };
     let mut setup = Vec::new();
-    if writable(ctx, 0x1005) {
-        let cob = crate::procedures::sdo::u32_of(&ctx.read(0x1005, 0)?).unwrap_or(0x80) & !0x4000_0000;
-        setup.push((0x1005u16, cob.to_le_bytes().to_vec()));
-    }
     if writable(ctx, 0x1006) {
-        setup.push((0x1006, vec![0; 4]));
+        setup.push((0x1006u16, vec![0; 4]));
+    }
+    if writable(ctx, 0x1005) {
+        let cob = sync_cob.unwrap_or(0x80) & !0x4000_0000;
+        setup.push((0x1005, cob.to_le_bytes().to_vec()));
     }
     for (index, data) in setup {
         let reply = ctx.modify(index, 0, data.clone())?;
         if !matches!(reply, Reply::Done(_)) {
-            return Ok(crate::procedures::sdo::refused_unexpectedly(
-                &crate::procedures::sdo::download_text((index, 0), &data),
+            return Ok(refused_unexpectedly(
+                &download_text((index, 0), &data),
                 &reply,
                 req::SYNC_OBJECTS,
                 "the device refuses to be a SYNC consumer",
             ));
         }
     }
-    if crate::procedures::sdo::u32_of(&ctx.read(0x1005, 0)?).is_some_and(|cob| cob & 0x4000_0000 != 0) {
+    if !writable(ctx, 0x1005) && sync_cob.is_some_and(|cob| cob & 0x4000_0000 != 0) {
         return Ok(Finding::not_applicable(
-            "the device produces SYNC (1005h bit 30) and 1005h is not writable",
+            "1005h bit 30 is set (the device produces SYNC) and the EDS makes 1005h not writable (AccessType)",
         ));
     }
+    let settings = [Setting::new(2, vec![1], SYNCHRONOUS_CYCLIC)];
     let mut ids: Vec<u16> = Vec::new();
     let mut names = Vec::new();
+    let mut passed_over = Vec::new();
     for pdo in ctx.model().pdos(crate::device_model::PdoDirection::Transmit) {
         if ids.len() == MAX_COUNTED_TPDOS {
             break;
         }
-        let Some((pdo, cob)) = crate::procedures::tpdo::configurable_tpdo_at(ctx, &pdo, &[1, 2])? else {
-            continue;
+        let cob = match configurable_tpdo_at(ctx, &pdo, &settings)? {
+            Ok(Ok(cob)) => cob,
+            Ok(Err(why)) => {
+                passed_over.push(format!("TPDO{}: {why}", pdo.number));
+                continue;
+            }
+            Err(failed) => return Ok(failed),
         };
         let id = (cob & 0x7FF) as u16;
         if ids.contains(&id) {
             continue;
         }
-        if configure_tpdo(ctx, &pdo, cob, &[(2, vec![1])], false)?.is_none() {
-            ids.push(id);
-            names.push(format!("TPDO{} ({id:#X})", pdo.number));
+        match configure_tpdo(ctx, &pdo, cob, &settings, false)? {
+            Ok(()) => {
+                ids.push(id);
+                names.push(format!("TPDO{} ({id:#X})", pdo.number));
+            }
+            Err(finding) if finding.verdict == crate::model::Verdict::NotApplicable => {
+                passed_over.push(finding.reason);
+            }
+            Err(failed) => return Ok(failed),
         }
     }
     if ids.is_empty() {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID and transmission type takes type 1",
-        ));
+        return Ok(none_configurable(&passed_over));
     }
     let counter = match ctx.read(0x1019, 0)? {
         Reply::Done(d) => d.first().copied().filter(|c| *c > 1),

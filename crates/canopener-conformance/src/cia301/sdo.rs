@@ -313,7 +313,7 @@ fn read_write_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .values()
         .find(|e| e.access == Some(canopener_eds::AccessType::Wo))
     else {
-        return Ok(Finding::not_applicable("the EDS has no write-only entry"));
+        return Ok(Finding::not_applicable("the EDS has no entry with AccessType=wo"));
     };
     let at = (entry.index, entry.sub);
     let reply = ctx.read(at.0, at.1)?;

@@ -6,9 +6,9 @@
 //! afterwards. `--skip cia301.other` leaves the memory alone.
 
 use crate::context::{Ctx, Reply, hex};
-use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::nmt::reset_node;
-use crate::procedures::sdo::{download_text, expect_refusal, upload_text};
+use crate::procedures::sdo::{download_text, expect_refusal, read_described, upload_text};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -82,17 +82,21 @@ pub fn tests() -> Vec<TestDef> {
 }
 
 /// Whether `index`:01 is described and reads with bit 0 set.
-fn on_command(ctx: &mut Ctx<'_, '_>, index: u16) -> Result<bool, Stop> {
+fn on_command(ctx: &mut Ctx<'_, '_>, index: u16) -> Prepared<bool> {
     on_command_at(ctx, index, 1)
 }
 
 /// Whether `index`:`sub` is described and reads with bit 0 set (the device saves/restores that
-/// group of parameters on command).
-fn on_command_at(ctx: &mut Ctx<'_, '_>, index: u16, sub: u8) -> Result<bool, Stop> {
-    if ctx.model().entry(index, sub).is_none() {
-        return Ok(false);
+/// group of parameters on command, CiA 301 §7.5.2.13/14); a failure when the device does not serve
+/// an entry its EDS describes.
+fn on_command_at(ctx: &mut Ctx<'_, '_>, index: u16, sub: u8) -> Prepared<bool> {
+    if !ctx.model().entry(index, sub).is_some_and(|e| e.readable()) {
+        return Ok(Ok(false));
     }
-    Ok(matches!(ctx.read(index, sub)?, Reply::Done(d) if d.first().is_some_and(|b| b & 1 == 1)))
+    Ok(
+        read_described(ctx, index, sub, "what the device saves or restores on command")?
+            .map(|d| d.first().is_some_and(|b| b & 1 == 1)),
+    )
 }
 
 fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -107,8 +111,10 @@ fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
         // Sub-index 1 is all parameters, 2 communication, 3 application, 4..7Fh manufacturer
         // groups (CiA 301 §7.5.2.13/14).
         for sub in 1..=0x7Fu8 {
-            if !on_command_at(ctx, index, sub)? {
-                continue;
+            match on_command_at(ctx, index, sub)? {
+                Ok(true) => {}
+                Ok(false) => continue,
+                Err(failed) => return Ok(failed),
             }
             for wrong in wrongs {
                 let reply = ctx.write(index, sub, wrong.to_vec())?;
@@ -127,7 +133,9 @@ fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
         }
     }
     Ok(if checked.is_empty() {
-        Finding::not_applicable("no sub-index of 1010h or 1011h saves/restores on command")
+        Finding::not_applicable(
+            "no sub-index of 1010h or 1011h is in the EDS and reads with bit 0 set: nothing is saved or restored on command",
+        )
     } else {
         Finding::pass(format!("wrong signatures refused by {}", checked.join(", ")))
     })
@@ -197,10 +205,17 @@ struct Stored {
 /// expects the values back; then restores the defaults ("load" to 1011h:01), resets the node and
 /// expects the defaults.
 fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Outcome {
-    if !on_command(ctx, 0x1010)? || !on_command(ctx, 0x1011)? {
-        return Ok(Finding::not_applicable(
-            "1010h:01 or 1011h:01 does not save/restore on command",
-        ));
+    for index in [0x1010, 0x1011] {
+        match on_command(ctx, index)? {
+            Ok(true) => {}
+            Ok(false) => {
+                return Ok(Finding::not_applicable(format!(
+                    "{index:04X}h:01 is not in the EDS or reads with bit 0 clear: the device does not {} all parameters on command",
+                    if index == 0x1010 { "save" } else { "restore" }
+                )));
+            }
+            Err(failed) => return Ok(failed),
+        }
     }
     let written: Vec<String> = targets
         .iter()

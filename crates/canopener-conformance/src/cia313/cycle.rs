@@ -4,14 +4,14 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use super::{Criterion, Judged, judge, ms_between, standard_id};
+use super::{Clock, Criterion, Judged, judge, ms_between, standard_id};
 use crate::context::{Ctx, Reply};
 use crate::device_model::EntryModel;
 use crate::finding::{Evidence, Finding, Outcome};
 use crate::model::Measurement;
 use crate::procedures::nmt::back_to_pre_operational;
 use crate::procedures::sdo::u32_of;
-use crate::procedures::tpdo::{configurable_tpdo, configure_tpdo};
+use crate::procedures::tpdo::{Setting, set_up_tpdo};
 use crate::requirements as req;
 
 /// The event timer `cia313.perf.3` sets, in ms.
@@ -24,19 +24,19 @@ pub const SYNC_PERIOD: Duration = Duration::from_millis(10);
 pub const HEARTBEAT_MS: u16 = 100;
 
 pub(super) fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2, 5])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID, transmission type and event timer",
-        ));
-    };
     // Type FFh: event-driven, device profile specific; the event timer alone triggers it here.
-    let settings = [(2u8, vec![0xFF]), (5, EVENT_TIMER_MS.to_le_bytes().to_vec())];
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &settings, false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot use an event timer: {refused}",
-            pdo.number
-        )));
-    }
+    let settings = [
+        Setting::new(2, vec![0xFF], "event-driven transmission (type FFh)"),
+        Setting::new(
+            5,
+            EVENT_TIMER_MS.to_le_bytes().to_vec(),
+            "the event timer (18xxh:05) at this value",
+        ),
+    ];
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
+    };
     let id = (cob & 0x7FF) as u16;
     let period = Duration::from_millis(u64::from(EVENT_TIMER_MS));
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
@@ -89,6 +89,7 @@ pub(super) fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request,
             clause: req::PDO,
             cause: "the event timer runs off its period, or the TPDO is also sent on other events",
+            clock: Clock::Bus,
         },
         periods,
         Some(criterion),
@@ -96,17 +97,15 @@ pub(super) fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 pub(super) fn sync(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID and transmission type",
-        ));
+    let settings = [Setting::new(
+        2,
+        vec![1],
+        "cyclic synchronous transmission at this type",
+    )];
+    let (pdo, cob) = match set_up_tpdo(ctx, &settings, false)? {
+        Ok(found) => found,
+        Err(finding) => return Ok(finding),
     };
-    if let Some(refused) = configure_tpdo(ctx, &pdo, cob, &[(2, vec![1])], false)? {
-        return Ok(Finding::not_applicable(format!(
-            "TPDO{} cannot be synchronous: {refused}",
-            pdo.number
-        )));
-    }
     let sync = match u32_of(&ctx.read(0x1005, 0)?) {
         Some(cob) => (cob & 0x7FF) as u16,
         None => 0x80,
@@ -122,7 +121,7 @@ pub(super) fn sync(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ctx.send(sync, &[])?;
         let frames = ctx.listen(SYNC_PERIOD, |f| standard_id(f) == Some(id) && !f.is_remote())?;
         if let Some(first) = frames.first() {
-            delays.push(ms_between(sent, first.at));
+            delays.push(ms_between(sent, first.link_time));
             stamps.push(first.at);
         }
         counts.push(frames.len());
@@ -170,6 +169,7 @@ pub(super) fn sync(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request,
             clause: req::PDO,
             cause: "the device sends the synchronous TPDO later after the SYNC than the criterion allows",
+            clock: Clock::Link,
         },
         delays,
         criterion,
@@ -242,6 +242,7 @@ pub(super) fn heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request,
             clause: req::HEARTBEAT,
             cause: "the heartbeat producer's timer deviates from 1017h, or sends extra heartbeats",
+            clock: Clock::Bus,
         },
         periods,
         Some(criterion),

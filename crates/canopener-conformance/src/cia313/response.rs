@@ -5,15 +5,15 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use super::{BOOT_UPS, Criterion, Judged, Outgoing, Timed, exchange, judge, standard_id, unusable};
+use super::{BOOT_UPS, Clock, Criterion, Judged, Outgoing, Timed, exchange, judge, standard_id, unusable};
 use crate::procedures::nmt::BOOT_UP_WAIT;
 use crate::procedures::nmt::back_to_pre_operational;
-use crate::procedures::sdo::{download_text, u32_of, upload_text};
+use crate::procedures::sdo::{download_text, read_described, u32_of, upload_text};
 use canopener_wire::{LSS_MASTER_TO_SLAVE_ID, LssAddress, LssAddressPart, LssRequest};
 
 use crate::context::{Ctx, Reply};
 use crate::device_model::PdoDirection;
-use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::lss::{answer_specifier, is_lss_answer};
 use crate::requirements as req;
 
@@ -22,9 +22,13 @@ use crate::requirements as req;
 const RTR_WAIT: Duration = Duration::from_millis(100);
 
 pub(super) fn sdo_read(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((index, sub, _)) = type_one(ctx, [PdoDirection::Transmit, PdoDirection::Receive], false)? else {
+    let Some((index, sub, _)) = (match type_one(ctx, [PdoDirection::Transmit, PdoDirection::Receive], false)?
+    {
+        Ok(found) => found,
+        Err(failed) => return Ok(failed),
+    }) else {
         return Ok(Finding::not_applicable(
-            "no PDO maps a readable object of at most 4 bytes (no type-I object to read)",
+            "no PDO mapping (1600h–17FFh, 1A00h–1BFFh as read) names an object the EDS makes readable with at most 4 bytes: no type-I object to read",
         ));
     };
     let [lo, hi] = index.to_le_bytes();
@@ -42,10 +46,14 @@ pub(super) fn sdo_read(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 pub(super) fn sdo_write(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((index, sub, size)) = type_one(ctx, [PdoDirection::Receive, PdoDirection::Transmit], true)?
+    let Some((index, sub, size)) =
+        (match type_one(ctx, [PdoDirection::Receive, PdoDirection::Transmit], true)? {
+            Ok(found) => found,
+            Err(failed) => return Ok(failed),
+        })
     else {
         return Ok(Finding::not_applicable(
-            "no PDO maps a writable object of at most 4 bytes (no type-I object to write)",
+            "no PDO mapping (1600h–17FFh, 1A00h–1BFFh as read) names an object the EDS makes writable with at most 4 bytes: no type-I object to write",
         ));
     };
     // The object's own value: the measurement changes nothing, and `modify` writes it back anyway.
@@ -149,6 +157,7 @@ fn sdo_repeated(
             ),
             clause: req::SDO_UPLOAD,
             cause: "the SDO server's turnaround is slower than the criterion",
+            clock: Clock::Link,
         },
         samples,
         criterion,
@@ -157,23 +166,33 @@ fn sdo_repeated(
 
 /// The first object a PDO of `directions` (in that order) maps that the EDS makes readable (or
 /// writable) with at most 4 bytes: a type-I object (CiA 313; the thesis §4.2.2: objects mapped into
-/// PDOs define what the device is for). The mapping is read from the device.
+/// PDOs define what the device is for). The mapping is read from the device; a mapping parameter the
+/// EDS describes and the device does not serve fails the test.
 fn type_one(
     ctx: &mut Ctx<'_, '_>,
     directions: [PdoDirection; 2],
     writable: bool,
-) -> Result<Option<(u16, u8, usize)>, Stop> {
+) -> Prepared<Option<(u16, u8, usize)>> {
     for direction in directions {
         for pdo in ctx.model().pdos(direction) {
             let Some(mapping) = pdo.mapping else { continue };
-            let count = match ctx.read(mapping, 0)? {
-                Reply::Done(d) if d.len() == 1 => d[0].min(64),
-                _ => continue,
+            if !ctx.model().entry(mapping, 0).is_some_and(|e| e.readable()) {
+                continue;
+            }
+            let count = match read_described(ctx, mapping, 0, "the number of mapped objects")? {
+                // A longer expedited answer is cia301.sdo.14's to judge; the count is the first byte.
+                Ok(value) => value.first().copied().unwrap_or(0).min(64),
+                Err(failed) => return Ok(Err(failed)),
             };
             for sub in 1..=count {
-                let Some(entry) = u32_of(&ctx.read(mapping, sub)?) else {
+                if !ctx.model().entry(mapping, sub).is_some_and(|e| e.readable()) {
                     continue;
+                }
+                let entry = match read_described(ctx, mapping, sub, "a mapping entry")? {
+                    Ok(value) => u32_of(&Reply::Done(value)),
+                    Err(failed) => return Ok(Err(failed)),
                 };
+                let Some(entry) = entry else { continue };
                 let (index, object_sub) = ((entry >> 16) as u16, (entry >> 8) as u8);
                 let Some(model) = ctx.model().entry(index, object_sub) else {
                     continue;
@@ -186,18 +205,21 @@ fn type_one(
                 let size = model.size().unwrap_or(usize::from((entry & 0xFF) as u8) / 8);
                 // Dummy entries (below 1000h) map no object.
                 if index >= 0x1000 && usable && (1..=4).contains(&size) {
-                    return Ok(Some((index, object_sub, size)));
+                    return Ok(Ok(Some((index, object_sub, size))));
                 }
             }
         }
     }
-    Ok(None)
+    Ok(Ok(None))
 }
 
 pub(super) fn rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((number, cob, kind)) = rtr_tpdo(ctx)? else {
+    let Some((number, cob, kind)) = (match rtr_tpdo(ctx)? {
+        Ok(found) => found,
+        Err(failed) => return Ok(failed),
+    }) else {
         return Ok(Finding::not_applicable(
-            "no valid TPDO that maps data allows RTR (COB-ID bit 30 set or bit 31 set on every one)",
+            "no TPDO allows RTR as the device is configured: every one that maps data has 18xxh:01 bit 30 (no RTR, which CiA 301 allows) or bit 31 (not valid) set",
         ));
     };
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
@@ -259,6 +281,7 @@ pub(super) fn rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request,
             clause: req::PDO,
             cause: "the device samples and sends the TPDO slower than the criterion",
+            clock: Clock::Link,
         },
         samples,
         criterion,
@@ -304,6 +327,7 @@ pub(super) fn boot_up(ctx: &mut Ctx<'_, '_>) -> Outcome {
             request: format!("NMT reset node {node}, {} times", samples.len()),
             clause: req::BOOT_UP,
             cause: "the device's initialisation is slower than the criterion",
+            clock: Clock::Link,
         },
         samples,
         criterion,
@@ -312,26 +336,39 @@ pub(super) fn boot_up(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 /// The first valid TPDO (COB-ID bit 31 clear) that allows RTR (bit 30 clear, CiA 301 §7.5.2.37) and
 /// maps data, as the device is configured: (number, CAN-ID, transmission type). Nothing is changed:
-/// RTR is optional, and the test measures the device as it is set up.
-fn rtr_tpdo(ctx: &mut Ctx<'_, '_>) -> Result<Option<(u16, u16, u8)>, Stop> {
+/// RTR is optional, and the test measures the device as it is set up. A parameter the EDS describes
+/// and the device does not serve fails the test.
+fn rtr_tpdo(ctx: &mut Ctx<'_, '_>) -> Prepared<Option<(u16, u16, u8)>> {
     for pdo in ctx.model().pdos(PdoDirection::Transmit) {
-        let Some(cob) = u32_of(&ctx.read(pdo.comm, 1)?) else {
+        let Some(mapping) = pdo.mapping else { continue };
+        let model = ctx.model();
+        let readable = |index: u16, sub: u8| model.entry(index, sub).is_some_and(|e| e.readable());
+        if !(readable(pdo.comm, 1) && readable(pdo.comm, 2) && readable(mapping, 0)) {
             continue;
-        };
-        let Reply::Done(kind) = ctx.read(pdo.comm, 2)? else {
-            continue;
-        };
-        let mapped = match pdo.mapping {
-            Some(mapping) => {
-                matches!(ctx.read(mapping, 0)?, Reply::Done(d) if d.first().is_some_and(|n| *n > 0))
+        }
+        let mut values = Vec::new();
+        for (index, sub, what) in [
+            (pdo.comm, 1, "the TPDO's COB-ID"),
+            (pdo.comm, 2, "the TPDO's transmission type"),
+            (mapping, 0, "the number of mapped objects"),
+        ] {
+            match read_described(ctx, index, sub, what)? {
+                Ok(value) => values.push(value),
+                Err(failed) => return Ok(Err(failed)),
             }
-            None => false,
-        };
-        if cob & 0xC000_0000 == 0 && cob & 0x7FF != 0 && mapped && kind.len() == 1 {
-            return Ok(Some((pdo.number, (cob & 0x7FF) as u16, kind[0])));
+        }
+        let cob = u32_of(&Reply::Done(values[0].clone()));
+        let kind = values[1].first().copied();
+        let mapped = values[2].first().is_some_and(|n| *n > 0);
+        if let (Some(cob), Some(kind)) = (cob, kind)
+            && cob & 0xC000_0000 == 0
+            && cob & 0x7FF != 0
+            && mapped
+        {
+            return Ok(Ok(Some((pdo.number, (cob & 0x7FF) as u16, kind))));
         }
     }
-    Ok(None)
+    Ok(Ok(None))
 }
 
 /// The inquire services measured (CiA 305: the answer has the request's command specifier), with
@@ -429,6 +466,7 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 request: format!("LSS {what}, {} times", samples.len()),
                 clause: "CiA 305 v3.0",
                 cause: "the LSS slave answers slower than the criterion",
+                clock: Clock::Link,
             },
             samples,
             criterion,
@@ -448,7 +486,11 @@ pub(super) fn lss(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Finding::pass(format!(
             "LSS response times, {repetitions} of each service, max: {} ms; {judged}{}",
             worst.join(", "),
-            super::stamps_note(ctx, Criterion::at_most(ctx, "lss.response_max_ms", max).as_ref())
+            super::stamps_note(
+                ctx,
+                Clock::Link,
+                Criterion::at_most(ctx, "lss.response_max_ms", max).as_ref()
+            )
         ))
     }))
 }

@@ -5,7 +5,9 @@ use std::time::Duration;
 
 use crate::context::{Ctx, Reply};
 use crate::device_model::EntryModel;
-use crate::finding::Stop;
+use crate::finding::{Prepared, Stop};
+use crate::procedures::sdo::{download_text, refused_unexpectedly};
+use crate::requirements as req;
 
 /// How long a device may take from a reset to its boot-up message. CiA 301 sets no bound; the CCT
 /// waits a fixed time, canopener waits 2 s (documented in `docs/conformance.md`).
@@ -15,16 +17,23 @@ pub const BOOT_UP_WAIT: Duration = Duration::from_secs(2);
 /// device's timer resolution.
 pub const TEST_HEARTBEAT_MS: u16 = 50;
 
-/// Starts the heartbeat producer at [`TEST_HEARTBEAT_MS`] (written back after the test); `false`
-/// when the device has no writable 1017h.
-pub fn start_heartbeat(ctx: &mut Ctx<'_, '_>) -> Result<bool, Stop> {
+/// Starts the heartbeat producer at [`TEST_HEARTBEAT_MS`] (written back after the test): `false`
+/// when the EDS has no writable 1017h; a failure when the device refuses (or does not answer) the
+/// value its EDS makes writable (CiA 301 allows any producer time).
+pub fn start_heartbeat(ctx: &mut Ctx<'_, '_>) -> Prepared<bool> {
     if !ctx.model().entry(0x1017, 0).is_some_and(EntryModel::writable) {
-        return Ok(false);
+        return Ok(Ok(false));
     }
-    Ok(matches!(
-        ctx.modify(0x1017, 0, TEST_HEARTBEAT_MS.to_le_bytes().to_vec())?,
-        Reply::Done(_)
-    ))
+    let data = TEST_HEARTBEAT_MS.to_le_bytes().to_vec();
+    Ok(match ctx.modify(0x1017, 0, data.clone())? {
+        Reply::Done(_) => Ok(true),
+        other => Err(refused_unexpectedly(
+            &download_text((0x1017, 0), &data),
+            &other,
+            req::HEARTBEAT,
+            "the heartbeat producer time the EDS makes writable is not taken",
+        )),
+    })
 }
 
 /// The NMT state byte the device reports now: the last heartbeat within two and a half periods when

@@ -1,9 +1,9 @@
 //! SDO requests as the analyses name them, and the verdicts on a confirmation or refusal CiA 301
 //! requires.
 
-use crate::context::{Reply, hex};
-use crate::finding::{Evidence, Finding};
-use crate::requirements::{Accepted, code_meaning};
+use crate::context::{Ctx, Reply, hex};
+use crate::finding::{Evidence, Finding, Prepared};
+use crate::requirements::{self as req, Accepted, code_meaning};
 
 /// The verdict on a request that CiA 301 requires the device to refuse with one of `accepted`.
 pub fn expect_refusal(
@@ -48,6 +48,22 @@ pub fn refused_unexpectedly(request: &str, reply: &Reply, clause: &str, cause: &
             cause: cause.to_owned(),
         },
     )
+}
+
+/// Reads `index`:`sub`, an entry the EDS describes as readable, whose value (`what`) a test needs
+/// before it can measure anything: any answer but the value ends the test with a failure, since
+/// CiA 301 requires the server to serve what the device describes (a timeout is a failure, never "the
+/// feature is absent").
+pub fn read_described(ctx: &mut Ctx<'_, '_>, index: u16, sub: u8, what: &str) -> Prepared<Vec<u8>> {
+    Ok(match ctx.read(index, sub)? {
+        Reply::Done(value) => Ok(value),
+        other => Err(refused_unexpectedly(
+            &upload_text((index, sub)),
+            &other,
+            req::SDO_UPLOAD,
+            &format!("the device does not serve {what}, which its EDS describes as readable"),
+        )),
+    })
 }
 
 /// `SDO upload 1000h:00`.

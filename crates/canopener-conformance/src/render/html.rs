@@ -102,6 +102,11 @@ fn write_summary(out: &mut String, report: &Report) {
         ("fail", "The device failed at least one test.")
     } else if s.inconclusive > 0 {
         ("inconclusive", "No test failed, but some could not decide.")
+    } else if s.measured_no_criterion > 0 {
+        (
+            "pass",
+            "Every applicable test passed; the measurements counted apart were judged against no criterion.",
+        )
     } else {
         ("pass", "Every applicable test passed.")
     };
@@ -112,17 +117,16 @@ fn write_summary(out: &mut String, report: &Report) {
         "<div class=\"card\"><span class=\"num\" id=\"count-tests\">{}</span><span class=\"label\">tests</span></div>",
         report.tests.len()
     );
-    for (verdict, count) in [
-        (Verdict::Pass, s.pass),
-        (Verdict::Fail, s.fail),
-        (Verdict::Inconclusive, s.inconclusive),
-        (Verdict::NotApplicable, s.not_applicable),
+    for (name, label, count) in [
+        ("pass", label(Verdict::Pass), s.conformance_passes()),
+        ("measured", MEASURED, s.measured_no_criterion),
+        ("fail", label(Verdict::Fail), s.fail),
+        ("inconclusive", label(Verdict::Inconclusive), s.inconclusive),
+        ("not_applicable", label(Verdict::NotApplicable), s.not_applicable),
     ] {
-        let name = verdict.as_str();
         let _ = writeln!(
             out,
-            "<div class=\"card {name}\"><span class=\"num\" id=\"count-{name}\">{count}</span><span class=\"label\">{}</span></div>",
-            label(verdict)
+            "<div class=\"card {name}\"><span class=\"num\" id=\"count-{name}\">{count}</span><span class=\"label\">{label}</span></div>"
         );
     }
     out.push_str("</div>\n");
@@ -214,11 +218,16 @@ fn write_suite(out: &mut String, report: &Report, suite: &str) {
     );
     let _ = writeln!(
         out,
-        "<h2>{} <span class=\"meta\">{} {}: {} passed, {} failed, {} inconclusive, {} not applicable</span></h2>",
+        "<h2>{} <span class=\"meta\">{} {}: {} passed, {}{} failed, {} inconclusive, {} not applicable</span></h2>",
         suite_heading(suite),
         tests.len(),
         if tests.len() == 1 { "test" } else { "tests" },
-        summary.pass,
+        summary.conformance_passes(),
+        if summary.measured_no_criterion > 0 {
+            format!("{} {MEASURED}, ", summary.measured_no_criterion)
+        } else {
+            String::new()
+        },
         summary.fail,
         summary.inconclusive,
         summary.not_applicable
@@ -235,7 +244,7 @@ fn write_suite(out: &mut String, report: &Report, suite: &str) {
             esc(&test.id),
             esc(group_name(&test.group)),
             esc(&test.title),
-            badge(test.verdict),
+            badge(test),
             esc(&test.reason),
             test.duration_s
         );
@@ -247,11 +256,17 @@ fn write_suite(out: &mut String, report: &Report, suite: &str) {
     out.push_str("</section>\n");
 }
 
-fn badge(verdict: Verdict) -> String {
+/// What the summaries call a pass no criterion judged.
+const MEASURED: &str = "measured, no criterion";
+
+fn badge(test: &TestReport) -> String {
+    if test.measured_no_criterion() {
+        return format!("<span class=\"badge measured\">{MEASURED}</span>");
+    }
     format!(
         "<span class=\"badge {}\">{}</span>",
-        verdict.as_str(),
-        label(verdict)
+        test.verdict.as_str(),
+        label(test.verdict)
     )
 }
 
@@ -263,15 +278,20 @@ fn write_test(out: &mut String, test: &TestReport) {
     };
     let _ = writeln!(
         out,
-        "<details class=\"test\" id=\"{}\" data-verdict=\"{}\" data-measurements=\"{}\"{open}>",
+        "<details class=\"test\" id=\"{}\" data-verdict=\"{}\" data-measurements=\"{}\"{}{open}>",
         esc(&anchor(&test.id)),
         test.verdict.as_str(),
-        test.measurements.len()
+        test.measurements.len(),
+        if test.measured_no_criterion() {
+            " data-no-criterion=\"\""
+        } else {
+            ""
+        }
     );
     let _ = writeln!(
         out,
         "<summary>{} <span class=\"id\">{}</span> {}<br/><span class=\"reason\">{}</span></summary>",
-        badge(test.verdict),
+        badge(test),
         esc(&test.id),
         esc(&test.title),
         esc(&test.reason)
@@ -814,6 +834,7 @@ mod tests {
                 telegram(0.001, Direction::Tx, "SDO upload 1000h:00"),
                 telegram(0.0015, Direction::Rx, "<script>alert(1)</script>"),
             ],
+            no_criterion: false,
         }
     }
 
@@ -839,6 +860,17 @@ mod tests {
                 BTreeMap::from([("heartbeat_interval".to_owned(), heartbeat)]),
             ),
             test_report("cia401.io.1", Verdict::NotApplicable, BTreeMap::new()),
+            TestReport {
+                no_criterion: true,
+                ..test_report(
+                    "cia313.perf.1",
+                    Verdict::Pass,
+                    BTreeMap::from([(
+                        "sdo_read_response".to_owned(),
+                        Measurement::new("ms", vec![0.2, 0.3]),
+                    )]),
+                )
+            },
         ];
         Report {
             version: crate::model::REPORT_VERSION,
@@ -925,6 +957,37 @@ mod tests {
             .filter(|n| n.has_tag_name("circle") && has_class(n, "out"))
             .count();
         assert_eq!(outliers, 1);
+    }
+
+    #[test]
+    fn a_measurement_without_criterion_is_counted_apart_from_the_passes() {
+        let report = small_report();
+        let html = render(&report);
+        let doc = parse(&html);
+        let count = |id: &str| {
+            doc.descendants()
+                .find(|n| n.attribute("id") == Some(id))
+                .and_then(|n| n.text())
+                .map(str::to_owned)
+        };
+        assert_eq!(report.summary.pass, 2);
+        assert_eq!(count("count-pass").as_deref(), Some("1"));
+        assert_eq!(count("count-measured").as_deref(), Some("1"));
+        let measured = doc
+            .descendants()
+            .find(|n| n.attribute("id") == Some(anchor("cia313.perf.1").as_str()))
+            .expect("the test");
+        assert_eq!(measured.attribute("data-verdict"), Some("pass"));
+        assert!(measured.attribute("data-no-criterion").is_some());
+        assert!(
+            measured
+                .descendants()
+                .any(|n| has_class(&n, "badge") && n.text() == Some("measured, no criterion"))
+        );
+        assert!(
+            html.contains("1 test: 0 passed, 1 measured, no criterion, 0 failed"),
+            "the suite line"
+        );
     }
 
     #[test]

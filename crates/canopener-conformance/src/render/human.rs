@@ -6,6 +6,9 @@ use std::fmt::Write as _;
 use crate::catalogue::GROUPS;
 use crate::model::{Report, TestReport, Verdict};
 
+/// What the summaries call a pass no criterion judged.
+pub const MEASURED: &str = "measured, no criterion";
+
 /// How many telegrams of a failing test the human report shows (the rest are in `--log DIR`).
 pub const EXCERPT: usize = 12;
 
@@ -36,7 +39,11 @@ pub fn render(report: &Report) -> String {
             continue;
         }
         let count = |v: Verdict| tests.iter().filter(|t| t.verdict == v).count();
-        let mut parts = vec![format!("{} passed", count(Verdict::Pass))];
+        let measured = tests.iter().filter(|t| t.measured_no_criterion()).count();
+        let mut parts = vec![format!("{} passed", count(Verdict::Pass) - measured)];
+        if measured > 0 {
+            parts.push(format!("{measured} {MEASURED}"));
+        }
         for (verdict, label) in [
             (Verdict::Fail, "failed"),
             (Verdict::Inconclusive, "inconclusive"),
@@ -89,6 +96,20 @@ pub fn render(report: &Report) -> String {
             }
         }
     }
+    let measured: Vec<&str> = report
+        .tests
+        .iter()
+        .filter(|t| t.measured_no_criterion())
+        .map(|t| t.id.as_str())
+        .collect();
+    if !measured.is_empty() {
+        let _ = writeln!(
+            out,
+            "\n{} (not conformance passes: no criterion was given, see --criteria): {}",
+            upper_first(MEASURED),
+            measured.join(", ")
+        );
+    }
     if report.interrupted {
         let _ = writeln!(
             out,
@@ -101,13 +122,25 @@ pub fn render(report: &Report) -> String {
     let s = report.summary;
     let _ = writeln!(
         out,
-        "\n{} tests: {} passed, {} failed, {} inconclusive, {} not applicable ({:.1} s)",
+        "\n{} tests: {} passed, {}{} failed, {} inconclusive, {} not applicable ({:.1} s)",
         report.tests.len(),
-        s.pass,
+        s.conformance_passes(),
+        if s.measured_no_criterion > 0 {
+            format!("{} {MEASURED}, ", s.measured_no_criterion)
+        } else {
+            String::new()
+        },
         s.fail,
         s.inconclusive,
         s.not_applicable,
         report.duration_s
     );
     out
+}
+
+fn upper_first(text: &str) -> String {
+    let mut chars = text.chars();
+    chars
+        .next()
+        .map_or(String::new(), |c| c.to_uppercase().chain(chars).collect())
 }

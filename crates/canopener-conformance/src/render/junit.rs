@@ -10,16 +10,27 @@ use crate::model::{Report, Verdict};
 pub fn render(report: &Report) -> String {
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     let s = report.summary;
+    // A measurement no criterion judged is no conformance pass: it is reported as skipped, with
+    // the counts apart in the suite's properties.
     let _ = writeln!(
         out,
         "<testsuite name=\"canopener test\" tests=\"{}\" failures=\"{}\" errors=\"{}\" skipped=\"{}\" time=\"{:.6}\" timestamp=\"{}\">",
         report.tests.len(),
         s.fail,
         s.inconclusive,
-        s.not_applicable,
+        s.not_applicable + s.measured_no_criterion,
         report.duration_s,
         attr(&report.started)
     );
+    out.push_str("  <properties>\n");
+    for (name, value) in [
+        ("passed", s.conformance_passes()),
+        ("measured_no_criterion", s.measured_no_criterion),
+        ("not_applicable", s.not_applicable),
+    ] {
+        let _ = writeln!(out, "    <property name=\"{name}\" value=\"{value}\"/>");
+    }
+    out.push_str("  </properties>\n");
     for test in &report.tests {
         let _ = writeln!(
             out,
@@ -43,6 +54,13 @@ pub fn render(report: &Report) -> String {
             }
             Verdict::NotApplicable => {
                 let _ = writeln!(out, "    <skipped message=\"{}\"/>", attr(&test.reason));
+            }
+            Verdict::Pass if test.no_criterion => {
+                let _ = writeln!(
+                    out,
+                    "    <skipped message=\"{}\"/>",
+                    attr(&format!("measured, no criterion: {}", test.reason))
+                );
             }
             Verdict::Pass => {}
         }

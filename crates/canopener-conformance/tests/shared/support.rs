@@ -176,6 +176,40 @@ impl Default for Setup {
     }
 }
 
+/// Runs every test except those `skip` names against a simulated device from the EDS text `bytes`,
+/// then reads `entry` from the device over SDO on the same bus: what the run left behind. `None`
+/// when the read failed.
+#[allow(dead_code)]
+pub(crate) fn run_then_read(
+    bytes: &[u8],
+    name: &str,
+    skip: &[&str],
+    entry: (u16, u8),
+) -> (Report, Option<Vec<u8>>) {
+    let mut left = None;
+    let report = run_bytes_then(
+        &Setup::default(),
+        bytes,
+        name,
+        NODE,
+        &[],
+        &Selection {
+            skip: skip.iter().map(|s| (*s).to_owned()).collect(),
+            ..Selection::default()
+        },
+        None,
+        &|_| false,
+        &|f, _| *f,
+        &mut |link| {
+            let mut session =
+                canopener_runtime::sdo_session::SdoSession::new(link, NODE, Duration::from_millis(500))
+                    .expect("session");
+            left = session.read(entry.0, entry.1).ok();
+        },
+    );
+    (report, left)
+}
+
 #[allow(clippy::too_many_arguments)]
 fn run_bytes(
     setup: &Setup,
@@ -187,6 +221,38 @@ fn run_bytes(
     cancel_at: Option<&str>,
     on_frame: &dyn Fn(&CanFrame) -> bool,
     rewrite: &dyn Fn(&CanFrame, bool) -> CanFrame,
+) -> Report {
+    let selection = Selection {
+        only: only.iter().map(|s| (*s).to_owned()).collect(),
+        ..Selection::default()
+    };
+    run_bytes_then(
+        setup,
+        bytes,
+        name,
+        node,
+        faults,
+        &selection,
+        cancel_at,
+        on_frame,
+        rewrite,
+        &mut |_| {},
+    )
+}
+
+/// [`run_bytes`] with any selection, handing the bus to `after` once the run is over.
+#[allow(clippy::too_many_arguments)]
+fn run_bytes_then(
+    setup: &Setup,
+    bytes: &[u8],
+    name: &str,
+    node: u8,
+    faults: &[Fault],
+    selection: &Selection,
+    cancel_at: Option<&str>,
+    on_frame: &dyn Fn(&CanFrame) -> bool,
+    rewrite: &dyn Fn(&CanFrame, bool) -> CanFrame,
+    after: &mut dyn FnMut(&mut dyn Link),
 ) -> Report {
     let cancel = Cancel::new();
     let loaded = canopener_eds::load(bytes);
@@ -207,10 +273,6 @@ fn run_bytes(
         on_frame,
         rewrite,
     };
-    let selection = Selection {
-        only: only.iter().map(|s| (*s).to_owned()).collect(),
-        ..Selection::default()
-    };
     let tests = selection.pick(&catalogue()).expect("selection");
     let spec = RunSpec {
         node,
@@ -222,13 +284,15 @@ fn run_bytes(
         eds_errors,
         cancel: Some(cancel.clone()),
     };
-    runner::run_with(&mut bus, &spec, &setup.performance, &tests, |progress| {
+    let report = runner::run_with(&mut bus, &spec, &setup.performance, &tests, |progress| {
         if progress.current.is_some_and(|t| Some(t.id) == cancel_at) {
             cancel.cancel();
         }
     })
     .expect("run")
-    .report
+    .report;
+    after(&mut bus);
+    report
 }
 
 /// A link that cancels `cancel` when it receives a frame `on_frame` accepts, and passes every frame
