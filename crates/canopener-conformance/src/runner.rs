@@ -9,7 +9,6 @@ use canopener_runtime::link::Link;
 use canopener_runtime::sdo_session::SdoSession;
 use canopener_wire::{Decoder, NmtCommand};
 
-use crate::test_def::TestDef;
 use crate::context::{Ctx, Reply};
 use crate::device_model::DeviceModel;
 use crate::finding::{Finding, Stop};
@@ -17,6 +16,7 @@ use crate::model::{BusInfo, DeviceInfo, Identity, REPORT_VERSION, Report, Summar
 use crate::performance::Performance;
 use crate::recorder::{Logged, Recorder};
 use crate::stimulus::Hook;
+use crate::test_def::TestDef;
 
 /// What a run needs besides the link.
 #[derive(Debug, Clone)]
