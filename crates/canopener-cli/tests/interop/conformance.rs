@@ -544,8 +544,9 @@ fn the_heartbeat_deviation_through_the_hub_passes_clean_and_fails_with_heartbeat
 /// canopen's `LocalNode` serving the CiA 401 EDS, whose RPDO1 maps 6200h:01 with a DefaultValue, so
 /// an RPDO's effect can be read back. LocalNode obeys only NMT commands for its own node-ID (its
 /// `NmtSlave.on_command` compares the node-ID byte with its own and 0) and, with the peer's resets,
-/// restores what each reset must; but it never acts on an RPDO, in any state, so `nmt.6` fails on
-/// operational: its silence in pre-operational and stopped is no merit.
+/// restores what each reset must; but without an application that subscribes its RPDOs
+/// (`rpdo.read()`) it never acts on one, in any state, so `nmt.6` fails on operational: its silence in
+/// pre-operational and stopped is no merit.
 #[test]
 fn python_local_node_per_state() {
     let Some(python) = python() else { return };

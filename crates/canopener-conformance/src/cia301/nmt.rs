@@ -1,6 +1,9 @@
 //! NMT state and transition tests (CCT groups "State" and "Transition"): every transition of the
-//! CiA 301 state diagram (§7.3.2.2.1 figure "NMT state diagram of a CANopen device") and the services
-//! allowed in each state.
+//! CiA 301 state diagram (§7.3.2.2.1 figure "NMT state diagram of a CANopen device"), addressed to the
+//! node, to all nodes and to other nodes, and SDO and error control in stopped. The other services
+//! per state are in [`super::nmt_pdo`] (PDOs) and [`super::nmt_services`] (EMCY, SYNC), what the
+//! resets keep and restore in [`super::nmt_resets`]; `docs/conformance.md` maps every cell of CiA
+//! 301's table of services per state to its test.
 
 use std::time::Duration;
 
