@@ -47,19 +47,16 @@ const CLEAN: &[(&str, &str)] = &[
 /// `cia301.eds.1` may report.
 const MANY_PDOS: &str = "CANopenNode__CANopenSocket__canopend__objDict__CANopenSocket.eds";
 
-/// The CiA 301 tests of the services per NMT state and of the resets (issue 22 item 3): they wait
-/// out the windows in which a device must stay silent, so their time is budgeted apart.
-const STATE_TESTS: &[&str] = &[
-    "cia301.nmt.5",
-    "cia301.nmt.6",
-    "cia301.nmt.7",
-    "cia301.nmt.8",
-    "cia301.nmt.9",
-    "cia301.nmt.10",
-    "cia301.nmt.11",
-    "cia301.pdo.19",
-    "cia301.emcy.6",
-];
+/// The CiA 301 tests of the services per NMT state and of the resets (issue 22 item 3), tagged
+/// `states`: they wait out the windows in which a device must stay silent, so their time is budgeted
+/// apart.
+fn state_tests() -> Vec<&'static str> {
+    canopener_conformance::catalogue::catalogue()
+        .into_iter()
+        .filter(|t| t.tags.contains(&"states"))
+        .map(|t| t.id)
+        .collect()
+}
 
 /// The ids of the failed tests.
 fn device_failures(report: &canopener_conformance::model::Report) -> Vec<String> {
@@ -89,9 +86,10 @@ fn check_clean(report: &canopener_conformance::model::Report, what: &str, allowe
     // services per NMT state and of the resets within three more (they watch states for frames
     // that must not come), and the CiA 305 suite within six more: its ten "must not answer" waits
     // cost one 500 ms timeout each.
+    let states = state_tests();
     let in_budget = |budget: &str, t: &canopener_conformance::model::TestReport| match budget {
-        "cia301" => (t.suite == "cia301" || t.suite == "eds") && !STATE_TESTS.contains(&t.id.as_str()),
-        "cia301 NMT states" => STATE_TESTS.contains(&t.id.as_str()),
+        "cia301" => (t.suite == "cia301" || t.suite == "eds") && !states.contains(&t.id.as_str()),
+        "cia301 NMT states" => states.contains(&t.id.as_str()),
         suite => t.suite == suite,
     };
     for (suite, budget) in [("cia301", 10.0), ("cia301 NMT states", 3.0), ("cia305", 6.0)] {
@@ -152,8 +150,10 @@ fn the_state_tests_decide_on_devices_that_refuse_downloads_in_operational() {
             .downloads_refused_in_operational(true),
         ..support::Setup::default()
     };
+    let states = state_tests();
+    assert_eq!(states.len(), 9, "{states:?}");
     for (name, what) in CLEAN {
-        let report = support::run_setup(&setup, name, &[], STATE_TESTS);
+        let report = support::run_setup(&setup, name, &[], &states);
         let undecided: Vec<_> = report
             .tests
             .iter()
@@ -161,7 +161,7 @@ fn the_state_tests_decide_on_devices_that_refuse_downloads_in_operational() {
             .map(|t| format!("{} {}: {}", t.id, t.verdict.as_str(), t.reason))
             .collect();
         assert!(undecided.is_empty(), "{what}: {undecided:#?}");
-        assert_eq!(report.tests.len(), STATE_TESTS.len());
+        assert_eq!(report.tests.len(), states.len());
     }
 }
 

@@ -67,6 +67,19 @@ fn report(path: &Path) -> Value {
     serde_json::from_str(&fixture::read_to_string(path).expect("report written")).expect("JSON report")
 }
 
+/// Every test of `report` as (id, verdict, reason).
+fn verdicts(report: &Value) -> Vec<(String, String, String)> {
+    report["tests"]
+        .as_array()
+        .expect("tests")
+        .iter()
+        .map(|t| {
+            let field = |name: &str| t[name].as_str().unwrap_or_default().to_owned();
+            (field("id"), field("verdict"), field("reason"))
+        })
+        .collect()
+}
+
 fn failed(report: &Value) -> Vec<String> {
     report["tests"]
         .as_array()
@@ -410,15 +423,7 @@ fn python_local_node_has_no_cia401_behaviour_and_never_passes_for_it() {
     let dir = ScratchDir::new("conformance-cia401-local-node");
     let bus = hub.spec("can0");
     let (code, report, stderr, _) = json_run(&dir, &bus, "34", &eds, &["--suite", "cia401"]);
-    let verdicts: Vec<(String, String, String)> = report["tests"]
-        .as_array()
-        .expect("tests")
-        .iter()
-        .map(|t| {
-            let field = |name: &str| t[name].as_str().unwrap_or_default().to_owned();
-            (field("id"), field("verdict"), field("reason"))
-        })
-        .collect();
+    let verdicts = verdicts(&report);
     eprintln!("python LocalNode, cia401: {verdicts:#?}");
     assert_eq!(code, Some(6), "stderr: {stderr}");
     assert_eq!(verdicts.len(), 9);
@@ -556,34 +561,11 @@ fn python_local_node_per_state() {
     let _peer = local_node(&python, &hub, "34", &eds, &[]);
     let dir = ScratchDir::new("conformance-states-local-node");
     let bus = hub.spec("can0");
-    let only = [
-        "cia301.nmt.5",
-        "cia301.nmt.6",
-        "cia301.nmt.7",
-        "cia301.nmt.8",
-        "cia301.nmt.9",
-        "cia301.nmt.10",
-        "cia301.nmt.11",
-        "cia301.pdo.19",
-        "cia301.emcy.6",
-    ];
-    let mut args = Vec::new();
-    for id in only {
-        args.extend(["--only", id]);
-    }
-    let (code, report, stderr, _) = json_run(&dir, &bus, "34", &eds, &args);
-    let verdicts: Vec<(String, String, String)> = report["tests"]
-        .as_array()
-        .expect("tests")
-        .iter()
-        .map(|t| {
-            let field = |name: &str| t[name].as_str().unwrap_or_default().to_owned();
-            (field("id"), field("verdict"), field("reason"))
-        })
-        .collect();
+    let (code, report, stderr, _) = json_run(&dir, &bus, "34", &eds, &["--tag", "states"]);
+    let verdicts = verdicts(&report);
     eprintln!("python LocalNode, per-state tests: {verdicts:#?}");
     assert_eq!(code, Some(6), "stderr: {stderr}");
-    assert_eq!(verdicts.len(), only.len());
+    assert_eq!(verdicts.len(), 9);
     for (id, verdict, reason) in &verdicts {
         let expected = match id.as_str() {
             // Commands to other node-IDs ignored; the peer's resets restore 1000h–1FFFh (reset

@@ -88,7 +88,7 @@ pub fn tests() -> Vec<TestDef> {
             title: "NMT commands addressed to other node-IDs (all five, to two other node-IDs) are not obeyed",
             references: &[req::NMT_MODULE_CONTROL, req::BOOT_UP],
             precondition: "a writable 1017h or node guarding, to observe the state; the device alone on the bus (the commands address node-IDs it does not have)",
-            tags: &["nmt", "heartbeat"],
+            tags: &["nmt", "heartbeat", "states"],
             run: other_node_ids,
         },
     ]

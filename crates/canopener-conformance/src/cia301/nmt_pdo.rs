@@ -50,7 +50,7 @@ pub fn tests() -> Vec<TestDef> {
                 "CCT State 04",
             ],
             precondition: "a TPDO with writable COB-ID and transmission type and mapped data (the event-timer part needs a writable 18xxh:05, the SYNC part a SYNC consumer 1005h); a refusal to set it up is not_applicable",
-            tags: &["nmt", "pdo", "sync", "writes"],
+            tags: &["nmt", "pdo", "sync", "writes", "states"],
             run: tpdo_per_state,
         },
         TestDef {
@@ -66,7 +66,7 @@ pub fn tests() -> Vec<TestDef> {
                 "CCT State 04",
             ],
             precondition: "a valid RPDO mapping whole bytes of objects SDO can read, one of them an integer (else one mapped for the test with the mapping procedure); without one the test is inconclusive (nothing to observe)",
-            tags: &["nmt", "pdo", "writes"],
+            tags: &["nmt", "pdo", "writes", "states"],
             run: rpdo_per_state,
         },
         TestDef {
@@ -76,7 +76,7 @@ pub fn tests() -> Vec<TestDef> {
             title: "A TPDO whose 18xxh:01 bit 31 says \"not valid\" is never sent, also when made not valid in operational",
             references: &[req::PDO_PARAMETERS, req::PDO],
             precondition: "a TPDO with writable COB-ID and transmission type and mapped data, and a writable 18xxh:05 or a SYNC consumer (1005h)",
-            tags: &["pdo", "writes", "nmt"],
+            tags: &["pdo", "writes", "nmt", "states"],
             run: invalid_tpdo,
         },
     ]

@@ -36,7 +36,7 @@ pub fn tests() -> Vec<TestDef> {
             title: "Reset communication (sent in stopped) restores 1000h–1FFFh to their defaults and keeps 2000h–9FFFh as written",
             references: &[req::NMT_RESETS, req::NMT_STATES, "CCT Transition 01"],
             precondition: "writable communication (1017h, 100Ch, 1015h or 1016h:01) or application (2000h–9FFFh, integer) entries with a DefaultValue that hold what SDO writes",
-            tags: &["nmt", "od", "writes"],
+            tags: &["nmt", "od", "writes", "states"],
             run: reset_communication_areas,
         },
         TestDef {
@@ -51,7 +51,7 @@ pub fn tests() -> Vec<TestDef> {
                 "CCT Transition 01",
             ],
             precondition: "as cia301.nmt.10",
-            tags: &["nmt", "od", "writes"],
+            tags: &["nmt", "od", "writes", "states"],
             run: reset_node_areas,
         },
     ]

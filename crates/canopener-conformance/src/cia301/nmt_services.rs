@@ -45,7 +45,7 @@ pub fn tests() -> Vec<TestDef> {
                 "CCT State 04",
             ],
             precondition: "an EMCY producer (1014h, bit 31 clear) and a writable 1016h:01, else writable 100Ch and 100Dh",
-            tags: &["nmt", "emcy", "heartbeat", "writes"],
+            tags: &["nmt", "emcy", "heartbeat", "writes", "states"],
             run: emcy_per_state,
         },
         TestDef {
@@ -61,7 +61,7 @@ pub fn tests() -> Vec<TestDef> {
                 "CCT State 04",
             ],
             precondition: "writable 1005h and 1006h; a refusal to produce SYNC (optional) is not_applicable",
-            tags: &["nmt", "sync", "writes"],
+            tags: &["nmt", "sync", "writes", "states"],
             run: sync_producer_per_state,
         },
         TestDef {
@@ -71,7 +71,7 @@ pub fn tests() -> Vec<TestDef> {
             title: "1001h is not 00h while an error is active (a heartbeat consumer timeout or life guarding event)",
             references: &[req::ERROR_OBJECTS, req::EMCY, "CCT Emergency 05"],
             precondition: "a writable 1016h:01, else writable 100Ch and 100Dh, to provoke the error; 1001h reading 00h before it",
-            tags: &["emcy", "heartbeat", "writes"],
+            tags: &["emcy", "heartbeat", "writes", "states"],
             run: register_while_error,
         },
     ]
