@@ -65,7 +65,7 @@ pub fn tests() -> Vec<TestDef> {
                 "CCT State 03",
                 "CCT State 04",
             ],
-            precondition: "a valid RPDO mapping whole bytes of objects SDO can read, one of them an integer (else one mapped for the test with the mapping procedure); without one the test is inconclusive (nothing to observe)",
+            precondition: "a valid RPDO mapping whole bytes of objects SDO can read, one of them an integer (else one mapped for the test with the mapping procedure); not_applicable when the EDS has no RPDO or no writable object with PDOMapping=1, inconclusive when nothing an RPDO writes can be read back",
             tags: &["nmt", "pdo", "writes", "states"],
             run: rpdo_per_state,
         },
