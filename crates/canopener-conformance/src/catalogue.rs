@@ -35,6 +35,9 @@ pub fn catalogue() -> Vec<TestDef> {
     all.extend(crate::cia301::consumer::tests());
     all.extend(crate::cia301::store::tests());
     all.extend(crate::cia301::nmt::tests());
+    all.extend(crate::cia301::nmt_pdo::tests());
+    all.extend(crate::cia301::nmt_services::tests());
+    all.extend(crate::cia301::nmt_resets::tests());
     all.extend(crate::cia401::tests());
     all.extend(crate::cia305::tests());
     all.extend(crate::cia313::tests());

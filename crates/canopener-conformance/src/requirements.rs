@@ -57,6 +57,10 @@ pub const STORE_RESTORE: &str = "CiA 301 §7.5.2 (1010h store parameters, 1011h 
 pub const RESTRICTED_IDS: &str = "CiA 301 §7.3.5 (restricted CAN-IDs)";
 /// CiA 301 §7.2.8.2: NMT states and the services allowed in each.
 pub const NMT_STATES: &str = "CiA 301 §7.2.8.2 (NMT states and services per state)";
+/// CiA 301 §7.2.8.2: the initialisation sub-states reset application (2000h–9FFFh to their power-on
+/// values, then reset communication) and reset communication (1000h–1FFFh).
+pub const NMT_RESETS: &str =
+    "CiA 301 §7.2.8.2 (NMT initialisation: reset application 2000h–9FFFh, reset communication 1000h–1FFFh)";
 /// CiA 301 §7.2.8.3.1: NMT module control services.
 pub const NMT_MODULE_CONTROL: &str = "CiA 301 §7.2.8.3.1 (NMT module control)";
 /// CiA 301 §7.2.8.3.3: boot-up.

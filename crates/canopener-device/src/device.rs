@@ -58,8 +58,9 @@
 //! cores, never inside them: received frames pass the fault layer before routing, sent frames
 //! pass it (tagged with the core that made them) after collection, and the three "accepted
 //! anyway" faults and `store-ignored` act in the device's own SDO download hooks, which the SDO
-//! server calls at the end of every download, expedited, segmented or block. Without faults every
-//! one of these steps is the identity.
+//! server calls at the end of every download, expedited, segmented or block. The NMT state a
+//! core is told, the PDO parameters the engine loads, the routing per state and the areas a reset
+//! restores pass the fault layer too. Without faults every one of these steps is the identity.
 
 use std::collections::{BTreeSet, VecDeque};
 
@@ -466,6 +467,9 @@ impl Device {
             }
         }
         self.emcy.sync_od(&mut self.od);
+        if self.faults.has(Fault::ErrorRegisterNotUpdated) {
+            let _ = self.od.set_value(ObjectKey::new(0x1001, 0), &[0]);
+        }
         self.collect_frames(now);
     }
 
@@ -583,16 +587,21 @@ impl Device {
             let dropped = self.faults.has(Fault::NoEmcy)
                 || (self.faults.has(Fault::EmcyNoErrorReset) && d.starts_with(&[0, 0]));
             if d.len() == 8 && !dropped {
+                let register = if self.faults.has(Fault::ErrorRegisterNotUpdated) {
+                    0
+                } else {
+                    d[2]
+                };
                 self.events.push_back(DeviceEvent::EmcySent {
                     code: u16::from_le_bytes([d[0], d[1]]),
-                    register: d[2],
+                    register,
                     data: [d[3], d[4], d[5], d[6], d[7]],
                 });
             }
             made.push((Source::Emcy, frame));
         }
         made.extend(std::iter::from_fn(|| self.sync.poll_transmit()).map(|f| (Source::Sync, f)));
-        made.extend(std::iter::from_fn(|| self.pdo.poll_transmit()).map(|f| (Source::Other, f)));
+        made.extend(std::iter::from_fn(|| self.pdo.poll_transmit()).map(|f| (Source::Pdo, f)));
         made.extend(std::iter::from_fn(|| self.time.poll_transmit()).map(|f| (Source::Other, f)));
         if silent || !self.configured {
             made.truncate(lss_frames);
@@ -644,11 +653,15 @@ impl Device {
         self.events.push_back(DeviceEvent::Nmt(event));
         match event {
             NmtEvent::StateChanged { to, .. } => {
+                self.faults.set_state(to);
                 self.error_control.set_state(now, to);
-                self.emcy.set_state(now, to);
-                self.sync.set_state(now, to);
+                self.emcy
+                    .set_state(now, self.faults.core_state(CommService::Emcy, to));
+                self.sync
+                    .set_state(now, self.faults.core_state(CommService::Sync, to));
                 self.time.set_state(now, to);
-                self.pdo.set_state(now, to);
+                self.pdo
+                    .set_state(now, self.faults.core_state(CommService::Pdo, to));
                 self.lock_downloads();
                 if !to.is_active(CommService::Sdo) {
                     for (_, server) in &mut self.sdo {
@@ -657,7 +670,8 @@ impl Device {
                 }
             }
             NmtEvent::ResetApplication => {
-                self.reset_application = true;
+                // `reset-node-as-reset-communication`: the application area is left as it is.
+                self.reset_application = !self.faults.has(Fault::ResetNodeAsResetCommunication);
                 // Reset node is the device's power cycle: it starts with what LSS stored.
                 if let (Some(lss), Some(stored)) = (&mut self.lss, self.lss_storage.stored()) {
                     lss.restore_stored(stored);
@@ -849,8 +863,16 @@ impl Device {
                 None => self.configured = false,
             }
         }
-        self.restore_defaults(0x1000..=0x1FFF);
-        self.apply_saved(ParameterGroup::Communication);
+        if !application && self.faults.has(Fault::ResetCommunicationRestoresApplication) {
+            self.restore_defaults(0x2000..=0x9FFF);
+            for group in [ParameterGroup::Application, ParameterGroup::Manufacturer] {
+                self.apply_saved(group);
+            }
+        }
+        if application || !self.faults.has(Fault::ResetCommunicationKeepsValues) {
+            self.restore_defaults(0x1000..=0x1FFF);
+            self.apply_saved(ParameterGroup::Communication);
+        }
         self.store.sync_od(&mut self.od);
         self.load_communication(now);
         if application {
@@ -862,6 +884,13 @@ impl Device {
         if self.configured {
             self.nmt.boot(now);
         }
+    }
+
+    /// Loads the PDO engine's parameters from the dictionary (through the fault layer, which may
+    /// hand it a copy with TPDO COB-IDs made valid).
+    fn reload_pdos(&mut self, now: Instant) {
+        let od = self.faults.pdo_parameters(&self.od);
+        self.pdo.reload(now, &od);
     }
 
     fn restore_defaults(&mut self, range: std::ops::RangeInclusive<u16>) {
@@ -1042,7 +1071,7 @@ impl Core for Device {
             self.error_control.handle_frame(now, frame);
             self.consumer.handle_frame(now, frame);
         }
-        if state.is_active(CommService::Sdo) {
+        if state.is_active(CommService::Sdo) || self.faults.routes(CommService::Sdo, state) {
             let mut hooks = Hooks {
                 pdo: &self.pdo,
                 sync: &self.sync,
@@ -1063,7 +1092,7 @@ impl Core for Device {
         if state.is_active(CommService::Time) {
             self.time.handle_frame(now, frame);
         }
-        if state.is_active(CommService::Pdo) {
+        if state.is_active(CommService::Pdo) || self.faults.routes(CommService::Pdo, state) {
             self.pdo.handle_frame(now, frame, &mut self.od);
         }
         self.pump(now);

@@ -3,23 +3,34 @@
 //!
 //! Each [`Fault`] is a small, explicit deviation applied by the `Device` around its cores, never
 //! inside them: the cores stay correct, and a device without faults behaves exactly as before.
-//! A fault acts at one of four places:
+//! A fault acts at one of six places:
 //! - **on received frames**, before any core sees them (`FaultLayer::inbound`): a frame is
 //!   dropped (NMT stop, NMT broadcast, LSS, TPDO remote requests) or rewritten (the SDO toggle bit
-//!   is forced to what the server expects);
+//!   is forced to what the server expects, an NMT command's node-ID becomes the device's own);
 //! - **on sent frames**, after the cores made them and before they leave the device
-//!   (`FaultLayer::outbound`): a frame is dropped (boot-up, EMCY), rewritten (heartbeat state,
-//!   abort code, expedited size bit, SYNC counter, block CRC, boot-up CAN-ID) or delayed and
-//!   duplicated on virtual time (slow SDO, heartbeat jitter, extra heartbeats 1 ms apart);
+//!   (`FaultLayer::outbound`): a frame is dropped (boot-up, EMCY, TPDOs in pre-operational),
+//!   rewritten (heartbeat state, abort code, expedited size bit, SYNC counter, block CRC, boot-up
+//!   CAN-ID, EMCY error register) or delayed and duplicated on virtual time (slow SDO, heartbeat
+//!   jitter, extra heartbeats 1 ms apart);
 //! - **in the `Device`'s own checks** on SDO downloads: a download a correct device refuses
 //!   (above HighLimit, a non-mappable object in a PDO mapping, a restricted COB-ID) is stored and
 //!   confirmed anyway, and a `save` signature is confirmed without storing anything;
-//! - **in the `Device`'s routing**: node guarding requests are answered while heartbeat runs.
+//! - **in the `Device`'s routing**: node guarding requests are answered while heartbeat runs, SDO
+//!   requests in stopped and PDOs in pre-operational or stopped reach their cores
+//!   (`FaultLayer::routes`);
+//! - **in what the `Device` tells its cores**: the NMT state the PDO engine, the EMCY producer and
+//!   SYNC run in (`FaultLayer::core_state`), the PDO parameters the engine reads (bit 31 of TPDO
+//!   COB-IDs cleared, `FaultLayer::pdo_parameters`), and 1001h, cleared after every update;
+//! - **in the `Device`'s resets**: which areas of the dictionary reset node and reset
+//!   communication set back to their power-on values.
 //!
 //! The sources of the defects: the thesis in `seeds/001` (a UWASA node tested with a Kvaser rig:
 //! a write above HighLimit to 1F51h accepted, a non-mappable object accepted into a PDO mapping,
 //! heartbeats 1 ms apart, no RTR on TPDOs, no LSS), the EnergyBus conformance testing paper (a
-//! missing SYNC counter, a missing LSS state change during configuration) and field experience.
+//! missing SYNC counter, a missing LSS state change during configuration), the planted defects of
+//! issue 22 that an earlier CiA 301 suite did not notice (PDOs in pre-operational, NMT commands to
+//! other nodes obeyed, invalid TPDOs sent, 1001h not updated, reset communication restoring the
+//! application area) and field experience.
 
 use std::collections::VecDeque;
 use std::fmt;
@@ -29,6 +40,8 @@ use std::time::Duration;
 use canopener_can::{CanFrame, Instant, StandardId};
 use canopener_od::{DynamicOd, ObjectKey};
 use canopener_wire::{ERROR_CONTROL_BASE, LSS_MASTER_TO_SLAVE_ID, NMT_ID, NodeId, abort};
+
+use crate::nmt_slave::{CommService, NmtSlaveState};
 
 /// The SDO response delay of [`Fault::SdoSlow`] unless [`FaultSet::with_sdo_delay`] says
 /// otherwise: longer than the 500 ms many SDO clients wait by default.
@@ -100,11 +113,35 @@ pub enum Fault {
     TpdoEventTimerFast,
     /// The error register byte of every EMCY has the generic bit (bit 0) clear.
     EmcyGenericBitClear,
+    /// TPDOs are sent in pre-operational.
+    TpdoInPreOperational,
+    /// RPDOs received in pre-operational are acted on.
+    RpdoInPreOperational,
+    /// PDOs keep running in stopped.
+    PdoInStopped,
+    /// NMT commands addressed to another node-ID are obeyed.
+    NmtOtherNodeObeyed,
+    /// A TPDO is sent although 18xxh:01 bit 31 says it is not valid.
+    TpdoInvalidSent,
+    /// 1001h and the EMCY's error register byte stay 0 when an error occurs.
+    ErrorRegisterNotUpdated,
+    /// EMCYs are sent in stopped.
+    EmcyInStopped,
+    /// The SYNC producer keeps running in stopped.
+    SyncProducerInStopped,
+    /// SDO requests are answered in stopped.
+    SdoInStopped,
+    /// NMT reset communication also restores the application objects 2000h–9FFFh.
+    ResetCommunicationRestoresApplication,
+    /// NMT reset communication keeps the communication objects' values.
+    ResetCommunicationKeepsValues,
+    /// NMT reset node is carried out as a reset communication: 2000h–9FFFh keep their values.
+    ResetNodeAsResetCommunication,
 }
 
 impl Fault {
     /// Every fault, in catalogue order.
-    pub const ALL: [Fault; 30] = [
+    pub const ALL: [Fault; 42] = [
         Fault::NoBootUp,
         Fault::BootUpWrongId,
         Fault::HeartbeatStateWrong,
@@ -135,6 +172,18 @@ impl Fault {
         Fault::SyncProducerFast,
         Fault::TpdoEventTimerFast,
         Fault::EmcyGenericBitClear,
+        Fault::TpdoInPreOperational,
+        Fault::RpdoInPreOperational,
+        Fault::PdoInStopped,
+        Fault::NmtOtherNodeObeyed,
+        Fault::TpdoInvalidSent,
+        Fault::ErrorRegisterNotUpdated,
+        Fault::EmcyInStopped,
+        Fault::SyncProducerInStopped,
+        Fault::SdoInStopped,
+        Fault::ResetCommunicationRestoresApplication,
+        Fault::ResetCommunicationKeepsValues,
+        Fault::ResetNodeAsResetCommunication,
     ];
 
     /// The stable kebab-case name (`canopener sim --fault NAME`).
@@ -170,6 +219,18 @@ impl Fault {
             Fault::SyncProducerFast => "sync-producer-fast",
             Fault::TpdoEventTimerFast => "tpdo-event-timer-fast",
             Fault::EmcyGenericBitClear => "emcy-generic-bit-clear",
+            Fault::TpdoInPreOperational => "tpdo-in-pre-operational",
+            Fault::RpdoInPreOperational => "rpdo-in-pre-operational",
+            Fault::PdoInStopped => "pdo-in-stopped",
+            Fault::NmtOtherNodeObeyed => "nmt-other-node-obeyed",
+            Fault::TpdoInvalidSent => "tpdo-invalid-sent",
+            Fault::ErrorRegisterNotUpdated => "error-register-not-updated",
+            Fault::EmcyInStopped => "emcy-in-stopped",
+            Fault::SyncProducerInStopped => "sync-producer-in-stopped",
+            Fault::SdoInStopped => "sdo-in-stopped",
+            Fault::ResetCommunicationRestoresApplication => "reset-communication-restores-application",
+            Fault::ResetCommunicationKeepsValues => "reset-communication-keeps-values",
+            Fault::ResetNodeAsResetCommunication => "reset-node-as-reset-communication",
         }
     }
 
@@ -340,6 +401,72 @@ impl Fault {
                  the generic bit whenever any error bit is set. A test should check each EMCY's \
                  error register byte against that rule and against 1001h read after it. From \
                  CANopenNode's demo device (issue 22)."
+            Fault::TpdoInPreOperational => {
+                "TPDOs run in pre-operational as in operational: event-timer and SYNC-triggered TPDOs \
+                 are sent, though CiA 301 runs PDOs in operational only (RPDOs and remote requests \
+                 are still ignored there). A test should set up a TPDO that transmits on its own and \
+                 expect nothing in pre-operational. From issue 22 (a planted defect the CiA 301 suite \
+                 did not notice)."
+            }
+            Fault::RpdoInPreOperational => {
+                "RPDOs received in pre-operational are written into their mapped objects (TPDOs stay \
+                 silent there). A test should send an RPDO in pre-operational and read the mapped \
+                 object back by SDO: it must be unchanged. From issue 22 (a planted defect)."
+            }
+            Fault::PdoInStopped => {
+                "PDOs keep running in stopped: TPDOs are sent (event timer, remote requests) and RPDOs \
+                 are written into their mapped objects, though the device reports stopped and serves \
+                 no SDO. A test should expect no TPDO and an unchanged RPDO-mapped object after \
+                 stopped. Field experience (the PDO task not told about the NMT state)."
+            }
+            Fault::NmtOtherNodeObeyed => {
+                "NMT commands addressed to another node-ID are carried out as if addressed to this \
+                 node (the node-ID byte is not compared). A test should address commands to other \
+                 node-IDs and expect no change. From issue 22 (a planted defect)."
+            }
+            Fault::TpdoInvalidSent => {
+                "TPDOs are sent although 18xxh:01 bit 31 says the PDO is not valid: the device \
+                 ignores the bit and runs every TPDO that has a CAN-ID. A test should make a TPDO \
+                 transmit on its own, leave bit 31 set and expect nothing. From issue 22 (a planted \
+                 defect)."
+            }
+            Fault::ErrorRegisterNotUpdated => {
+                "1001h stays 00h and every EMCY carries 00h as its error register byte, while errors \
+                 are still raised, sent and recorded in 1003h. A test should read 1001h while an error \
+                 is active. From issue 22 (a planted defect)."
+            }
+            Fault::EmcyInStopped => {
+                "EMCYs are sent in stopped, though CiA 301 runs EMCY in pre-operational and \
+                 operational only. A test should provoke an error in stopped (a heartbeat consumer \
+                 timeout) and expect no EMCY until the device leaves stopped. Field experience."
+            }
+            Fault::SyncProducerInStopped => {
+                "A device that produces SYNC (1005h bit 30) keeps producing it in stopped, though CiA \
+                 301 runs SYNC in pre-operational and operational only. A test should stop the \
+                 producer's node and expect no SYNC. Field experience."
+            }
+            Fault::SdoInStopped => {
+                "SDO requests are answered in stopped, though the heartbeat reports stopped: CiA 301 \
+                 serves only NMT and error control there. A test should send an SDO request in \
+                 stopped and expect no answer. Field experience."
+            }
+            Fault::ResetCommunicationRestoresApplication => {
+                "NMT reset communication also sets the application objects 2000h–9FFFh back to their \
+                 power-on values, as reset node does; CiA 301 restores only 1000h–1FFFh on reset \
+                 communication. A test should change an application object, reset communication and \
+                 read it back unchanged. From issue 22 (a planted defect)."
+            }
+            Fault::ResetCommunicationKeepsValues => {
+                "NMT reset communication re-starts the communication services with the values they \
+                 have instead of setting 1000h–1FFFh back to their power-on values. A test should \
+                 change a communication object, reset communication and expect its default. Field \
+                 experience."
+            }
+            Fault::ResetNodeAsResetCommunication => {
+                "NMT reset node is carried out as a reset communication: 1000h–1FFFh get their \
+                 power-on values, 2000h–9FFFh keep what was written. A test should change an \
+                 application object, reset the node and expect its default (CCT State 01). Field \
+                 experience."
             }
         }
     }
@@ -378,7 +505,7 @@ impl FromStr for Fault {
 /// The faults of one device, and the delay of [`Fault::SdoSlow`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FaultSet {
-    bits: u32,
+    bits: u64,
     sdo_delay: Duration,
 }
 
@@ -399,7 +526,7 @@ impl FaultSet {
 
     /// This set with `fault` as well.
     pub const fn with(mut self, fault: Fault) -> FaultSet {
-        self.bits |= 1 << fault as u32;
+        self.bits |= 1 << fault as u64;
         self
     }
 
@@ -416,12 +543,12 @@ impl FaultSet {
 
     /// Removes `fault`.
     pub fn remove(&mut self, fault: Fault) {
-        self.bits &= !(1 << fault as u32);
+        self.bits &= !(1 << fault as u64);
     }
 
     /// Whether `fault` is in the set.
     pub const fn contains(&self, fault: Fault) -> bool {
-        self.bits & (1 << fault as u32) != 0
+        self.bits & (1 << fault as u64) != 0
     }
 
     /// Whether the set is empty.
@@ -467,7 +594,9 @@ pub(crate) enum Source {
     Emcy,
     /// The SYNC producer.
     Sync,
-    /// Anything else (PDOs, TIME, LSS).
+    /// The PDO engine (TPDOs).
+    Pdo,
+    /// Anything else (TIME, LSS).
     Other,
 }
 
@@ -499,6 +628,8 @@ pub(crate) struct FaultLayer {
     /// Under [`Fault::GuardingAndHeartbeat`]: the toggle of the next extra guarding answer.
     guard_toggle: bool,
     heartbeats: u64,
+    /// The device's NMT state, as [`FaultLayer::set_state`] was last told.
+    state: Option<NmtSlaveState>,
 }
 
 impl FaultLayer {
@@ -527,6 +658,9 @@ impl FaultLayer {
         let data = frame.data();
         if raw == u32::from(NMT_ID) && !frame.is_remote() && data.len() == 2 {
             let (command, target) = (data[0], data[1]);
+            if self.has(Fault::NmtOtherNodeObeyed) && target != 0 && target != node.get() {
+                return CanFrame::new(frame.id(), &[command, node.get()]).ok();
+            }
             if self.has(Fault::NmtBroadcastIgnored) && target == 0 {
                 return None;
             }
@@ -647,13 +781,24 @@ impl FaultLayer {
                 {
                     *register &= !0x01;
                 }
+                if self.has(Fault::ErrorRegisterNotUpdated) && bytes.len() >= 3 {
+                    bytes[2] = 0;
+                }
+            }
+            // Under `rpdo-in-pre-operational` the PDO engine runs in pre-operational to take RPDOs;
+            // what it would send there is held back.
+            Source::Pdo
+                if self.has(Fault::RpdoInPreOperational)
+                    && self.state == Some(NmtSlaveState::PreOperational) =>
+            {
+                return;
             }
             Source::Sync => {
                 if self.has(Fault::SyncCounterMissing) {
                     bytes.clear();
                 }
             }
-            Source::Other => {}
+            Source::Pdo | Source::Other => {}
         }
         let Ok(frame) = CanFrame::new(id, &bytes) else {
             return;
@@ -720,6 +865,61 @@ impl FaultLayer {
             bytes[0] = 0x43;
         }
         true
+    }
+
+    /// The device entered `state` (what [`Source::Pdo`] frames are held back by depends on it).
+    pub(crate) fn set_state(&mut self, state: NmtSlaveState) {
+        self.state = Some(state);
+    }
+
+    /// The NMT state the device gives the core of `service` while it is in `state`: `state`
+    /// itself, except where a fault runs the core in a state CiA 301 keeps it silent in
+    /// (`tpdo-in-pre-operational`, `rpdo-in-pre-operational`, `pdo-in-stopped`, `emcy-in-stopped`,
+    /// `sync-producer-in-stopped`).
+    pub(crate) fn core_state(&self, service: CommService, state: NmtSlaveState) -> NmtSlaveState {
+        use NmtSlaveState::{Operational, PreOperational, Stopped};
+        let pdo_in_pre_operational =
+            self.has(Fault::TpdoInPreOperational) || self.has(Fault::RpdoInPreOperational);
+        match (service, state) {
+            (CommService::Pdo, PreOperational) if pdo_in_pre_operational => Operational,
+            (CommService::Pdo, Stopped) if self.has(Fault::PdoInStopped) => Operational,
+            (CommService::Emcy, Stopped) if self.has(Fault::EmcyInStopped) => PreOperational,
+            (CommService::Sync, Stopped) if self.has(Fault::SyncProducerInStopped) => PreOperational,
+            _ => state,
+        }
+    }
+
+    /// Whether a received frame goes to the core of `service` in `state` although CiA 301's table
+    /// keeps the service silent there (`sdo-in-stopped`, `rpdo-in-pre-operational`,
+    /// `pdo-in-stopped`).
+    pub(crate) fn routes(&self, service: CommService, state: NmtSlaveState) -> bool {
+        use NmtSlaveState::{PreOperational, Stopped};
+        match (service, state) {
+            (CommService::Sdo, Stopped) => self.has(Fault::SdoInStopped),
+            (CommService::Pdo, PreOperational) => self.has(Fault::RpdoInPreOperational),
+            (CommService::Pdo, Stopped) => self.has(Fault::PdoInStopped),
+            _ => false,
+        }
+    }
+
+    /// The dictionary the PDO engine reads its parameters from: `od` itself, or under
+    /// [`Fault::TpdoInvalidSent`] a copy in which every TPDO COB-ID (1800h–19FFh:01) with a CAN-ID
+    /// has bit 31 ("not valid") cleared.
+    pub(crate) fn pdo_parameters<'od>(&self, od: &'od DynamicOd) -> std::borrow::Cow<'od, DynamicOd> {
+        if !self.has(Fault::TpdoInvalidSent) {
+            return std::borrow::Cow::Borrowed(od);
+        }
+        let mut copy = od.clone();
+        for index in 0x1800..=0x19FFu16 {
+            let key = ObjectKey::new(index, 1);
+            if let Some(&[a, b, c, d]) = od.get(key).map(|e| e.value()) {
+                let cob = u32::from_le_bytes([a, b, c, d]);
+                if cob & 0x7FF != 0 {
+                    let _ = copy.set_value(key, &(cob & 0x7FFF_FFFF).to_le_bytes());
+                }
+            }
+        }
+        std::borrow::Cow::Owned(copy)
     }
 
     /// The next guarding toggle under [`Fault::GuardingAndHeartbeat`].

@@ -632,6 +632,240 @@ fn lss_state_not_changed() {
     assert_eq!(bad[1..], Vec::<String>::new());
 }
 
+/// An event timer of 10 ms on TPDO1 (185h, type FFh), set in pre-operational.
+fn tpdo_event_timer(bus: &mut Bus) {
+    bus.rx(ms(1), &download(5, 0x1800, 5, &10u16.to_le_bytes()));
+}
+
+#[test]
+fn tpdo_in_pre_operational() {
+    let (ok, bad) = base(Fault::TpdoInPreOperational, |bus| {
+        tpdo_event_timer(bus);
+        bus.advance(ms(25));
+        // An RPDO in pre-operational is still ignored.
+        bus.rx(ms(26), "205#AB");
+    });
+    assert_eq!(ok, ["0.000 705#00", "1.000 585#6000180500000000"]);
+    assert_eq!(
+        bad,
+        [
+            "0.000 705#00",
+            "0.000 185#00",
+            "1.000 585#6000180500000000",
+            "1.000 185#00",
+            "11.000 185#00",
+            "21.000 185#00",
+        ]
+    );
+    let mut faulty = booted(device(BASE, 5, Fault::TpdoInPreOperational.into()));
+    faulty.rx(ms(1), "205#AB");
+    assert_eq!(faulty.value(0x6200, 1), [0]);
+}
+
+#[test]
+fn rpdo_in_pre_operational() {
+    let (ok, bad) = base(Fault::RpdoInPreOperational, |bus| {
+        tpdo_event_timer(bus);
+        bus.rx(ms(2), "205#AB");
+        bus.advance(ms(25));
+    });
+    // No TPDO either way: only the RPDO is taken.
+    assert_eq!(ok, bad);
+    for (faults, value) in [
+        (FaultSet::none(), 0x00),
+        (Fault::RpdoInPreOperational.into(), 0xAB),
+    ] {
+        let mut bus = booted(device(BASE, 5, faults));
+        bus.rx(ms(1), "205#AB");
+        assert_eq!(bus.value(0x6200, 1), [value]);
+        assert_eq!(bus.core.state(), NmtSlaveState::PreOperational);
+    }
+}
+
+#[test]
+fn pdo_in_stopped() {
+    let (ok, bad) = base(Fault::PdoInStopped, |bus| {
+        bus.rx(ms(1), "000#0105");
+        bus.rx(ms(2), "000#0205");
+        bus.rx(ms(3), "185#R1");
+        bus.rx(ms(4), "205#CD");
+    });
+    assert_eq!(ok, ["0.000 705#00", "1.000 185#00"]);
+    assert_eq!(ok[..], bad[..2]);
+    assert_eq!(bad[2..], ["3.000 185#00"]);
+    let mut faulty = booted(device(BASE, 5, Fault::PdoInStopped.into()));
+    faulty.rx(ms(1), "000#0205");
+    faulty.rx(ms(2), "205#CD");
+    assert_eq!(faulty.value(0x6200, 1), [0xCD]);
+    assert_eq!(faulty.core.state(), NmtSlaveState::Stopped);
+}
+
+#[test]
+fn nmt_other_node_obeyed() {
+    let (ok, bad) = base(Fault::NmtOtherNodeObeyed, |bus| {
+        bus.rx(ms(1), "000#0106");
+        bus.rx(ms(2), "000#817F");
+    });
+    assert_eq!(ok, ["0.000 705#00"]);
+    // Started by the command to node 6 (TPDO1 on entering operational), reset by the one to 127.
+    assert_eq!(bad, ["0.000 705#00", "1.000 185#00", "2.000 705#00"]);
+}
+
+#[test]
+fn tpdo_invalid_sent() {
+    let (ok, bad) = base(Fault::TpdoInvalidSent, |bus| {
+        bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        tpdo_event_timer(bus);
+        bus.rx(ms(2), "000#0105");
+        bus.advance(ms(25));
+    });
+    assert_eq!(
+        ok,
+        [
+            "0.000 705#00",
+            "1.000 585#6000180100000000",
+            "1.000 585#6000180500000000",
+        ]
+    );
+    assert_eq!(ok[..], bad[..3]);
+    assert_eq!(bad[3..], ["2.000 185#00", "12.000 185#00", "22.000 185#00"]);
+    // The dictionary still holds what was written.
+    let mut faulty = booted(device(BASE, 5, Fault::TpdoInvalidSent.into()));
+    faulty.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+    assert_eq!(faulty.value(0x1800, 1), 0x8000_0185u32.to_le_bytes());
+}
+
+#[test]
+fn error_register_not_updated() {
+    let (ok, bad) = base(Fault::ErrorRegisterNotUpdated, rpdo_length_error);
+    assert_eq!(
+        ok[2..],
+        ["2.000 085#1082110100000000", "3.000 085#0000000000000000"]
+    );
+    assert_eq!(
+        bad[2..],
+        ["2.000 085#1082000100000000", "3.000 085#0000000000000000"]
+    );
+    for (faults, register) in [
+        (FaultSet::none(), 0x11),
+        (Fault::ErrorRegisterNotUpdated.into(), 0),
+    ] {
+        let mut bus = booted(device(BASE, 5, faults));
+        bus.rx(ms(1), "000#0105");
+        bus.rx(ms(2), "205#");
+        assert_eq!(bus.value(0x1001, 0), [register]);
+        // The EMCY producer itself keeps the register right: the fault acts around it.
+        assert_eq!(bus.core.emcy().error_register(), 0x11);
+    }
+}
+
+/// DS301_profile (node 10) consuming node 11's heartbeat with 1016h:01 = 100 ms; one heartbeat of
+/// node 11 starts the monitoring, then the node is stopped and the heartbeat stays away.
+fn consumer_lost_in_stopped(bus: &mut Bus) {
+    bus.rx(ms(1), &download(10, 0x1016, 1, &0x000B_0064u32.to_le_bytes()));
+    bus.rx(ms(2), "70B#05");
+    bus.rx(ms(3), "000#020A");
+    bus.advance(ms(250));
+}
+
+#[test]
+fn emcy_in_stopped() {
+    let (ok, bad) = both(&DS301, 10, Fault::EmcyInStopped, consumer_lost_in_stopped);
+    assert_eq!(ok[1..], ["1.000 58A#6016100100000000"]);
+    assert_eq!(ok[..], bad[..2]);
+    assert_eq!(bad[2..], ["102.000 08A#3081110B00000000"]);
+    // The correct device sends it once it may: in pre-operational.
+    let mut correct = booted(device(&DS301, 10, FaultSet::none()));
+    consumer_lost_in_stopped(&mut correct);
+    correct.sent();
+    correct.rx(ms(260), "000#800A");
+    assert_eq!(correct.sent(), ["260.000 08A#3081110B00000000"]);
+}
+
+#[test]
+fn sync_producer_in_stopped() {
+    let (ok, bad) = both(&DS301, 10, Fault::SyncProducerInStopped, |bus| {
+        bus.rx(ms(1), &download(10, 0x1006, 0, &10_000u32.to_le_bytes()));
+        bus.rx(ms(2), &download(10, 0x1005, 0, &0x4000_0080u32.to_le_bytes()));
+        bus.advance(ms(25));
+        bus.rx(ms(25), "000#020A");
+        bus.advance(ms(50));
+    });
+    assert_eq!(ok[3..], ["12.000 080#", "22.000 080#"]);
+    assert_eq!(ok[..], bad[..5]);
+    assert_eq!(bad[5..], ["32.000 080#", "42.000 080#"]);
+}
+
+#[test]
+fn sdo_in_stopped() {
+    let (ok, bad) = base(Fault::SdoInStopped, |bus| {
+        bus.rx(ms(1), "000#0205");
+        bus.rx(ms(2), "605#4018100100000000");
+    });
+    assert_eq!(ok, ["0.000 705#00"]);
+    assert_eq!(bad, ["0.000 705#00", "2.000 585#43181001BC0A0000"]);
+}
+
+/// 2000h (DefaultValue 10) = 20 and 1017h (DefaultValue 0) = 100 ms, then `reset`.
+fn values_then(reset: &'static str) -> impl Fn(&mut Bus) {
+    move |bus: &mut Bus| {
+        bus.rx(ms(1), &download(5, 0x2000, 0, &20u16.to_le_bytes()));
+        bus.rx(ms(2), &hb(100));
+        bus.rx(ms(3), reset);
+    }
+}
+
+/// The values of 2000h and 1017h after `scenario` on a device with `faults`.
+fn kept(faults: FaultSet, scenario: impl Fn(&mut Bus)) -> (Vec<u8>, Vec<u8>) {
+    let mut bus = booted(device(BASE, 5, faults));
+    scenario(&mut bus);
+    (bus.value(0x2000, 0), bus.value(0x1017, 0))
+}
+
+#[test]
+fn reset_communication_restores_application() {
+    let fault = Fault::ResetCommunicationRestoresApplication;
+    let scenario = values_then("000#8205");
+    assert_eq!(kept(FaultSet::none(), &scenario), (vec![20, 0], vec![0, 0]));
+    assert_eq!(kept(fault.into(), &scenario), (vec![10, 0], vec![0, 0]));
+    // Reset node restores both areas either way.
+    assert_eq!(
+        kept(fault.into(), values_then("000#8105")),
+        (vec![10, 0], vec![0, 0])
+    );
+}
+
+#[test]
+fn reset_communication_keeps_values() {
+    let fault = Fault::ResetCommunicationKeepsValues;
+    let (ok, bad) = base(fault, |bus| {
+        values_then("000#8205")(bus);
+        bus.advance(ms(250));
+    });
+    // The faulty device keeps its heartbeat of 100 ms after the boot-up.
+    assert_eq!(ok[ok.len() - 1], "3.000 705#00");
+    assert_eq!(
+        bad[bad.len() - 3..],
+        ["3.000 705#00", "103.000 705#7F", "203.000 705#7F"]
+    );
+    assert_eq!(
+        kept(fault.into(), values_then("000#8205")),
+        (vec![20, 0], vec![100, 0])
+    );
+    assert_eq!(
+        kept(fault.into(), values_then("000#8105")),
+        (vec![10, 0], vec![0, 0])
+    );
+}
+
+#[test]
+fn reset_node_as_reset_communication() {
+    let fault = Fault::ResetNodeAsResetCommunication;
+    let scenario = values_then("000#8105");
+    assert_eq!(kept(FaultSet::none(), &scenario), (vec![10, 0], vec![0, 0]));
+    assert_eq!(kept(fault.into(), &scenario), (vec![20, 0], vec![0, 0]));
+}
+
 #[test]
 fn tpdo_config_silent() {
     let scenario = |bus: &mut Bus| {
@@ -817,7 +1051,7 @@ proptest::proptest! {
             ),
             0..60,
         ),
-        mask in 0u32..(1 << Fault::ALL.len()),
+        mask in 0u64..(1 << Fault::ALL.len()),
     ) {
         let faults: FaultSet = Fault::ALL
             .into_iter()

@@ -1,6 +1,9 @@
 //! NMT state and transition tests (CCT groups "State" and "Transition"): every transition of the
-//! CiA 301 state diagram (§7.3.2.2.1 figure "NMT state diagram of a CANopen device") and the services
-//! allowed in each state.
+//! CiA 301 state diagram (§7.3.2.2.1 figure "NMT state diagram of a CANopen device"), addressed to the
+//! node, to all nodes and to other nodes, and SDO and error control in stopped. The other services
+//! per state are in [`super::nmt_pdo`] (PDOs) and [`super::nmt_services`] (EMCY, SYNC), what the
+//! resets keep and restore in [`super::nmt_resets`]; `docs/conformance.md` maps every cell of CiA
+//! 301's table of services per state to its test.
 
 use std::time::Duration;
 
@@ -77,6 +80,16 @@ pub fn tests() -> Vec<TestDef> {
             precondition: "a writable 1017h or node guarding",
             tags: &["nmt"],
             run: stopped_services,
+        },
+        TestDef {
+            id: "cia301.nmt.7",
+            suite: "cia301",
+            group: "nmt",
+            title: "NMT commands addressed to other node-IDs (all five, to two other node-IDs) are not obeyed",
+            references: &[req::NMT_MODULE_CONTROL, req::BOOT_UP],
+            precondition: "a writable 1017h or node guarding, to observe the state; the device alone on the bus (the commands address node-IDs it does not have)",
+            tags: &["nmt", "heartbeat", "states"],
+            run: other_node_ids,
         },
     ]
 }
@@ -280,4 +293,98 @@ fn stopped_services(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         ),
     })
+}
+
+/// Two node-IDs other than `node`: the next one (an off-by-one) and the one that differs in bit 6
+/// (a device comparing fewer bits; 7Fh for node 40h, whose twin would be 0, all nodes).
+fn other_nodes(node: u8) -> [u8; 2] {
+    let twin = node ^ 0x40;
+    [node % 127 + 1, if twin == 0 { 0x7F } else { twin }]
+}
+
+fn other_node_ids(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    let heartbeat = start_heartbeat(ctx)?;
+    if !heartbeat && !ctx.model().has_guarding() {
+        return Ok(Finding::not_applicable(
+            "neither a writable 1017h nor node guarding to observe the state",
+        ));
+    }
+    let node = ctx.node();
+    let [a, b] = other_nodes(node);
+    let boot = ctx.id(0x700 + u16::from(node));
+    let since = ctx.mark();
+    // Every command to another node-ID from a state it would change; one to the device itself
+    // (start) moves it on, so that enter pre-operational and stop have something to change.
+    let steps = [
+        (NmtCommand::StopRemoteNode, a, PRE_OPERATIONAL),
+        (NmtCommand::StartRemoteNode, b, PRE_OPERATIONAL),
+        (NmtCommand::StartRemoteNode, node, OPERATIONAL),
+        (NmtCommand::EnterPreOperational, a, OPERATIONAL),
+        (NmtCommand::StopRemoteNode, b, OPERATIONAL),
+        (NmtCommand::ResetCommunication, a, OPERATIONAL),
+        (NmtCommand::ResetNode, b, OPERATIONAL),
+    ];
+    let mut sent = Vec::new();
+    for (command, target, expected) in steps {
+        ctx.send(0x000, &[command.as_raw(), target])?;
+        sent.push(format!("{} to node {target}", command_name(command)));
+        let state = observed_state(ctx, heartbeat)?;
+        if state != Some(expected) {
+            back_to_pre_operational(ctx)?;
+            return Ok(Finding::fail(
+                format!(
+                    "after NMT {} to node {target}: {}",
+                    command_name(command),
+                    state.map_or("no answer".to_owned(), state_name)
+                ),
+                Evidence {
+                    request: format!("node {node}; {}", sent.join(", ")),
+                    requirement: format!(
+                        "{}: a command addressed to another node-ID is not for this node, which stays {}",
+                        req::NMT_MODULE_CONTROL,
+                        state_name(expected)
+                    ),
+                    answer: state.map_or("no heartbeat or guarding answer".to_owned(), |s| {
+                        format!("the device reported {}", state_name(s))
+                    }),
+                    cause: "the node-ID byte of NMT commands is not compared with the device's own"
+                        .to_owned(),
+                },
+            ));
+        }
+    }
+    // A reset may take longer than one observation: its boot-up shows it whenever it comes.
+    let booted = ctx
+        .received_since(since)
+        .into_iter()
+        .any(|l| l.frame.id() == boot && !l.frame.is_remote() && l.frame.data() == [0]);
+    back_to_pre_operational(ctx)?;
+    if booted {
+        return Ok(Finding::fail(
+            "a boot-up after NMT resets addressed to other node-IDs",
+            Evidence {
+                request: format!("node {node}; {}", sent.join(", ")),
+                requirement: format!(
+                    "{}: a reset addressed to another node-ID does not reset this node (no boot-up)",
+                    req::NMT_MODULE_CONTROL
+                ),
+                answer: format!("a boot-up on {:03X}h", 0x700 + u16::from(node)),
+                cause: "the node-ID byte of NMT commands is not compared with the device's own".to_owned(),
+            },
+        ));
+    }
+    Ok(Finding::pass(format!(
+        "5 commands to nodes {a} and {b} ignored, start to node {node} obeyed"
+    )))
+}
+
+/// `enter pre-operational`.
+fn command_name(command: NmtCommand) -> &'static str {
+    match command {
+        NmtCommand::StartRemoteNode => "start remote node",
+        NmtCommand::StopRemoteNode => "stop remote node",
+        NmtCommand::EnterPreOperational => "enter pre-operational",
+        NmtCommand::ResetNode => "reset node",
+        NmtCommand::ResetCommunication => "reset communication",
+    }
 }

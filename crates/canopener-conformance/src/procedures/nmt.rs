@@ -65,10 +65,18 @@ pub fn state_name(state: u8) -> String {
     format!("{name} ({state:02X}h)")
 }
 
+/// How long a device gets to carry out an NMT state command before the tests look at it.
+pub const SETTLE: Duration = Duration::from_millis(20);
+
 /// NMT enter pre-operational, and a moment for the device to get there.
 pub fn back_to_pre_operational(ctx: &mut Ctx<'_, '_>) -> Result<(), Stop> {
-    ctx.nmt(canopener_wire::NmtCommand::EnterPreOperational, false)?;
-    ctx.listen(Duration::from_millis(20), |_| false).map(drop)
+    enter(ctx, canopener_wire::NmtCommand::EnterPreOperational)
+}
+
+/// `command` to the node under test, and [`SETTLE`] for the device to carry it out.
+pub fn enter(ctx: &mut Ctx<'_, '_>, command: canopener_wire::NmtCommand) -> Result<(), Stop> {
+    ctx.nmt(command, false)?;
+    ctx.listen(SETTLE, |_| false).map(drop)
 }
 
 /// NMT reset node and the boot-up after it; `false` without one within
