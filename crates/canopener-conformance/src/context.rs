@@ -98,6 +98,7 @@ pub struct Ctx<'r, 'l> {
     eds_errors: Option<&'r [String]>,
     restores: Vec<Restore>,
     measurements: BTreeMap<String, Measurement>,
+    performed: Vec<String>,
     performance: &'r Performance,
     stimulus: Option<Hook<'r>>,
 }
@@ -128,6 +129,7 @@ impl<'r, 'l> Ctx<'r, 'l> {
             eds_errors,
             restores: Vec::new(),
             measurements: BTreeMap::new(),
+            performed: Vec::new(),
             performance: &DEFAULT_PERFORMANCE,
             stimulus: None,
         }
@@ -351,6 +353,21 @@ impl<'r, 'l> Ctx<'r, 'l> {
     /// The measurements taken.
     pub fn take_measurements(&mut self) -> BTreeMap<String, Measurement> {
         std::mem::take(&mut self.measurements)
+    }
+
+    /// Records that the check of the CCT case `case` (`"SDO 19"`, as the case list names it) was
+    /// performed: call it where that step has run and its answer was judged, not before (the
+    /// report's `performed` then says what a run really checked; `tests/simulated.rs` holds the
+    /// coverage table to it). A case recorded twice is listed once.
+    pub fn performed(&mut self, case: &str) {
+        if !self.performed.iter().any(|c| c == case) {
+            self.performed.push(case.to_owned());
+        }
+    }
+
+    /// The CCT cases performed so far, in order.
+    pub fn take_performed(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.performed)
     }
 
     /// The standard CAN-ID `raw` (callers pass 11-bit values).

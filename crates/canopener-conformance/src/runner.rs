@@ -9,7 +9,6 @@ use canopener_runtime::link::Link;
 use canopener_runtime::sdo_session::SdoSession;
 use canopener_wire::{Decoder, NmtCommand};
 
-use crate::test_def::TestDef;
 use crate::context::{Ctx, Reply};
 use crate::device_model::DeviceModel;
 use crate::finding::{Finding, Stop};
@@ -17,6 +16,7 @@ use crate::model::{BusInfo, DeviceInfo, Identity, REPORT_VERSION, Report, Summar
 use crate::performance::Performance;
 use crate::recorder::{Logged, Recorder};
 use crate::stimulus::Hook;
+use crate::test_def::TestDef;
 
 /// What a run needs besides the link.
 #[derive(Debug, Clone)]
@@ -149,7 +149,7 @@ pub fn run_stimulated(
                 current: Some(test),
             });
             let test_start = recorder.now();
-            let (finding, measurements, left, stopped) =
+            let (finding, done, left, stopped) =
                 run_one(&mut recorder, spec, performance, stimulus.as_mut(), test)?;
             report.left_modified.extend(left);
             let telegrams = telegrams(recorder.since(0), start, &mut decoder);
@@ -163,8 +163,9 @@ pub fn run_stimulated(
                 verdict: finding.verdict,
                 reason: finding.reason,
                 analysis: finding.analysis,
-                measurements,
+                measurements: done.measurements,
                 duration_s: recorder.now().saturating_duration_since(test_start).as_secs_f64(),
+                performed: done.performed,
                 telegrams,
             });
             if stopped {
@@ -232,12 +233,13 @@ fn prepare(
     Ok(result)
 }
 
-type OneResult = (
-    Finding,
-    std::collections::BTreeMap<String, crate::model::Measurement>,
-    Vec<String>,
-    bool,
-);
+/// What a test left besides its verdict: its measurements and the CCT cases it performed.
+struct Done {
+    measurements: std::collections::BTreeMap<String, crate::model::Measurement>,
+    performed: Vec<String>,
+}
+
+type OneResult = (Finding, Done, Vec<String>, bool);
 
 fn run_one(
     recorder: &mut Recorder<'_>,
@@ -258,12 +260,15 @@ fn run_one(
         ),
         Err(Stop::Link(error)) => (Finding::inconclusive(format!("the bus failed: {error}")), true),
     };
-    let measurements = ctx.take_measurements();
+    let done = Done {
+        measurements: ctx.take_measurements(),
+        performed: ctx.take_performed(),
+    };
     // A test that put no frame on the bus (a precondition from the EDS alone said not_applicable)
     // changed nothing: no cleanup, which would cost each such test the settling time.
     let untouched = ctx.mark() == 0 && !stopped;
     if !test.needs_device() || untouched {
-        return Ok((finding, measurements, Vec::new(), stopped));
+        return Ok((finding, done, Vec::new(), stopped));
     }
     let interrupted = stopped && ctx.link_cancelled();
     if let Some(cancel) = spec.cancel.as_ref().filter(|_| interrupted) {
@@ -289,7 +294,7 @@ fn run_one(
             )]
         }
     };
-    Ok((finding, measurements, left, stopped))
+    Ok((finding, done, left, stopped))
 }
 
 fn telegrams(log: &[Logged], start: Instant, decoder: &mut Decoder) -> Vec<Telegram> {

@@ -248,6 +248,7 @@ pub fn tests() -> Vec<TestDef> {
 fn read_device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let reply = ctx.read(0x1000, 0)?;
     let request = upload_text((0x1000, 0));
+    ctx.performed("SDO 01");
     Ok(match &reply {
         Reply::Done(data) if data.len() == 4 => match ctx
             .model()
