@@ -218,6 +218,24 @@ impl<'r, 'l> Ctx<'r, 'l> {
         reply(result.map(|t| t.data))
     }
 
+    /// Reads `index`:`sub` with a block upload, offering the CRC when `crc` (CiA 301 §7.2.4.3.13;
+    /// the client checks it when the server offers it too). Later block transfers offer it again.
+    pub fn read_block(&mut self, index: u16, sub: u8, crc: bool) -> Result<Reply, Stop> {
+        self.sdo.set_block_crc(crc);
+        let reply = self.read_with(index, sub, UploadMode::Block);
+        self.sdo.set_block_crc(true);
+        reply
+    }
+
+    /// Writes `data` to `index`:`sub` with a block download, with a CRC when `crc` (CiA 301
+    /// §7.2.4.3.9; without, the end frame's CRC field is 0). Later block transfers use it again.
+    pub fn write_block(&mut self, index: u16, sub: u8, data: Vec<u8>, crc: bool) -> Result<Reply, Stop> {
+        self.sdo.set_block_crc(crc);
+        let reply = self.write_with(index, sub, data, DownloadMode::Block);
+        self.sdo.set_block_crc(true);
+        reply
+    }
+
     /// Writes `data` to `index`:`sub` without remembering the old value (for writes that must be
     /// refused, or that [`Ctx::modify`] already covers).
     pub fn write(&mut self, index: u16, sub: u8, data: Vec<u8>) -> Result<Reply, Stop> {

@@ -393,7 +393,7 @@ fn json_report_keeps_the_version_1_names() {
         assert!(!test[field].is_null(), "missing {field}");
     }
     // Added to version 1: the CCT cases the test performed.
-    assert_eq!(test["performed"], serde_json::json!(["SDO 01"]));
+    assert_eq!(test["performed"], serde_json::json!(["SDO 01", "SDO 13"]));
     let telegram = &test["telegrams"][0];
     for field in ["t", "dir", "id", "data", "meaning"] {
         assert!(!telegram[field].is_null(), "missing telegrams.{field}");
