@@ -71,9 +71,11 @@ fn check_clean(report: &canopener_conformance::model::Report, what: &str, allowe
         report.tests.len(),
         canopener_conformance::catalogue::catalogue().len()
     );
-    // The budget is per suite: the CiA 301 suite within ten virtual seconds, and the CiA 305 suite
-    // within six more: its ten "must not answer" waits cost one 500 ms timeout each.
-    for (suite, budget) in [("cia301", 10.0), ("cia305", 6.0)] {
+    // The budget is per suite: the CiA 301 suite within twelve virtual seconds (ten before the
+    // TPDO cases were also watched in stopped and pre-operational, CCT PDO 10-20: 0.8 s more on a
+    // device with 16 TPDOs), and the CiA 305 suite within six more: its ten "must not answer"
+    // waits cost one 500 ms timeout each.
+    for (suite, budget) in [("cia301", 12.0), ("cia305", 6.0)] {
         let mut longest: Vec<_> = report
             .tests
             .iter()
@@ -195,7 +197,16 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         ],
         Fault::HeartbeatTooFast | Fault::HeartbeatJitter => &["cia301.ec.1"],
         Fault::GuardingAndHeartbeat => &["cia301.ec.3"],
-        Fault::IgnoresNmtStop => &["cia301.pdo.15", "cia301.nmt.2", "cia301.nmt.3", "cia301.nmt.4"],
+        // Still operational after the stop: its TPDOs keep coming where the transmission tests
+        // (CCT PDO 11, 12) watch the stopped state, and answer RTR there (PDO 09).
+        Fault::IgnoresNmtStop => &[
+            "cia301.pdo.6",
+            "cia301.pdo.7",
+            "cia301.pdo.15",
+            "cia301.nmt.2",
+            "cia301.nmt.3",
+            "cia301.nmt.4",
+        ],
         Fault::NmtBroadcastIgnored => &["cia301.nmt.3"],
         Fault::SdoToggleIgnored => &["cia301.sdo.13"],
         Fault::SdoExpeditedSizeWrong => &[

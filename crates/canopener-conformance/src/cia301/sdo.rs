@@ -781,10 +781,7 @@ type BrokenUpload = (String, &'static str, &'static str);
 /// must be segmented (e = 0); when it indicates the size, the segments must add up to it; each
 /// segment response must carry the toggle of its request, the last one c = 1 and its unused bytes
 /// in n. `Err` holds the frames, what was required and the likely cause.
-fn segments(
-    ctx: &mut Ctx<'_, '_>,
-    at: (u16, u8),
-) -> Result<Result<Vec<u8>, BrokenUpload>, Stop> {
+fn segments(ctx: &mut Ctx<'_, '_>, at: (u16, u8)) -> Result<Result<Vec<u8>, BrokenUpload>, Stop> {
     let [lo, hi] = at.0.to_le_bytes();
     let Some(first) = ctx.raw_sdo([0x40, lo, hi, at.1, 0, 0, 0, 0])? else {
         return Ok(Err((
