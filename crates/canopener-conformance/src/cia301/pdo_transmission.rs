@@ -643,6 +643,8 @@ fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
             format!("{name}: {counts:?}")
         })
         .collect();
+    ctx.performed("Synchronization 03");
+    ctx.performed("Synchronization 04");
     Ok(if wrong.is_empty() {
         Finding::pass(format!(
             "{} followed each of {CONSUMER_SYNCS} SYNCs once",

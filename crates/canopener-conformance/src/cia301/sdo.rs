@@ -419,6 +419,7 @@ fn write_device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
         }
     };
     let reply = ctx.write(0x1000, 0, current.clone())?;
+    ctx.performed("SDO 03");
     Ok(expect_refusal(
         &download_text((0x1000, 0), &current),
         &reply,
@@ -439,6 +440,7 @@ fn read_write_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
     };
     let at = (entry.index, entry.sub);
     let reply = ctx.read(at.0, at.1)?;
+    ctx.performed("SDO 04");
     Ok(expect_refusal(
         &upload_text(at),
         &reply,
@@ -450,6 +452,7 @@ fn read_write_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn read_absent_sub(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let reply = ctx.read(0x1000, 1)?;
+    ctx.performed("SDO 05");
     Ok(expect_refusal(
         &upload_text((0x1000, 1)),
         &reply,
@@ -473,6 +476,7 @@ fn read_absent_object(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ));
     };
     let reply = ctx.read(index, 0)?;
+    ctx.performed("SDO 06");
     Ok(expect_refusal(
         &upload_text((index, 0)),
         &reply,
@@ -487,6 +491,7 @@ fn bad_command(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let request = [0xE0, 0x00, 0x10, 0x00, 0, 0, 0, 0];
     let answer = ctx.raw_sdo(request)?;
     let text = format!("SDO request {} (client command specifier 7)", hex(&request));
+    ctx.performed("SDO 07");
     Ok(expect_refusal(
         &text,
         &Reply::of_raw(answer),
@@ -497,21 +502,22 @@ fn bad_command(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    wrong_length(ctx, &[1, 2], "8- or 16-bit", 4, req::TOO_LONG)
+    wrong_length(ctx, &[1, 2], "8- or 16-bit", 4, req::TOO_LONG, "SDO 08")
 }
 
 fn too_short(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    wrong_length(ctx, &[2, 4], "16- or 32-bit", 1, req::TOO_SHORT)
+    wrong_length(ctx, &[2, 4], "16- or 32-bit", 1, req::TOO_SHORT, "SDO 09")
 }
 
 /// Downloads `length` zero bytes to the first writable entry of one of `sizes` bytes: a length that
-/// does not match the entry's type must be refused with the abort `requirement` names.
+/// does not match the entry's type must be refused with the abort `requirement` names (CCT `case`).
 fn wrong_length(
     ctx: &mut Ctx<'_, '_>,
     sizes: &[usize],
     sizes_text: &str,
     length: usize,
     requirement: Accepted,
+    case: &str,
 ) -> Outcome {
     let Some(entry) = writable_of_size(ctx, sizes) else {
         return Ok(Finding::not_applicable(format!(
@@ -526,6 +532,7 @@ fn wrong_length(
     } else {
         format!("{length} bytes")
     };
+    ctx.performed(case);
     Ok(expect_refusal(
         &format!("{} ({bytes} for {})", download_text(at, &data), entry.label()),
         &reply,
@@ -678,6 +685,7 @@ fn server_parameter(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let node = u32::from(ctx.node());
     for (sub, expected) in [(1u8, 0x600 + node), (2, 0x580 + node)] {
         let reply = ctx.read(0x1200, sub)?;
+        ctx.performed("SDO 12");
         let request = upload_text((0x1200, sub));
         let got = match &reply {
             Reply::Done(data) if data.len() == 4 => u32::from_le_bytes([data[0], data[1], data[2], data[3]]),
@@ -891,6 +899,7 @@ fn wrong_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
         hex(&segment)
     );
     let reply = Reply::of_raw(answer);
+    ctx.performed("SDO 17");
     let finding = expect_refusal(
         &text,
         &reply,
@@ -1261,6 +1270,7 @@ fn block_size_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
         let [a, b, c, d] = abort::INVALID_BLOCK_SIZE.to_le_bytes();
         ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
     }
+    ctx.performed("SDO 26");
     Ok(expect_refusal(
         &text,
         &reply,
@@ -1315,6 +1325,7 @@ fn further_sdo_channels(ctx: &mut Ctx<'_, '_>) -> Outcome {
             }
         }
     }
+    ctx.performed("SDO 28");
     // CCT SDO 29: change one value, reset communication, and every default is back. A node-ID
     // (sub-index 3) or a valid COB-ID (made invalid) can always change (CiA 301 §7.5.2.33/34).
     let change = current.iter().find_map(|(e, d)| {
@@ -1336,6 +1347,7 @@ fn further_sdo_channels(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !crate::procedures::nmt::reset_communication(ctx)? {
         return Ok(Finding::inconclusive("no boot-up after the reset communication"));
     }
+    ctx.performed("SDO 29");
     for e in &entries {
         let Some(default) = &e.default else { continue };
         let reply = ctx.read(e.index, e.sub)?;
@@ -1431,6 +1443,7 @@ fn block_ack_sequence_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
         let [a, b, c, d] = abort::INVALID_SEQUENCE_NUMBER.to_le_bytes();
         ctx.send(0x600 + node, &[0x80, lo, hi, at.1, a, b, c, d])?;
     }
+    ctx.performed("SDO 27");
     Ok(expect_refusal(
         &format!(
             "{text}, start, {last_seq} sub-block(s) received, block acknowledge {}",
