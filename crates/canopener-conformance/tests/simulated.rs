@@ -11,9 +11,16 @@ use canopener_conformance::performance::{Criteria, Performance};
 use canopener_conformance::render::candump;
 use canopener_device::faults::{DEFAULT_SDO_DELAY, Fault};
 
-/// Five vendored EDS files of four vendors that canopener's EDS checks find no error in. Every
-/// simulated device serves block transfers, so each of them also covers the block tests.
+/// Five vendored EDS files of four vendors that canopener's EDS checks find no error in, and the
+/// demo device of `canopener demo` (CANopenNode's, with optional CiA 401 and CiA 301 objects: the
+/// only clean file with 1020h, an SDO client and sub-index FFh). Every simulated device serves
+/// block transfers, so each of them also covers the block tests.
 const CLEAN: &[(&str, &str)] = &[
+    // CANopenNode's demo device with optional objects: CCT OD 05, SDO 28-30, Testing other 09.
+    (
+        "test_data/cia401_full_io.eds",
+        "canopener demo: CiA 401, 1020h, SDO client, sub-index FFh",
+    ),
     // CiA 401 (1000h = 000F0191h), no node guarding.
     (
         "CANopenNode__CANopenDemo__demo__demoDevice.eds",
@@ -121,6 +128,46 @@ fn clean_simulated_devices_pass_within_ten_virtual_seconds() {
             report.duration_s,
             not_applicable.join("; ")
         );
+    }
+}
+
+/// The CCT coverage table (`canopener_conformance::cct`) means what it says: every case it gives a
+/// test is performed by that test on at least one clean simulated device (each test records a case
+/// only where the step that checks it ran), and no test records a case it does not claim.
+#[test]
+fn every_cct_case_of_the_table_is_performed_on_a_clean_device() {
+    use std::collections::{BTreeMap, BTreeSet};
+    let mut performed: BTreeMap<String, BTreeSet<&str>> = BTreeMap::new();
+    for (name, what) in CLEAN {
+        let report = support::run(name, &[], &["cia301"]);
+        for test in &report.tests {
+            let def = canopener_conformance::catalogue::catalogue()
+                .into_iter()
+                .find(|t| t.id == test.id)
+                .expect("a catalogue test");
+            let claimed: Vec<&str> = canopener_conformance::cct::referenced(&def).collect();
+            for case in &test.performed {
+                assert!(
+                    claimed.contains(&case.as_str()),
+                    "{what}: {} performed CCT {case}, which it does not claim",
+                    test.id
+                );
+                performed.entry(case.clone()).or_default().insert(what);
+            }
+        }
+    }
+    let missing: Vec<String> = canopener_conformance::cct::CASES
+        .iter()
+        .filter(|c| !performed.contains_key(c.name))
+        .map(|c| format!("{} ({}: {:?})", c.name, c.coverage.as_str(), c.tests))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "never performed on a clean device: {missing:#?}"
+    );
+    // The figures docs/conformance.md quotes (cargo test reports the wall time).
+    for case in canopener_conformance::cct::CASES {
+        eprintln!("{}: {:?}", case.name, performed[case.name]);
     }
 }
 

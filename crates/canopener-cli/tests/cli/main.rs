@@ -26,6 +26,7 @@ mod net_system;
 mod sim;
 mod test_criteria;
 mod test_html;
+mod test_list;
 mod test_stimulus;
 
 use std::process::Output;
