@@ -6,14 +6,18 @@
 //! A fault acts at one of four places:
 //! - **on received frames**, before any core sees them (`FaultLayer::inbound`): a frame is
 //!   dropped (NMT stop, NMT broadcast, LSS, TPDO remote requests) or rewritten (the SDO toggle bit
-//!   is forced to what the server expects);
+//!   is forced to what the server expects, a block transfer without CRC becomes an invalid
+//!   command);
 //! - **on sent frames**, after the cores made them and before they leave the device
 //!   (`FaultLayer::outbound`): a frame is dropped (boot-up, EMCY), rewritten (heartbeat state,
-//!   abort code, expedited size bit, SYNC counter, block CRC, boot-up CAN-ID) or delayed and
+//!   abort code, expedited size bit, SYNC counter, block CRC, boot-up CAN-ID, 1000h's byte order,
+//!   sub-index FFh, the last segment's unused bytes) or delayed and
 //!   duplicated on virtual time (slow SDO, heartbeat jitter, extra heartbeats 1 ms apart);
 //! - **in the `Device`'s own checks** on SDO downloads: a download a correct device refuses
-//!   (above HighLimit, a non-mappable object in a PDO mapping, a restricted COB-ID) is stored and
-//!   confirmed anyway, and a `save` signature is confirmed without storing anything;
+//!   (above HighLimit, a non-mappable object in a PDO mapping, a restricted COB-ID, a mapping
+//!   outside the procedure or too long, a count to 1003h:00, a wrong signature) is stored and
+//!   confirmed anyway, a process output is refused in an RPDO mapping, and a `save` or `load`
+//!   signature is confirmed without storing (or restoring) anything, or everything but 1020h;
 //! - **in the `Device`'s routing**: node guarding requests are answered while heartbeat runs.
 //!
 //! The sources of the defects: the thesis in `seeds/001` (a UWASA node tested with a Kvaser rig:
@@ -87,11 +91,33 @@ pub enum Fault {
     NoLss,
     /// The LSS slave never leaves the waiting state.
     LssStateNotChanged,
+    /// 1000h is answered with its bytes in reverse order.
+    DeviceTypeByteOrder,
+    /// The last segment of a segmented upload says no byte is unused.
+    SegmentUnusedWrong,
+    /// Block transfers without CRC are refused.
+    BlockCrcRequired,
+    /// Any value written to 1003h:00 is taken.
+    ErrorCountUnchecked,
+    /// Sub-index FFh answers with the object code and the data type's low byte swapped.
+    StructureEntryWrong,
+    /// Process outputs (rww, wo) are refused in RPDO mappings.
+    ProcessOutputRefused,
+    /// Mappings are taken whatever the PDO's validity and sub-index 0.
+    MappingProcedureUnchecked,
+    /// Mappings with too many objects or more than 64 bits are taken.
+    MappingSizeUnchecked,
+    /// Any value written to 1010h/1011h saves or restores.
+    SignatureUnchecked,
+    /// `load` to 1011h is confirmed but nothing is restored.
+    RestoreIgnored,
+    /// `save` stores everything but 1020h.
+    VerifyConfigurationNotStored,
 }
 
 impl Fault {
     /// Every fault, in catalogue order.
-    pub const ALL: [Fault; 24] = [
+    pub const ALL: [Fault; 35] = [
         Fault::NoBootUp,
         Fault::BootUpWrongId,
         Fault::HeartbeatStateWrong,
@@ -116,6 +142,17 @@ impl Fault {
         Fault::SyncCounterMissing,
         Fault::NoLss,
         Fault::LssStateNotChanged,
+        Fault::DeviceTypeByteOrder,
+        Fault::SegmentUnusedWrong,
+        Fault::BlockCrcRequired,
+        Fault::ErrorCountUnchecked,
+        Fault::StructureEntryWrong,
+        Fault::ProcessOutputRefused,
+        Fault::MappingProcedureUnchecked,
+        Fault::MappingSizeUnchecked,
+        Fault::SignatureUnchecked,
+        Fault::RestoreIgnored,
+        Fault::VerifyConfigurationNotStored,
     ];
 
     /// The stable kebab-case name (`canopener sim --fault NAME`).
@@ -145,6 +182,17 @@ impl Fault {
             Fault::SyncCounterMissing => "sync-counter-missing",
             Fault::NoLss => "no-lss",
             Fault::LssStateNotChanged => "lss-state-not-changed",
+            Fault::DeviceTypeByteOrder => "device-type-byte-order",
+            Fault::SegmentUnusedWrong => "segment-unused-wrong",
+            Fault::BlockCrcRequired => "block-crc-required",
+            Fault::ErrorCountUnchecked => "error-count-unchecked",
+            Fault::StructureEntryWrong => "structure-entry-wrong",
+            Fault::ProcessOutputRefused => "process-output-refused",
+            Fault::MappingProcedureUnchecked => "mapping-procedure-unchecked",
+            Fault::MappingSizeUnchecked => "mapping-size-unchecked",
+            Fault::SignatureUnchecked => "signature-unchecked",
+            Fault::RestoreIgnored => "restore-ignored",
+            Fault::VerifyConfigurationNotStored => "verify-configuration-not-stored",
         }
     }
 
@@ -278,6 +326,69 @@ impl Fault {
                  A test should switch to configuration (each way) and configure the node-ID. From the \
                  EnergyBus paper (missing state change in the LSS state machine during configuration)."
             }
+            Fault::DeviceTypeByteOrder => {
+                "Expedited uploads of 1000h:00 carry the device type with its bytes reversed (sent \
+                 big-endian), so 000F0191h reads 91010F00h. A test should read 1000h and compare it \
+                 with the EDS (CCT SDO 01). Field experience (a byte order mix-up on a big-endian \
+                 controller)."
+            }
+            Fault::SegmentUnusedWrong => {
+                "The last segment of a segmented upload says no byte is unused (n = 0) whatever the \
+                 length, so a client takes padding for data. A test should read a value longer than 4 \
+                 bytes segment by segment and add the segments up to the size indicated (CCT SDO 16, \
+                 18). Field experience."
+            }
+            Fault::BlockCrcRequired => {
+                "Block uploads and downloads are served only with CRC: a client that asks for none \
+                 (cc = 0) gets the abort 0504 0001h. CiA 301 lets the client choose. A test should run \
+                 block transfers without and with CRC (CCT SDO 19-25). Field experience."
+            }
+            Fault::ErrorCountUnchecked => {
+                "Any value written to 1003h:00 is confirmed and stored, though CiA 301 allows only 0 \
+                 (clearing the error history) and wants 0609 0030h for the rest. A test should write a \
+                 value above the allowed range (CCT SDO 10 writes FFh). Field experience."
+            }
+            Fault::StructureEntryWrong => {
+                "Sub-index FFh of an object answers with the object code and the data type's low byte \
+                 swapped (the record 1018h reads 00000923h instead of 00002309h). A test should read \
+                 sub-index FFh and compare it with the EDS's ObjectType and DataType (CCT OD 05). \
+                 Field experience."
+            }
+            Fault::ProcessOutputRefused => {
+                "An RPDO mapping entry naming a process output (rww) or a write-only object is refused \
+                 with 0604 0041h although its PDOMapping is 1: the device maps only rw objects into \
+                 RPDOs. A test should map such an object into an RPDO and expect it taken (CCT PDO \
+                 27). Field experience."
+            }
+            Fault::MappingProcedureUnchecked => {
+                "A PDO mapping is taken while the PDO is valid (COB-ID bit 31 clear) and mapping \
+                 entries while sub-index 0 is not 0, though CiA 301 §7.5.2.38 wants the procedure \
+                 (PDO made invalid, sub-index 0 set to 0, entries, sub-index 0, PDO valid) and an \
+                 abort otherwise; the entries are still checked. A test should skip a step and expect \
+                 the refusal (CCT PDO 23, 24). Field experience."
+            }
+            Fault::MappingSizeUnchecked => {
+                "A mapping whose sub-index 0 asks for more objects than the mapping has entries, or \
+                 whose objects add up to more than 64 bits, is taken instead of aborted with \
+                 0604 0042h. A test should try both (CCT PDO 25, 26). Field experience."
+            }
+            Fault::SignatureUnchecked => {
+                "Any value written to 1010h/1011h sub-indices 1 and above saves or restores, not only \
+                 the signatures `save` and `load`; CiA 301 wants 0800 0020h for a wrong signature. A \
+                 test should write a wrong signature and expect the refusal (CCT Other 01, 03, 05, \
+                 07). Field experience."
+            }
+            Fault::RestoreIgnored => {
+                "Writing `load` to 1011h is confirmed but nothing is restored: saved values keep \
+                 coming back after each reset. A test should save, restore, reset and expect the \
+                 defaults (CCT Other 02, 04, 06, 08). Field experience."
+            }
+            Fault::VerifyConfigurationNotStored => {
+                "`save` stores every parameter except 1020h (verify configuration), which comes back \
+                 as 0 after the next reset, so a master that checks the configuration date and time \
+                 configures the device again at every start. A test should write 1020h, save, reset \
+                 and read it back (CCT Other 09). Field experience."
+            }
         }
     }
 }
@@ -315,7 +426,7 @@ impl FromStr for Fault {
 /// The faults of one device, and the delay of [`Fault::SdoSlow`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FaultSet {
-    bits: u32,
+    bits: u64,
     sdo_delay: Duration,
 }
 
@@ -336,7 +447,7 @@ impl FaultSet {
 
     /// This set with `fault` as well.
     pub const fn with(mut self, fault: Fault) -> FaultSet {
-        self.bits |= 1 << fault as u32;
+        self.bits |= 1 << fault as u64;
         self
     }
 
@@ -353,12 +464,12 @@ impl FaultSet {
 
     /// Removes `fault`.
     pub fn remove(&mut self, fault: Fault) {
-        self.bits &= !(1 << fault as u32);
+        self.bits &= !(1 << fault as u64);
     }
 
     /// Whether `fault` is in the set.
     pub const fn contains(&self, fault: Fault) -> bool {
-        self.bits & (1 << fault as u32) != 0
+        self.bits & (1 << fault as u64) != 0
     }
 
     /// Whether the set is empty.
@@ -494,6 +605,14 @@ impl FaultLayer {
             return None;
         }
         if sdo_request && let Some(&first) = data.first() {
+            // A block upload initiate (ccs 5, cs 0) or block download initiate (ccs 6, cs 0) without
+            // CRC (cc = 0) becomes ccs 7, which the server aborts with 0504 0001h.
+            let block_initiate = first & 0xE3 == 0xA0 || first & 0xE1 == 0xC0;
+            if self.has(Fault::BlockCrcRequired) && block_initiate && first & 0x04 == 0 {
+                let mut bytes = data.to_vec();
+                bytes[0] = 0xE0;
+                return CanFrame::new(frame.id(), &bytes).ok();
+            }
             if first & 0xE3 == 0xA0 {
                 self.block = BlockUpload::Initiated;
             } else if first == 0xA2 && self.block == BlockUpload::LastSent {
@@ -639,6 +758,19 @@ impl FaultLayer {
             if self.has(Fault::WrongAbortCode) {
                 bytes[4..8].copy_from_slice(&abort::GENERAL_ERROR.to_le_bytes());
             }
+        }
+        // An expedited upload response (scs 2, e = 1) and the entry it answers.
+        if first & 0xE2 == 0x42 && bytes.len() == 8 {
+            if self.has(Fault::DeviceTypeByteOrder) && bytes[1..4] == [0x00, 0x10, 0x00] {
+                bytes[4..8].reverse();
+            }
+            if self.has(Fault::StructureEntryWrong) && bytes[3] == 0xFF {
+                bytes.swap(4, 5);
+            }
+        }
+        // The last segment of a segmented upload (scs 0, c = 1), not a block upload's sub-block.
+        if self.has(Fault::SegmentUnusedWrong) && self.block == BlockUpload::None && first & 0xE1 == 0x01 {
+            bytes[0] = first & !0x0E;
         }
         if self.has(Fault::SdoExpeditedSizeWrong) && first & 0xE3 == 0x43 {
             bytes[0] = 0x43;
