@@ -330,6 +330,7 @@ fn expected_failures(fault: Fault) -> &'static [&'static str] {
         ],
         // On FULL_DEVICE.
         Fault::VerifyConfigurationNotStored => &["cia301.other.6"],
+        Fault::TpdoRtrInPreOperational => &["cia301.pdo.15"],
     }
 }
 

@@ -1036,6 +1036,11 @@ impl Core for Device {
         }
         if state.is_active(CommService::Pdo) {
             self.pdo.handle_frame(now, frame, &mut self.od);
+        } else if frame.is_remote()
+            && state == NmtSlaveState::PreOperational
+            && self.faults.has(Fault::TpdoRtrInPreOperational)
+        {
+            self.pdo.handle_rtr(frame, &self.od);
         }
         self.pump(now);
     }

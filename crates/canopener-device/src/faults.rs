@@ -18,7 +18,8 @@
 //!   outside the procedure or too long, a count to 1003h:00, a wrong signature) is stored and
 //!   confirmed anyway, a process output is refused in an RPDO mapping, and a `save` or `load`
 //!   signature is confirmed without storing (or restoring) anything, or everything but 1020h;
-//! - **in the `Device`'s routing**: node guarding requests are answered while heartbeat runs.
+//! - **in the `Device`'s routing**: node guarding requests are answered while heartbeat runs, and
+//!   remote requests for TPDOs in pre-operational.
 //!
 //! The sources of the defects: the thesis in `seeds/001` (a UWASA node tested with a Kvaser rig:
 //! a write above HighLimit to 1F51h accepted, a non-mappable object accepted into a PDO mapping,
@@ -113,11 +114,13 @@ pub enum Fault {
     RestoreIgnored,
     /// `save` stores everything but 1020h.
     VerifyConfigurationNotStored,
+    /// Remote requests for TPDOs are answered in pre-operational.
+    TpdoRtrInPreOperational,
 }
 
 impl Fault {
     /// Every fault, in catalogue order.
-    pub const ALL: [Fault; 35] = [
+    pub const ALL: [Fault; 36] = [
         Fault::NoBootUp,
         Fault::BootUpWrongId,
         Fault::HeartbeatStateWrong,
@@ -153,6 +156,7 @@ impl Fault {
         Fault::SignatureUnchecked,
         Fault::RestoreIgnored,
         Fault::VerifyConfigurationNotStored,
+        Fault::TpdoRtrInPreOperational,
     ];
 
     /// The stable kebab-case name (`canopener sim --fault NAME`).
@@ -193,6 +197,7 @@ impl Fault {
             Fault::SignatureUnchecked => "signature-unchecked",
             Fault::RestoreIgnored => "restore-ignored",
             Fault::VerifyConfigurationNotStored => "verify-configuration-not-stored",
+            Fault::TpdoRtrInPreOperational => "tpdo-rtr-in-pre-operational",
         }
     }
 
@@ -388,6 +393,13 @@ impl Fault {
                  as 0 after the next reset, so a master that checks the configuration date and time \
                  configures the device again at every start. A test should write 1020h, save, reset \
                  and read it back (CCT Other 09). Field experience."
+            }
+            Fault::TpdoRtrInPreOperational => {
+                "Remote requests for TPDOs are answered in pre-operational, though CiA 301 runs PDOs \
+                 in operational only; event-timer and SYNC TPDOs stay silent there. A test should \
+                 request a TPDO that answers RTR in operational again in pre-operational and expect \
+                 nothing (CCT PDO 15). Field experience (the RTR handler not told about the NMT \
+                 state)."
             }
         }
     }

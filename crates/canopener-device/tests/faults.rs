@@ -833,6 +833,21 @@ fn verify_configuration_not_stored() {
 }
 
 #[test]
+fn tpdo_rtr_in_pre_operational() {
+    // TPDO1 of base.eds (185h, RTR allowed, type 255) requested in pre-operational, then in
+    // operational.
+    let (ok, bad) = base(Fault::TpdoRtrInPreOperational, |bus| {
+        bus.rx(ms(1), "185#R1");
+        bus.rx(ms(2), "000#0105");
+        bus.rx(ms(3), "185#R1");
+    });
+    let tpdos =
+        |trace: &[String]| -> Vec<String> { trace.iter().filter(|f| f.contains(" 185#")).cloned().collect() };
+    assert_eq!(tpdos(&ok), ["2.000 185#00", "3.000 185#00"]);
+    assert_eq!(tpdos(&bad), ["1.000 185#00", "2.000 185#00", "3.000 185#00"]);
+}
+
+#[test]
 fn without_faults_nothing_changes() {
     let mut plain = booted(Device::from_eds(&eds(BASE), 5, Box::new(NoApplication)).expect("device"));
     let mut none = booted(device(BASE, 5, FaultSet::none()));

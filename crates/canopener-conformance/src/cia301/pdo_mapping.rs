@@ -569,7 +569,9 @@ fn accepted_alone(
     what: &str,
 ) -> Outcome {
     let Some((entry, label)) = mappable_with_access(ctx, access) else {
-        return Ok(Finding::not_applicable(format!("the EDS has no {what}")));
+        return Ok(Finding::not_applicable(format!(
+            "the EDS has no object that is {what}"
+        )));
     };
     let (request, reply) = match map_alone(ctx, direction, entry)? {
         Ok(done) => done,
