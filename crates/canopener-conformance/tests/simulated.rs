@@ -715,3 +715,27 @@ fn the_lss_suite_passes_a_clean_lss_device_and_does_not_apply_to_one_without() {
         );
     }
 }
+
+/// The stopped steps of the TPDO transmission tests (CCT PDO 10-14) where the PRL120 cannot show
+/// them (`pdo.12`'s TPDO is not writable there, it has no 1019h for `pdo.14`): on the bundled CiA
+/// 401 demo device a device that ignores NMT stop fails every one whose TPDO transmits on its own.
+/// `pdo.13` (type 0) sends only after an application event, which the tester cannot make in stopped,
+/// so it passes there.
+#[test]
+fn the_tpdo_transmission_tests_fail_in_stopped_on_a_device_that_ignores_stop() {
+    let report = support::run(FULL_DEVICE, &[Fault::IgnoresNmtStop], &["cia301.pdo"]);
+    let failed = device_failures(&report);
+    assert_eq!(
+        failed,
+        ["cia301.pdo.6", "cia301.pdo.7", "cia301.pdo.12", "cia301.pdo.14"],
+        "{failed:?}"
+    );
+    for test in report.tests.iter().filter(|t| t.verdict == Verdict::Fail) {
+        assert!(
+            test.reason.starts_with("stopped (PDO 1"),
+            "{}: {}",
+            test.id,
+            test.reason
+        );
+    }
+}
