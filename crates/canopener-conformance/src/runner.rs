@@ -52,6 +52,9 @@ pub struct Progress<'a> {
     pub total: usize,
     /// The test starting now (`None` when all are done).
     pub current: Option<&'a TestDef>,
+    /// The test that ended just before, with its verdict, so a display can show verdicts as they
+    /// come (`None` before the first test).
+    pub finished: Option<&'a TestReport>,
 }
 
 /// The run could not start.
@@ -147,6 +150,7 @@ pub fn run_stimulated(
                 done,
                 total: tests.len(),
                 current: Some(test),
+                finished: report.tests.last(),
             });
             let test_start = recorder.now();
             let (finding, done, left, stopped) =
@@ -177,6 +181,7 @@ pub fn run_stimulated(
             done: report.tests.len(),
             total: tests.len(),
             current: None,
+            finished: report.tests.last(),
         });
     }
     report.duration_s = recorder.now().saturating_duration_since(start).as_secs_f64();
