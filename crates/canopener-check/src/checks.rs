@@ -22,7 +22,7 @@ pub(crate) mod objects;
 mod profiles;
 mod reading;
 mod syntax;
-mod value_rules;
+pub(crate) mod value_rules;
 mod values;
 mod xml;
 

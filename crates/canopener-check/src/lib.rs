@@ -9,7 +9,9 @@
 //! - the check modules, one per catalogue group, each describing and running its own checks;
 //! - [`registry`]: every check's description, assembled from the check modules;
 //! - [`check`]: runs the selected checks and returns [`Finding`]s;
-//! - [`fix`]: turns fixable findings (and rule-pack fixes) into line edits.
+//! - [`fix`]: turns fixable findings (and rule-pack fixes) into line edits;
+//! - [`value_rules`]: the CiA 301 value ranges of the rule table, for testers that write values to a
+//!   device rather than read them from a file.
 //!
 //! This crate performs no IO: callers pass a loaded file in and get findings out.
 
@@ -24,6 +26,7 @@ mod run;
 mod checks;
 pub mod portability;
 pub mod profile;
+pub mod value_rules;
 
 pub mod fix;
 

@@ -119,6 +119,7 @@ pub struct Ctx<'r, 'l> {
     eds_errors: Option<&'r [String]>,
     restores: Vec<Restore>,
     measurements: BTreeMap<String, Measurement>,
+    performed: Vec<String>,
     performance: &'r Performance,
     stimulus: Option<Hook<'r>>,
     broken: Vec<Junk>,
@@ -152,6 +153,7 @@ impl<'r, 'l> Ctx<'r, 'l> {
             eds_errors,
             restores: Vec::new(),
             measurements: BTreeMap::new(),
+            performed: Vec::new(),
             performance: &DEFAULT_PERFORMANCE,
             stimulus: None,
             broken: Vec::new(),
@@ -244,6 +246,24 @@ impl<'r, 'l> Ctx<'r, 'l> {
         self.reply(mark, (index, sub), result.map(|t| t.data))
     }
 
+    /// Reads `index`:`sub` with a block upload, offering the CRC when `crc` (CiA 301 §7.2.4.3.13;
+    /// the client checks it when the server offers it too). Later block transfers offer it again.
+    pub fn read_block(&mut self, index: u16, sub: u8, crc: bool) -> Result<Reply, Stop> {
+        self.sdo.set_block_crc(crc);
+        let reply = self.read_with(index, sub, UploadMode::Block);
+        self.sdo.set_block_crc(true);
+        reply
+    }
+
+    /// Writes `data` to `index`:`sub` with a block download, with a CRC when `crc` (CiA 301
+    /// §7.2.4.3.9; without, the end frame's CRC field is 0). Later block transfers use it again.
+    pub fn write_block(&mut self, index: u16, sub: u8, data: Vec<u8>, crc: bool) -> Result<Reply, Stop> {
+        self.sdo.set_block_crc(crc);
+        let reply = self.write_with(index, sub, data, DownloadMode::Block);
+        self.sdo.set_block_crc(true);
+        reply
+    }
+
     /// Writes `data` to `index`:`sub` without remembering the old value (for writes that must be
     /// refused, or that [`Ctx::modify`] already covers).
     pub fn write(&mut self, index: u16, sub: u8, data: Vec<u8>) -> Result<Reply, Stop> {
@@ -271,8 +291,14 @@ impl<'r, 'l> Ctx<'r, 'l> {
     /// nobody could undo would reach the tests that follow).
     pub fn modify(&mut self, index: u16, sub: u8, data: Vec<u8>) -> Result<Reply, Stop> {
         let old = self.read(index, sub)?;
-        if matches!(old, Reply::Broken { .. }) {
-            return Ok(old);
+        if let Reply::Broken { code, reason } = old {
+            // Say which transfer broke: the request under test was never sent.
+            return Ok(Reply::Broken {
+                code,
+                reason: format!(
+                    "the upload of {index:04X}h:{sub:02X} that comes first (to write the value back after the test), so the download was not sent: {reason}"
+                ),
+            });
         }
         let reply = self.write(index, sub, data)?;
         // Only a confirmed write changed anything (a refused one is what many tests expect), or
@@ -455,6 +481,21 @@ impl<'r, 'l> Ctx<'r, 'l> {
     /// Whether [`Ctx::judged_without_criterion`] was called.
     pub fn without_criterion(&self) -> bool {
         self.no_criterion
+    }
+
+    /// Records that the check of the CCT case `case` (`"SDO 19"`, as the case list names it) was
+    /// performed: call it where that step has run and its answer was judged, not before (the
+    /// report's `performed` then says what a run really checked; `tests/simulated.rs` holds the
+    /// coverage table to it). A case recorded twice is listed once.
+    pub fn performed(&mut self, case: &str) {
+        if !self.performed.iter().any(|c| c == case) {
+            self.performed.push(case.to_owned());
+        }
+    }
+
+    /// The CCT cases performed so far, in order.
+    pub fn take_performed(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.performed)
     }
 
     /// The standard CAN-ID `raw` (callers pass 11-bit values).

@@ -40,6 +40,36 @@ impl Finding {
         }
     }
 
+    /// The verdict of a test made of steps, each `(name, finding)`: the first failure, else the first
+    /// undecided step, else a pass naming what each step found (and which steps did not apply),
+    /// or not_applicable when no step applied.
+    pub fn of_steps(steps: Vec<(&str, Finding)>) -> Finding {
+        for verdict in [Verdict::Fail, Verdict::Inconclusive] {
+            if let Some((name, finding)) = steps.iter().find(|(_, f)| f.verdict == verdict) {
+                return Finding {
+                    reason: format!("{name}: {}", finding.reason),
+                    ..finding.clone()
+                };
+            }
+        }
+        let named = |verdict: Verdict| -> Vec<String> {
+            steps
+                .iter()
+                .filter(|(_, f)| f.verdict == verdict)
+                .map(|(name, f)| format!("{name}: {}", f.reason))
+                .collect()
+        };
+        let (passed, skipped) = (named(Verdict::Pass), named(Verdict::NotApplicable));
+        if passed.is_empty() {
+            return Finding::not_applicable(skipped.join("; "));
+        }
+        let mut reason = passed.join("; ");
+        if !skipped.is_empty() {
+            reason.push_str(&format!(" (not applicable: {})", skipped.join("; ")));
+        }
+        Finding::pass(reason)
+    }
+
     fn new(verdict: Verdict, reason: impl Into<String>) -> Finding {
         Finding {
             verdict,
@@ -93,3 +123,50 @@ pub type Outcome = Result<Finding, Stop>;
 /// What a step before the measurement returns: what the test goes on with, or the finding that
 /// ends it there (not applicable, a failure, inconclusive).
 pub type Prepared<T> = Result<Result<T, Finding>, Stop>;
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn failure() -> Finding {
+        Finding::fail(
+            "refused nothing",
+            Evidence {
+                request: "r".into(),
+                requirement: "q".into(),
+                answer: "a".into(),
+                cause: "c".into(),
+            },
+        )
+    }
+
+    #[test]
+    fn steps_fail_first_then_undecided_then_pass_with_what_did_not_apply() {
+        let all = Finding::of_steps(vec![
+            ("PDO 32", Finding::pass("refused")),
+            ("PDO 29", Finding::inconclusive("no answer")),
+            ("x", failure()),
+        ]);
+        assert_eq!(all.verdict, Verdict::Fail);
+        assert_eq!(all.reason, "x: refused nothing");
+        assert!(all.analysis.contains("Request:  r"));
+        let undecided = Finding::of_steps(vec![
+            ("PDO 32", Finding::pass("refused")),
+            ("PDO 29", Finding::inconclusive("no answer")),
+        ]);
+        assert_eq!(undecided.verdict, Verdict::Inconclusive);
+        let passed = Finding::of_steps(vec![
+            ("PDO 32", Finding::pass("refused")),
+            ("PDO 29", Finding::not_applicable("no RPDO")),
+        ]);
+        assert_eq!(passed.verdict, Verdict::Pass);
+        assert_eq!(passed.reason, "PDO 32: refused (not applicable: PDO 29: no RPDO)");
+        let none = Finding::of_steps(vec![
+            ("a", Finding::not_applicable("x")),
+            ("b", Finding::not_applicable("y")),
+        ]);
+        assert_eq!(
+            (none.verdict, none.reason.as_str()),
+            (Verdict::NotApplicable, "a: x; b: y")
+        );
+    }
+}

@@ -4,6 +4,8 @@
 //!
 //! - [`test_def`]: what a test is (stable id, title, CiA and CCT references, the precondition it takes
 //!   from the EDS); [`catalogue`]: every suite's tests assembled, selection by suite, id and tag.
+//! - [`cct`]: the CCT 3.0.3.10 cases, how canopener covers each (covered, partial, different) and
+//!   the tests that perform them.
 //! - [`procedures`]: what the suites share (refusal verdicts, NMT resets, TPDO set-up, an LSS master);
 //!   a suite never uses another suite (`tests/layering.rs`).
 //! - [`cia301`]: the CiA 301 device test (designed from CiA 301, covering the CCT's cases; see
@@ -28,6 +30,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod catalogue;
+pub mod cct;
 pub mod cia301;
 pub mod cia305;
 pub mod cia313;

@@ -183,6 +183,11 @@ pub struct TestReport {
     pub measurements: BTreeMap<String, Measurement>,
     /// How long the test ran, in seconds on the link's clock.
     pub duration_s: f64,
+    /// The CCT cases (`SDO 19`, `PDO 27`) whose check this run actually performed, in the order
+    /// performed: a case is listed only when the step that checks it ran and was judged, not
+    /// because the test references it (a test that ends early, or does not apply, performed
+    /// less). Added to version 1 of the report; empty for tests outside the CCT.
+    pub performed: Vec<String>,
     /// Every frame sent and received while the test ran, decoded.
     pub telegrams: Vec<Telegram>,
     /// A `pass` whose measurement no criterion judged ("measured, no criterion"): not a conformance

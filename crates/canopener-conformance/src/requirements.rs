@@ -53,6 +53,8 @@ pub const HEARTBEAT: &str = "CiA 301 §7.2.8.3.2.2 (heartbeat)";
 pub const HEARTBEAT_CONSUMER: &str = "CiA 301 §7.5.2 (1016h consumer heartbeat time, 1029h error behaviour)";
 /// CiA 301 §7.5.2: store 1010h and restore 1011h.
 pub const STORE_RESTORE: &str = "CiA 301 §7.5.2 (1010h store parameters, 1011h restore default parameters)";
+/// CiA 301 §7.5.2: 1020h, the date and time of the configuration a tool downloaded and saved.
+pub const VERIFY_CONFIGURATION: &str = "CiA 301 §7.5.2 (1020h verify configuration)";
 /// CiA 301 §7.3.5: restricted CAN-IDs.
 pub const RESTRICTED_IDS: &str = "CiA 301 §7.3.5 (restricted CAN-IDs)";
 /// CiA 301 §7.2.8.2: NMT states and the services allowed in each.

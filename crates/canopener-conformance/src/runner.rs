@@ -152,7 +152,7 @@ pub fn run_stimulated(
                 finished: report.tests.last(),
             });
             let test_start = recorder.now();
-            let (finding, measurements, no_criterion, left, stopped) =
+            let (finding, done, left, stopped) =
                 run_one(&mut recorder, spec, performance, stimulus.as_mut(), test)?;
             report.left_modified.extend(left);
             // Each test's log is decoded on its own: what an earlier test left open (a guarding
@@ -168,10 +168,11 @@ pub fn run_stimulated(
                 verdict: finding.verdict,
                 reason: finding.reason,
                 analysis: finding.analysis,
-                measurements,
+                measurements: done.measurements,
                 duration_s: recorder.now().saturating_duration_since(test_start).as_secs_f64(),
+                performed: done.performed,
                 telegrams,
-                no_criterion,
+                no_criterion: done.no_criterion,
             });
             if stopped {
                 report.interrupted = true;
@@ -253,13 +254,15 @@ fn prepare(
     Ok(result)
 }
 
-type OneResult = (
-    Finding,
-    std::collections::BTreeMap<String, crate::model::Measurement>,
-    bool,
-    Vec<String>,
-    bool,
-);
+/// What a test left besides its verdict: its measurements, whether one was judged against no
+/// criterion, and the CCT cases it performed.
+struct Done {
+    measurements: std::collections::BTreeMap<String, crate::model::Measurement>,
+    no_criterion: bool,
+    performed: Vec<String>,
+}
+
+type OneResult = (Finding, Done, Vec<String>, bool);
 
 fn run_one(
     recorder: &mut Recorder<'_>,
@@ -281,13 +284,16 @@ fn run_one(
         Err(Stop::Link(error)) => (Finding::inconclusive(format!("the bus failed: {error}")), true),
         Err(Stop::Unsendable(reason)) => (Finding::inconclusive(reason), false),
     };
-    let measurements = ctx.take_measurements();
-    let no_criterion = ctx.without_criterion();
+    let done = Done {
+        measurements: ctx.take_measurements(),
+        no_criterion: ctx.without_criterion(),
+        performed: ctx.take_performed(),
+    };
     // A test that put no frame on the bus (a precondition from the EDS alone said not_applicable)
     // changed nothing: no cleanup, which would cost each such test the settling time.
     let untouched = ctx.mark() == 0 && !stopped;
     if !test.needs_device() || untouched {
-        return Ok((finding, measurements, no_criterion, Vec::new(), stopped));
+        return Ok((finding, done, Vec::new(), stopped));
     }
     let interrupted = stopped && ctx.link_cancelled();
     if let Some(cancel) = spec.cancel.as_ref().filter(|_| interrupted) {
@@ -333,7 +339,7 @@ fn run_one(
             )]
         }
     };
-    Ok((finding, measurements, no_criterion, left, stopped))
+    Ok((finding, done, left, stopped))
 }
 
 /// Whatever a test concluded, junk on the device's CAN-IDs keeps it from passing

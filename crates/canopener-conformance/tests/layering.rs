@@ -26,6 +26,7 @@ const LAYERS: &[(&str, u8)] = &[
     ("cia313", 2),
     ("cia401", 2),
     ("catalogue", 3),
+    ("cct", 3),
     ("runner", 4),
     ("render", 4),
     ("demo", 5),

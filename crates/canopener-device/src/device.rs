@@ -613,12 +613,14 @@ impl Device {
         self.transmit.extend(frames);
     }
 
-    /// The PDOs reloaded from the dictionary, or from the view `mapping-not-applied` and
-    /// `tpdo-event-timer-fast` give them.
+    /// The PDOs reloaded from the dictionary, through the fault layer: `tpdo-invalid-sent` hands the
+    /// engine TPDO COB-IDs made valid, `mapping-not-applied` and `tpdo-event-timer-fast` the view
+    /// they give.
     fn reload_pdos(&mut self, now: Instant) {
-        match crate::faults::pdo_view(self.faults.faults(), &self.od, &self.applied_mappings) {
+        let od = self.faults.pdo_parameters(&self.od);
+        match crate::faults::pdo_view(self.faults.faults(), &od, &self.applied_mappings) {
             Some(view) => self.pdo.reload(now, &view),
-            None => self.pdo.reload(now, &self.od),
+            None => self.pdo.reload(now, &od),
         }
     }
 
@@ -886,13 +888,6 @@ impl Device {
         }
     }
 
-    /// Loads the PDO engine's parameters from the dictionary (through the fault layer, which may
-    /// hand it a copy with TPDO COB-IDs made valid).
-    fn reload_pdos(&mut self, now: Instant) {
-        let od = self.faults.pdo_parameters(&self.od);
-        self.pdo.reload(now, &od);
-    }
-
     fn restore_defaults(&mut self, range: std::ops::RangeInclusive<u16>) {
         for entry in self.pristine.iter().filter(|e| range.contains(&e.key().index)) {
             let _ = self.od.set_value(entry.key(), entry.value());
@@ -1094,6 +1089,11 @@ impl Core for Device {
         }
         if state.is_active(CommService::Pdo) || self.faults.routes(CommService::Pdo, state) {
             self.pdo.handle_frame(now, frame, &mut self.od);
+        } else if frame.is_remote()
+            && state == NmtSlaveState::PreOperational
+            && self.faults.has(Fault::TpdoRtrInPreOperational)
+        {
+            self.pdo.handle_rtr(frame, &self.od);
         }
         self.pump(now);
     }
@@ -1191,10 +1191,14 @@ struct Hooks<'a> {
     consumer: &'a HeartbeatConsumer,
     store: &'a mut StoreRestore,
     params: &'a mut dyn ParameterStore,
-    /// The device's defects: `store-ignored` confirms `save` to 1010h without storing;
-    /// `unmappable-accepted` and `pdo-cob-id-unchecked` let a mapping or COB-ID the PDO rules refuse
-    /// through; `limit-not-enforced` stores values outside LowLimit..HighLimit. All hold in every
-    /// transfer mode, since the SDO server calls these hooks at the end of each.
+    /// The device's defects: `store-ignored` confirms `save` to 1010h without storing,
+    /// `restore-ignored` `load` to 1011h without restoring, `signature-unchecked` takes any value
+    /// as the signature, `verify-configuration-not-stored` saves all but 1020h;
+    /// `unmappable-accepted`, `pdo-cob-id-unchecked`, `mapping-procedure-unchecked` and
+    /// `mapping-size-unchecked` let a mapping or COB-ID the PDO rules refuse through,
+    /// `process-output-refused` refuses rww/wo objects in RPDO mappings; `error-count-unchecked`
+    /// takes any value to 1003h:00; `limit-not-enforced` stores values outside LowLimit..HighLimit.
+    /// All hold in every transfer mode, since the SDO server calls these hooks at the end of each.
     faults: FaultSet,
 }
 
@@ -1205,11 +1209,27 @@ impl SdoHooks for Hooks<'_> {
         {
             return Err(abort::GENERAL_ERROR);
         }
-        match self.pdo.check_write(key, data, od) {
+        let procedure_unchecked = self.faults.contains(Fault::MappingProcedureUnchecked);
+        let checked = match self.pdo.check_write(key, data, od) {
+            Err(PdoConfigError::MappingWhileValid { .. } | PdoConfigError::MappingWhileEnabled { .. })
+                if procedure_unchecked =>
+            {
+                // The entry itself is still checked, as if the procedure had been followed.
+                self.pdo
+                    .check_write(key, data, &mapping_procedure_followed(key, od))
+            }
+            result => result,
+        };
+        match checked {
             Err(PdoConfigError::NotMappable { .. }) if self.faults.contains(Fault::UnmappableAccepted) => {}
             Err(PdoConfigError::RestrictedCanId { .. }) if self.faults.contains(Fault::PdoCobIdUnchecked) => {
             }
+            Err(PdoConfigError::TooManyObjects { .. } | PdoConfigError::LengthExceeded { .. })
+                if self.faults.contains(Fault::MappingSizeUnchecked) => {}
             result => result.map_err(|e| e.abort_code())?,
+        }
+        if self.faults.contains(Fault::ProcessOutputRefused) && process_output_in_rpdo(key, data, od) {
+            return Err(abort::OBJECT_NOT_MAPPABLE);
         }
         self.sync.check_download(key, data).map_err(|e| e.abort_code())?;
         self.time.check_download(key, data).map_err(|e| e.abort_code())?;
@@ -1219,7 +1239,7 @@ impl SdoHooks for Hooks<'_> {
                 emcy.set_cob_id(u32::from_le_bytes([a, b, c, d]))
                     .map_err(|e| e.abort_code())?;
             }
-            (0x1003, 0, &[count]) => {
+            (0x1003, 0, &[count]) if !self.faults.contains(Fault::ErrorCountUnchecked) => {
                 let mut emcy = self.emcy.clone();
                 emcy.write_history_count(count).map_err(|e| e.abort_code())?;
             }
@@ -1234,10 +1254,23 @@ impl SdoHooks for Hooks<'_> {
         if self.faults.contains(Fault::StoreIgnored) && key.index == 0x1010 && data == b"save" {
             return Ok(());
         }
+        if self.faults.contains(Fault::RestoreIgnored) && key.index == 0x1011 && data == b"load" {
+            return Ok(());
+        }
+        // Under `signature-unchecked` any 4 bytes to a group of 1010h/1011h act as the signature.
+        let data = match (key.index, key.sub, data.len()) {
+            (0x1010, 1.., 4) if self.faults.contains(Fault::SignatureUnchecked) => b"save",
+            (0x1011, 1.., 4) if self.faults.contains(Fault::SignatureUnchecked) => b"load",
+            _ => data,
+        };
         // Last: a `save` here stores the dictionary at once, so every other check must have passed.
-        self.store
-            .check_download(key, data, od, self.params)
-            .map_err(|e| e.abort_code())
+        let result = if self.faults.contains(Fault::VerifyConfigurationNotStored) {
+            let mut params = WithoutVerifyConfiguration(&mut *self.params);
+            self.store.check_download(key, data, od, &mut params)
+        } else {
+            self.store.check_download(key, data, od, self.params)
+        };
+        result.map_err(|e| e.abort_code())
     }
 
     fn write(&mut self, key: ObjectKey, data: &[u8], od: &mut DynamicOd) -> Result<(), OdError> {
@@ -1262,6 +1295,59 @@ impl SdoHooks for Hooks<'_> {
             }
         }
         Ok(())
+    }
+}
+
+/// `od` as the mapping procedure would leave it for a write to `key` (CiA 301 §7.5.2.38): the PDO
+/// not valid (COB-ID bit 31 set) and, for an entry, sub-index 0 at 0. What
+/// [`Fault::MappingProcedureUnchecked`] checks a mapping write against.
+fn mapping_procedure_followed(key: ObjectKey, od: &DynamicOd) -> DynamicOd {
+    let mut view = od.clone();
+    if let Some((pdo, false)) = PdoRef::from_index(key.index) {
+        let cob_key = ObjectKey::new(pdo.comm_index(), 1);
+        if let Some(&[a, b, c, d]) = od.get(cob_key).map(|e| e.value()) {
+            let invalid = u32::from_le_bytes([a, b, c, d]) | 0x8000_0000;
+            let _ = view.set_value(cob_key, &invalid.to_le_bytes());
+        }
+        if key.sub != 0 {
+            let _ = view.set_value(ObjectKey::new(key.index, 0), &[0]);
+        }
+    }
+    view
+}
+
+/// Whether `data` written to `key` maps a process output (rww) or write-only object into an RPDO:
+/// what [`Fault::ProcessOutputRefused`] refuses.
+fn process_output_in_rpdo(key: ObjectKey, data: &[u8], od: &DynamicOd) -> bool {
+    let &[_, sub, lo, hi] = data else { return false };
+    if !(0x1600..=0x17FF).contains(&key.index) || key.sub == 0 {
+        return false;
+    }
+    let mapped = ObjectKey::new(u16::from_le_bytes([lo, hi]), sub);
+    od.get(mapped)
+        .is_some_and(|e| matches!(e.access(), canopener_od::Access::Rww | canopener_od::Access::Wo))
+}
+
+/// A parameter store that saves everything but 1020h (verify configuration):
+/// [`Fault::VerifyConfigurationNotStored`].
+struct WithoutVerifyConfiguration<'a>(&'a mut dyn ParameterStore);
+
+impl ParameterStore for WithoutVerifyConfiguration<'_> {
+    fn save(&mut self, group: ParameterGroup, values: &[(ObjectKey, Vec<u8>)]) -> Result<(), StorageError> {
+        let kept: Vec<(ObjectKey, Vec<u8>)> = values
+            .iter()
+            .filter(|(k, _)| k.index != 0x1020)
+            .cloned()
+            .collect();
+        self.0.save(group, &kept)
+    }
+
+    fn load(&mut self, group: ParameterGroup) -> Result<Option<crate::store::Snapshot>, StorageError> {
+        self.0.load(group)
+    }
+
+    fn clear(&mut self, group: ParameterGroup) -> Result<(), StorageError> {
+        self.0.clear(group)
     }
 }
 

@@ -6,18 +6,22 @@
 //! A fault acts at one of six places:
 //! - **on received frames**, before any core sees them (`FaultLayer::inbound`): a frame is
 //!   dropped (NMT stop, NMT broadcast, LSS, TPDO remote requests) or rewritten (the SDO toggle bit
-//!   is forced to what the server expects, an NMT command's node-ID becomes the device's own);
+//!   is forced to what the server expects, an NMT command's node-ID becomes the device's own, a
+//!   block transfer without CRC becomes an invalid command);
 //! - **on sent frames**, after the cores made them and before they leave the device
 //!   (`FaultLayer::outbound`): a frame is dropped (boot-up, EMCY, TPDOs in pre-operational),
 //!   rewritten (heartbeat state, abort code, expedited size bit, SYNC counter, block CRC, boot-up
-//!   CAN-ID, EMCY error register) or delayed and duplicated on virtual time (slow SDO, heartbeat
-//!   jitter, extra heartbeats 1 ms apart);
+//!   CAN-ID, EMCY error register, 1000h's byte order, sub-index FFh, the last segment's unused
+//!   bytes) or delayed and duplicated on virtual time (slow SDO, heartbeat jitter, extra heartbeats
+//!   1 ms apart);
 //! - **in the `Device`'s own checks** on SDO downloads: a download a correct device refuses
-//!   (above HighLimit, a non-mappable object in a PDO mapping, a restricted COB-ID) is stored and
-//!   confirmed anyway, and a `save` signature is confirmed without storing anything;
+//!   (above HighLimit, a non-mappable object in a PDO mapping, a restricted COB-ID, a mapping
+//!   outside the procedure or too long, a count to 1003h:00, a wrong signature) is stored and
+//!   confirmed anyway, a process output is refused in an RPDO mapping, and a `save` or `load`
+//!   signature is confirmed without storing (or restoring) anything, or everything but 1020h;
 //! - **in the `Device`'s routing**: node guarding requests are answered while heartbeat runs, SDO
-//!   requests in stopped and PDOs in pre-operational or stopped reach their cores
-//!   (`FaultLayer::routes`);
+//!   requests in stopped, PDOs in pre-operational or stopped and remote requests for TPDOs in
+//!   pre-operational reach their cores (`FaultLayer::routes`);
 //! - **in what the `Device` tells its cores**: the NMT state the PDO engine, the EMCY producer and
 //!   SYNC run in (`FaultLayer::core_state`), the PDO parameters the engine reads (bit 31 of TPDO
 //!   COB-IDs cleared, `FaultLayer::pdo_parameters`), and 1001h, cleared after every update;
@@ -137,11 +141,35 @@ pub enum Fault {
     ResetCommunicationKeepsValues,
     /// NMT reset node is carried out as a reset communication: 2000h–9FFFh keep their values.
     ResetNodeAsResetCommunication,
+    /// 1000h is answered with its bytes in reverse order.
+    DeviceTypeByteOrder,
+    /// The last segment of a segmented upload says no byte is unused.
+    SegmentUnusedWrong,
+    /// Block transfers without CRC are refused.
+    BlockCrcRequired,
+    /// Any value written to 1003h:00 is taken.
+    ErrorCountUnchecked,
+    /// Sub-index FFh answers with the object code and the data type's low byte swapped.
+    StructureEntryWrong,
+    /// Process outputs (rww, wo) are refused in RPDO mappings.
+    ProcessOutputRefused,
+    /// Mappings are taken whatever the PDO's validity and sub-index 0.
+    MappingProcedureUnchecked,
+    /// Mappings with too many objects or more than 64 bits are taken.
+    MappingSizeUnchecked,
+    /// Any value written to 1010h/1011h saves or restores.
+    SignatureUnchecked,
+    /// `load` to 1011h is confirmed but nothing is restored.
+    RestoreIgnored,
+    /// `save` stores everything but 1020h.
+    VerifyConfigurationNotStored,
+    /// Remote requests for TPDOs are answered in pre-operational.
+    TpdoRtrInPreOperational,
 }
 
 impl Fault {
     /// Every fault, in catalogue order.
-    pub const ALL: [Fault; 42] = [
+    pub const ALL: [Fault; 54] = [
         Fault::NoBootUp,
         Fault::BootUpWrongId,
         Fault::HeartbeatStateWrong,
@@ -184,6 +212,18 @@ impl Fault {
         Fault::ResetCommunicationRestoresApplication,
         Fault::ResetCommunicationKeepsValues,
         Fault::ResetNodeAsResetCommunication,
+        Fault::DeviceTypeByteOrder,
+        Fault::SegmentUnusedWrong,
+        Fault::BlockCrcRequired,
+        Fault::ErrorCountUnchecked,
+        Fault::StructureEntryWrong,
+        Fault::ProcessOutputRefused,
+        Fault::MappingProcedureUnchecked,
+        Fault::MappingSizeUnchecked,
+        Fault::SignatureUnchecked,
+        Fault::RestoreIgnored,
+        Fault::VerifyConfigurationNotStored,
+        Fault::TpdoRtrInPreOperational,
     ];
 
     /// The stable kebab-case name (`canopener sim --fault NAME`).
@@ -231,6 +271,18 @@ impl Fault {
             Fault::ResetCommunicationRestoresApplication => "reset-communication-restores-application",
             Fault::ResetCommunicationKeepsValues => "reset-communication-keeps-values",
             Fault::ResetNodeAsResetCommunication => "reset-node-as-reset-communication",
+            Fault::DeviceTypeByteOrder => "device-type-byte-order",
+            Fault::SegmentUnusedWrong => "segment-unused-wrong",
+            Fault::BlockCrcRequired => "block-crc-required",
+            Fault::ErrorCountUnchecked => "error-count-unchecked",
+            Fault::StructureEntryWrong => "structure-entry-wrong",
+            Fault::ProcessOutputRefused => "process-output-refused",
+            Fault::MappingProcedureUnchecked => "mapping-procedure-unchecked",
+            Fault::MappingSizeUnchecked => "mapping-size-unchecked",
+            Fault::SignatureUnchecked => "signature-unchecked",
+            Fault::RestoreIgnored => "restore-ignored",
+            Fault::VerifyConfigurationNotStored => "verify-configuration-not-stored",
+            Fault::TpdoRtrInPreOperational => "tpdo-rtr-in-pre-operational",
         }
     }
 
@@ -401,6 +453,7 @@ impl Fault {
                  the generic bit whenever any error bit is set. A test should check each EMCY's \
                  error register byte against that rule and against 1001h read after it. From \
                  CANopenNode's demo device (issue 22)."
+            }
             Fault::TpdoInPreOperational => {
                 "TPDOs run in pre-operational as in operational: event-timer and SYNC-triggered TPDOs \
                  are sent, though CiA 301 runs PDOs in operational only (RPDOs and remote requests \
@@ -467,6 +520,76 @@ impl Fault {
                  power-on values, 2000h–9FFFh keep what was written. A test should change an \
                  application object, reset the node and expect its default (CCT State 01). Field \
                  experience."
+            }
+            Fault::DeviceTypeByteOrder => {
+                "Expedited uploads of 1000h:00 carry the device type with its bytes reversed (sent \
+                 big-endian), so 000F0191h reads 91010F00h. A test should read 1000h and compare it \
+                 with the EDS (CCT SDO 01). Field experience (a byte order mix-up on a big-endian \
+                 controller)."
+            }
+            Fault::SegmentUnusedWrong => {
+                "The last segment of a segmented upload says no byte is unused (n = 0) whatever the \
+                 length, so a client takes padding for data. A test should read a value longer than 4 \
+                 bytes segment by segment and add the segments up to the size indicated (CCT SDO 16, \
+                 18). Field experience."
+            }
+            Fault::BlockCrcRequired => {
+                "Block uploads and downloads are served only with CRC: a client that asks for none \
+                 (cc = 0) gets the abort 0504 0001h. CiA 301 lets the client choose. A test should run \
+                 block transfers without and with CRC (CCT SDO 19-25). Field experience."
+            }
+            Fault::ErrorCountUnchecked => {
+                "Any value written to 1003h:00 is confirmed and stored, though CiA 301 allows only 0 \
+                 (clearing the error history) and wants 0609 0030h for the rest. A test should write a \
+                 value above the allowed range (CCT SDO 10 writes FFh). Field experience."
+            }
+            Fault::StructureEntryWrong => {
+                "Sub-index FFh of an object answers with the object code and the data type's low byte \
+                 swapped (the record 1018h reads 00000923h instead of 00002309h). A test should read \
+                 sub-index FFh and compare it with the EDS's ObjectType and DataType (CCT OD 05). \
+                 Field experience."
+            }
+            Fault::ProcessOutputRefused => {
+                "An RPDO mapping entry naming a process output (rww) or a write-only object is refused \
+                 with 0604 0041h although its PDOMapping is 1: the device maps only rw objects into \
+                 RPDOs. A test should map such an object into an RPDO and expect it taken (CCT PDO \
+                 27). Field experience."
+            }
+            Fault::MappingProcedureUnchecked => {
+                "A PDO mapping is taken while the PDO is valid (COB-ID bit 31 clear) and mapping \
+                 entries while sub-index 0 is not 0, though CiA 301 §7.5.2.38 wants the procedure \
+                 (PDO made invalid, sub-index 0 set to 0, entries, sub-index 0, PDO valid) and an \
+                 abort otherwise; the entries are still checked. A test should skip a step and expect \
+                 the refusal (CCT PDO 23, 24). Field experience."
+            }
+            Fault::MappingSizeUnchecked => {
+                "A mapping whose sub-index 0 asks for more objects than the mapping has entries, or \
+                 whose objects add up to more than 64 bits, is taken instead of aborted with \
+                 0604 0042h. A test should try both (CCT PDO 25, 26). Field experience."
+            }
+            Fault::SignatureUnchecked => {
+                "Any value written to 1010h/1011h sub-indices 1 and above saves or restores, not only \
+                 the signatures `save` and `load`; CiA 301 wants 0800 0020h for a wrong signature. A \
+                 test should write a wrong signature and expect the refusal (CCT Other 01, 03, 05, \
+                 07). Field experience."
+            }
+            Fault::RestoreIgnored => {
+                "Writing `load` to 1011h is confirmed but nothing is restored: saved values keep \
+                 coming back after each reset. A test should save, restore, reset and expect the \
+                 defaults (CCT Other 02, 04, 06, 08). Field experience."
+            }
+            Fault::VerifyConfigurationNotStored => {
+                "`save` stores every parameter except 1020h (verify configuration), which comes back \
+                 as 0 after the next reset, so a master that checks the configuration date and time \
+                 configures the device again at every start. A test should write 1020h, save, reset \
+                 and read it back (CCT Other 09). Field experience."
+            }
+            Fault::TpdoRtrInPreOperational => {
+                "Remote requests for TPDOs are answered in pre-operational, though CiA 301 runs PDOs \
+                 in operational only; event-timer and SYNC TPDOs stay silent there. A test should \
+                 request a TPDO that answers RTR in operational again in pre-operational and expect \
+                 nothing (CCT PDO 15). Field experience (the RTR handler not told about the NMT \
+                 state)."
             }
         }
     }
@@ -699,6 +822,14 @@ impl FaultLayer {
             return None;
         }
         if sdo_request && let Some(&first) = data.first() {
+            // A block upload initiate (ccs 5, cs 0) or block download initiate (ccs 6, cs 0) without
+            // CRC (cc = 0) becomes ccs 7, which the server aborts with 0504 0001h.
+            let block_initiate = first & 0xE3 == 0xA0 || first & 0xE1 == 0xC0;
+            if self.has(Fault::BlockCrcRequired) && block_initiate && first & 0x04 == 0 {
+                let mut bytes = data.to_vec();
+                bytes[0] = 0xE0;
+                return CanFrame::new(frame.id(), &bytes).ok();
+            }
             if first & 0xE3 == 0xA0 {
                 self.block = BlockUpload::Initiated;
             } else if first == 0xA2 && self.block == BlockUpload::LastSent {
@@ -860,6 +991,19 @@ impl FaultLayer {
             if self.has(Fault::WrongAbortCode) {
                 bytes[4..8].copy_from_slice(&abort::GENERAL_ERROR.to_le_bytes());
             }
+        }
+        // An expedited upload response (scs 2, e = 1) and the entry it answers.
+        if first & 0xE2 == 0x42 && bytes.len() == 8 {
+            if self.has(Fault::DeviceTypeByteOrder) && bytes[1..4] == [0x00, 0x10, 0x00] {
+                bytes[4..8].reverse();
+            }
+            if self.has(Fault::StructureEntryWrong) && bytes[3] == 0xFF {
+                bytes.swap(4, 5);
+            }
+        }
+        // The last segment of a segmented upload (scs 0, c = 1), not a block upload's sub-block.
+        if self.has(Fault::SegmentUnusedWrong) && self.block == BlockUpload::None && first & 0xE1 == 0x01 {
+            bytes[0] = first & !0x0E;
         }
         if self.has(Fault::SdoExpeditedSizeWrong) && first & 0xE3 == 0x43 {
             bytes[0] = 0x43;

@@ -1031,7 +1031,10 @@ impl PdoEngine {
         handled
     }
 
-    fn handle_rtr(&mut self, frame: &CanFrame, od: &DynamicOd) -> bool {
+    /// Answers a remote request for a TPDO whatever the NMT state: for the `Device`'s
+    /// `tpdo-rtr-in-pre-operational` fault, which lets remote requests through where CiA 301 keeps
+    /// PDOs silent. Returns whether a TPDO has the frame's CAN-ID and allows RTR.
+    pub(crate) fn handle_rtr(&mut self, frame: &CanFrame, od: &DynamicOd) -> bool {
         let mut handled = false;
         for tpdo in &self.tpdos {
             if tpdo.id != Some(frame.id()) || !tpdo.rtr_allowed() {

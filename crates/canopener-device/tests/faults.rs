@@ -1022,6 +1022,221 @@ fn emcy_generic_bit_clear() {
     assert_eq!(faulty.value(0x1001, 0), [0x11]);
 }
 
+/// CANopenNode's demo device with the optional objects (1020h, sub-index FFh): the conformance
+/// suite's `test_data/cia401_full_io.eds`.
+const FULL_IO: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../canopener-conformance/test_data/cia401_full_io.eds"
+);
+
+/// The server's answers (585h) in a trace, without their time stamps.
+fn answers(trace: &[String]) -> Vec<&str> {
+    trace
+        .iter()
+        .filter_map(|f| f.split_once(' ').map(|(_, frame)| frame))
+        .filter(|f| f.starts_with("585#") || f.starts_with("58A#"))
+        .collect()
+}
+
+#[test]
+fn device_type_byte_order() {
+    let (ok, bad) = base(Fault::DeviceTypeByteOrder, |bus| {
+        bus.rx(ms(1), "605#4000100000000000");
+        // Other entries keep their byte order.
+        bus.rx(ms(2), "605#4018100100000000");
+    });
+    assert_eq!(answers(&ok), ["585#4300100091010F00", "585#43181001BC0A0000"]);
+    assert_eq!(answers(&bad), ["585#43001000000F0191", "585#43181001BC0A0000"]);
+}
+
+#[test]
+fn segment_unused_wrong() {
+    // 2120h:02 (UNSIGNED64) of the full demo device, segment by segment: 7 bytes, then 1 byte with
+    // n = 6 unused, which the fault turns into n = 0.
+    let (ok, bad) = both(FULL_IO, 5, Fault::SegmentUnusedWrong, |bus| {
+        bus.rx(ms(1), "605#4020210200000000");
+        bus.rx(ms(2), "605#6000000000000000");
+        bus.rx(ms(3), "605#7000000000000000");
+    });
+    assert_eq!(answers(&ok)[..2], answers(&bad)[..2]);
+    assert_eq!(answers(&ok)[2], "585#1D12000000000000");
+    assert_eq!(answers(&bad)[2], "585#1112000000000000");
+    // Expedited answers are not touched.
+    let (ok, bad) = both(FULL_IO, 5, Fault::SegmentUnusedWrong, |bus| {
+        bus.rx(ms(1), "605#4018100100000000");
+    });
+    assert_eq!(answers(&ok), answers(&bad));
+}
+
+#[test]
+fn block_crc_required() {
+    // Block upload of 1018h:01 without CRC (A0): refused; with CRC (A4): served as before.
+    let (ok, bad) = base(Fault::BlockCrcRequired, |bus| {
+        bus.rx(ms(1), "605#A01810017F000000");
+        bus.rx(ms(2), "605#8018100100000008");
+    });
+    assert!(answers(&ok)[0].starts_with("585#C"), "{ok:?}");
+    assert_eq!(answers(&bad)[0], "585#8018100101000405");
+    let (ok, bad) = base(Fault::BlockCrcRequired, |bus| {
+        bus.rx(ms(1), "605#A41810017F000000")
+    });
+    assert_eq!(answers(&ok), answers(&bad));
+    // Block download of 1017h without CRC (C2): refused.
+    let (ok, bad) = base(Fault::BlockCrcRequired, |bus| {
+        bus.rx(ms(1), "605#C217100002000000")
+    });
+    assert!(answers(&ok)[0].starts_with("585#A"), "{ok:?}");
+    assert_eq!(answers(&bad)[0], "585#8017100001000405");
+}
+
+#[test]
+fn error_count_unchecked() {
+    let (ok, bad) = both(&DS301, 10, Fault::ErrorCountUnchecked, |bus| {
+        bus.rx(ms(1), &download(10, 0x1003, 0, &[1]));
+        bus.rx(ms(2), &download(10, 0x1003, 0, &[0]));
+    });
+    assert_eq!(answers(&ok), ["58A#8003100030000906", "58A#6003100000000000"]);
+    assert_eq!(answers(&bad), ["58A#6003100000000000", "58A#6003100000000000"]);
+}
+
+#[test]
+fn structure_entry_wrong() {
+    let (ok, bad) = both(FULL_IO, 5, Fault::StructureEntryWrong, |bus| {
+        bus.rx(ms(1), "605#401810FF00000000");
+        bus.rx(ms(2), "605#4018100000000000");
+    });
+    assert_eq!(answers(&ok), ["585#431810FF09230000", "585#4F18100004000000"]);
+    assert_eq!(answers(&bad), ["585#431810FF23090000", "585#4F18100004000000"]);
+}
+
+#[test]
+fn process_output_refused() {
+    // ISD860's RPDO1: 6040h (controlword, rww, PDOMapping=1) mapped again by the procedure.
+    let isd860 = canopener_testkit::corpus::eds(
+        "ros-industrial__ros_canopen__canopen_chain_node__test__eds__ISD860.eds",
+    )
+    .display()
+    .to_string();
+    let scenario = |bus: &mut Bus| {
+        bus.rx(ms(1), &download(5, 0x1400, 1, &0x8000_0205u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1600, 0, &[0]));
+        bus.rx(ms(3), &download(5, 0x1600, 1, &0x6040_0010u32.to_le_bytes()));
+    };
+    let (ok, bad) = both(&isd860, 5, Fault::ProcessOutputRefused, scenario);
+    assert_eq!(answers(&ok)[2], "585#6000160100000000");
+    assert_eq!(answers(&bad)[2], "585#8000160141000406");
+    // A TPDO mapping is not affected.
+    let (ok, bad) = both(&isd860, 5, Fault::ProcessOutputRefused, |bus| {
+        bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1A00, 0, &[0]));
+    });
+    assert_eq!(answers(&ok), answers(&bad));
+}
+
+#[test]
+fn mapping_procedure_unchecked() {
+    // 1A00h:01 while TPDO1 is valid, then while 1A00h:00 is not 0: refused, unless the fault.
+    let (ok, bad) = base(Fault::MappingProcedureUnchecked, |bus| {
+        bus.rx(ms(1), &download(5, 0x1A00, 1, &0x6000_0108u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(ms(3), &download(5, 0x1A00, 1, &0x6000_0108u32.to_le_bytes()));
+        // The entry itself is still checked: 2000h has PDOMapping=0.
+        bus.rx(ms(4), &download(5, 0x1A00, 1, &0x2000_0010u32.to_le_bytes()));
+    });
+    let ok = answers(&ok);
+    let bad = answers(&bad);
+    assert!(
+        ok[0].starts_with("585#80001A01") && ok[2].starts_with("585#80001A01"),
+        "{ok:?}"
+    );
+    assert_eq!(bad[0], "585#60001A0100000000");
+    assert_eq!(bad[2], "585#60001A0100000000");
+    // The correct device refuses it for the procedure (0601 0000h), the faulty one for the entry.
+    assert_eq!(ok[3], "585#80001A0100000106");
+    assert_eq!(bad[3], "585#80001A0141000406");
+}
+
+#[test]
+fn mapping_size_unchecked() {
+    // 1A00h has one entry: sub-index 0 = 2 asks for too many objects.
+    let (ok, bad) = base(Fault::MappingSizeUnchecked, |bus| {
+        bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1A00, 0, &[0]));
+        bus.rx(ms(3), &download(5, 0x1A00, 0, &[2]));
+    });
+    assert_eq!(answers(&ok)[2], "585#80001A0042000406");
+    assert_eq!(answers(&bad)[2], "585#60001A0000000000");
+}
+
+#[test]
+fn signature_unchecked() {
+    let scenario = |bus: &mut Bus| {
+        bus.rx(ms(1), &download(10, 0x1017, 0, &500u16.to_le_bytes()));
+        bus.rx(ms(2), &download(10, 0x1010, 1, b"wron"));
+        bus.rx(ms(3), "000#810A");
+    };
+    let (ok, bad) = both(&DS301, 10, Fault::SignatureUnchecked, scenario);
+    assert_eq!(answers(&ok)[1], "58A#8010100120000008");
+    assert_eq!(answers(&bad)[1], "58A#6010100100000000");
+    // The faulty device saved: 1017h survives the reset.
+    let mut faulty = booted(device(&DS301, 10, Fault::SignatureUnchecked.into()));
+    scenario(&mut faulty);
+    assert_eq!(faulty.value(0x1017, 0), 500u16.to_le_bytes());
+}
+
+#[test]
+fn restore_ignored() {
+    let scenario = |bus: &mut Bus| {
+        bus.rx(ms(1), &download(10, 0x1017, 0, &500u16.to_le_bytes()));
+        bus.rx(ms(2), &download(10, 0x1010, 1, b"save"));
+        bus.rx(ms(3), &download(10, 0x1011, 1, b"load"));
+        bus.rx(ms(4), "000#810A");
+    };
+    let (ok, bad) = both(&DS301, 10, Fault::RestoreIgnored, scenario);
+    // Both confirm the restore.
+    assert_eq!(answers(&ok)[2], "58A#6011100100000000");
+    assert_eq!(answers(&bad)[2], "58A#6011100100000000");
+    let mut correct = booted(device(&DS301, 10, FaultSet::none()));
+    scenario(&mut correct);
+    let mut faulty = booted(device(&DS301, 10, Fault::RestoreIgnored.into()));
+    scenario(&mut faulty);
+    assert_eq!(correct.value(0x1017, 0), [0, 0]);
+    assert_eq!(faulty.value(0x1017, 0), 500u16.to_le_bytes());
+}
+
+#[test]
+fn verify_configuration_not_stored() {
+    let scenario = |bus: &mut Bus| {
+        bus.rx(ms(1), &download(5, 0x1020, 1, &14_610u32.to_le_bytes()));
+        bus.rx(ms(2), &download(5, 0x1017, 0, &500u16.to_le_bytes()));
+        bus.rx(ms(3), &download(5, 0x1010, 1, b"save"));
+        bus.rx(ms(4), "000#8105");
+    };
+    let mut correct = booted(device(FULL_IO, 5, FaultSet::none()));
+    scenario(&mut correct);
+    let mut faulty = booted(device(FULL_IO, 5, Fault::VerifyConfigurationNotStored.into()));
+    scenario(&mut faulty);
+    assert_eq!(correct.value(0x1020, 1), 14_610u32.to_le_bytes());
+    assert_eq!(faulty.value(0x1020, 1), [0; 4]);
+    // The rest was saved.
+    assert_eq!(faulty.value(0x1017, 0), 500u16.to_le_bytes());
+}
+
+#[test]
+fn tpdo_rtr_in_pre_operational() {
+    // TPDO1 of base.eds (185h, RTR allowed, type 255) requested in pre-operational, then in
+    // operational.
+    let (ok, bad) = base(Fault::TpdoRtrInPreOperational, |bus| {
+        bus.rx(ms(1), "185#R1");
+        bus.rx(ms(2), "000#0105");
+        bus.rx(ms(3), "185#R1");
+    });
+    let tpdos =
+        |trace: &[String]| -> Vec<String> { trace.iter().filter(|f| f.contains(" 185#")).cloned().collect() };
+    assert_eq!(tpdos(&ok), ["2.000 185#00", "3.000 185#00"]);
+    assert_eq!(tpdos(&bad), ["1.000 185#00", "2.000 185#00", "3.000 185#00"]);
+}
+
 #[test]
 fn without_faults_nothing_changes() {
     let mut plain = booted(Device::from_eds(&eds(BASE), 5, Box::new(NoApplication)).expect("device"));

@@ -115,6 +115,14 @@ impl<L: Link> SdoSession<L> {
         self
     }
 
+    /// Whether the block transfers that follow offer (and, when the server offers it too, check)
+    /// the CRC: the `cc` flag of CiA 301 §7.2.4.3.9 and §7.2.4.3.13, on by default. Unlike
+    /// [`SdoSession::configure`] this keeps the session, so a tester can ask for one block transfer
+    /// without CRC (as the CCT's SDO 19-21 do) and switch back.
+    pub fn set_block_crc(&mut self, crc: bool) {
+        self.client = self.client.clone().with_crc(crc);
+    }
+
     /// The server's node-ID.
     pub fn node(&self) -> u8 {
         self.node

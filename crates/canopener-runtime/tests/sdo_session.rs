@@ -182,3 +182,37 @@ fn runs_on_virtual_time_are_deterministic() {
     assert!(first.len() > 10);
     assert_eq!(first, run());
 }
+
+#[test]
+fn block_transfers_offer_the_crc_unless_switched_off_and_read_the_same_value_either_way() {
+    let mut link = link(Timing::Ideal, &[5]);
+    let mut session = SdoSession::new(&mut link, 5, Duration::from_millis(500)).unwrap();
+    let name = session.read(0x1008, 0).unwrap();
+    let initiates = |link: &mut VirtualLink<Device>| -> Vec<String> {
+        bus_lines(link)
+            .into_iter()
+            .filter_map(|line| line.split_once(" 605#").map(|(_, data)| data.to_owned()))
+            .filter(|data| data.starts_with('A'))
+            .collect()
+    };
+    let block = |session: &mut SdoSession<&mut VirtualLink<Device>>| {
+        session.upload(0x1008, 0, UploadMode::Block, &mut |_| {}).unwrap()
+    };
+    // Off: the initiate has cc = 0 (A0h), the value is the same.
+    session.set_block_crc(false);
+    let without = block(&mut session);
+    assert_eq!(
+        (without.data.as_slice(), without.protocol),
+        (name.as_slice(), Protocol::Block)
+    );
+    // On again: cc = 1 (A4h).
+    session.set_block_crc(true);
+    assert_eq!(block(&mut session).data, name);
+    let sent = initiates(&mut link);
+    assert!(sent.iter().any(|d| d.starts_with("A0081000")), "{sent:?}");
+    assert!(sent.iter().any(|d| d.starts_with("A4081000")), "{sent:?}");
+    assert!(
+        sent.iter().position(|d| d.starts_with("A0")) < sent.iter().position(|d| d.starts_with("A4")),
+        "{sent:?}"
+    );
+}

@@ -69,7 +69,8 @@ pub(crate) fn markdown(severity_of: impl Fn(&str) -> Option<Severity>) -> String
          area 1000h-1FFFh, taken from the project's reference notes (`cia301-401-305-essentials.md` §n is\n\
          written `C§n`, `eds-format-and-checks.md` §n `E§n`). *Evaluated as* is the row's data as the\n\
          checker runs it: *when* the conditions under which the rule applies, *→* what must then hold\n\
-         (blank for rows covered by older checks or not checked). Values are the ones the device uses: `ParameterValue` in a\n\
+         (blank for rows covered by older checks or not checked, unless a device test uses the row).\n\
+         Values are the ones the device uses: `ParameterValue` in a\n\
          DCF, otherwise `DefaultValue`. Severity follows the source: a value the device must refuse or\n\
          that makes the object unusable is an error, a value that has no effect or contradicts a\n\
          recommendation is a warning (see the severity policy in [checks.md](checks.md)).\n\n",

@@ -194,8 +194,12 @@ fn list(tests: &[TestDef], format: ReportFormat) -> String {
         let rows: Vec<_> = tests
             .iter()
             .map(|t| {
+                let cct: Vec<_> = canopener_conformance::cct::cases_of(t)
+                    .map(|c| json!({"case": c.name, "coverage": c.coverage.as_str(), "reading": c.reading}))
+                    .collect();
                 json!({"id": t.id, "suite": t.suite, "group": t.group, "title": t.title,
-                       "references": t.references, "precondition": t.precondition, "tags": t.tags})
+                       "references": t.references, "precondition": t.precondition, "tags": t.tags,
+                       "cct": cct})
             })
             .collect();
         return format!("{}\n", serde_json::Value::Array(rows));

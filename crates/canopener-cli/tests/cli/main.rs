@@ -27,6 +27,7 @@ mod net_system;
 mod sim;
 mod test_criteria;
 mod test_html;
+mod test_list;
 mod test_stimulus;
 mod web;
 mod web_harness;

@@ -290,18 +290,24 @@ fn canopener_tests_total() -> usize {
 /// adds) lacks what a certified device must have; the suite must name exactly those gaps, and nothing
 /// else, and run to its end.
 const LOCAL_NODE_GAPS: &[&str] = &[
-    // Its SDO server answers a sub-index a VAR does not have, and sub-indices beyond an array's.
+    // Its SDO server answers a sub-index a VAR does not have, and sub-indices beyond an array's;
+    // sub-index FFh of a VAR reads as the VAR's value (CCT OD 05).
     "cia301.sdo.4",
     "cia301.od.7",
-    // It answers a block upload (even one with block size 128, or the one cia301.sdo.21 then
-    // acknowledges wrongly) with a normal upload instead of refusing it with 0504 0001h.
+    "cia301.od.9",
+    // 1003h:00 takes any value, not only 0 (CCT SDO 10 writes FFh there).
+    "cia301.sdo.9",
+    // It answers a block upload (with or without CRC, even one with block size 128, or the one
+    // cia301.sdo.21 then acknowledges wrongly) with a normal upload instead of refusing it with
+    // 0504 0001h.
     "cia301.sdo.15",
     "cia301.sdo.18",
     "cia301.sdo.21",
     // No PDO timing (event timer, inhibit time, synchronous transmission with or without a SYNC
     // start value, TPDOs on SYNC as consumer), no RTR on TPDOs, no checks of PDO
-    // COB-IDs, and no mapping procedure: entries are taken while the PDO is valid, beyond 64 bits,
-    // in the wrong direction and for objects that may not be mapped.
+    // COB-IDs, and no mapping procedure: entries are taken while the PDO is valid or sub-index 0 is
+    // not 0, beyond the mapping's entries and 64 bits, in the wrong direction and for objects that
+    // may not be mapped (into a TPDO and into an RPDO).
     "cia301.pdo.6",
     "cia301.pdo.7",
     "cia301.pdo.12",

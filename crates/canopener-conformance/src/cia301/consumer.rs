@@ -126,6 +126,7 @@ fn same_node_twice(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     let second = entry(producer, 2000);
     let reply = ctx.modify(0x1016, 2, second.clone())?;
+    ctx.performed("Heartbeat 04");
     Ok(expect_refusal(
         &format!(
             "{}, then {}",
@@ -243,6 +244,8 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
         expected: expected_state,
         observed: state,
     };
+    ctx.performed("Heartbeat 05");
+    ctx.performed("Heartbeat 06");
     Ok(reaction.verdict(request, "heartbeat event", "heartbeat"))
 }
 
@@ -327,6 +330,8 @@ fn life_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
         expected: expected_state,
         observed: state,
     };
+    ctx.performed("Guarding 05");
+    ctx.performed("Guarding 06");
     Ok(reaction.verdict(request, "life guarding event", "guarding answer"))
 }
 
@@ -434,6 +439,7 @@ fn consumer_after_reset(ctx: &mut Ctx<'_, '_>) -> Outcome {
     })?;
     // Written back here: the test wrote it after the reset, outside `modify`.
     ctx.write(0x1016, 1, default.clone())?;
+    ctx.performed("Heartbeat 07");
     Ok(match alarm {
         Some(alarm) => Finding::fail(
             "EMCY 8130h although the consumed node never sent a heartbeat",

@@ -43,6 +43,7 @@ fn eds_check(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let Some(errors) = ctx.eds_errors() else {
         return Ok(Finding::not_applicable("the description is not an EDS/DCF"));
     };
+    ctx.performed("EDS checker");
     Ok(match errors {
         [] => Finding::pass("no errors"),
         [first, ..] => Finding::fail(

@@ -63,7 +63,6 @@ pub fn emcy_tests() -> Vec<TestDef> {
                 req::ERROR_REGISTER,
                 "CCT Emergency 04",
                 "CCT Emergency 05",
-                "CCT Emergency 06",
             ],
             precondition: "an enabled RPDO with mapped data, and an EMCY producer (1014h)",
             tags: &["emcy", "pdo", "nmt"],
@@ -185,6 +184,7 @@ fn emcy_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     let expected = 0x80 + u32::from(ctx.node());
     let reply = ctx.read(0x1014, 0)?;
+    ctx.performed("Emergency 01");
     Ok(match u32_of(&reply) {
         Some(cob) if cob & 0x7FF == expected => Finding::pass(format!("{expected:#X}")),
         _ => Finding::fail(
@@ -203,7 +203,9 @@ fn emcy_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn error_register(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    Ok(match ctx.read(0x1001, 0)? {
+    let reply = ctx.read(0x1001, 0)?;
+    ctx.performed("Emergency 02");
+    Ok(match reply {
         Reply::Done(d) if d.len() == 1 => Finding::pass(format!("error register {:02X}h", d[0])),
         other => refused_unexpectedly(
             &upload_text((0x1001, 0)),
@@ -311,6 +313,9 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
         "NMT start, then RPDO{number} on {cob:#X} with {} bytes where {bytes} are mapped",
         bytes - 1
     );
+    if look == Look::Emcy {
+        ctx.performed("Emergency 04");
+    }
     if error_reset {
         if !seen.iter().any(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
             return Ok(Finding::inconclusive(
@@ -325,6 +330,7 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
             .into_iter()
             .collect();
         let reset = format!("{request}, then RPDO{number} with {bytes} bytes");
+        ctx.performed("Emergency 04");
         return Ok(
             match after.iter().find(|l| l.frame.data().starts_with(&[0x00, 0x00])) {
                 Some(emcy) => match register_agrees(ctx, emcy.frame.data(), false, &reset)? {
@@ -367,7 +373,10 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
     // The error register byte of the EMCY, and 1001h read while the error is still there (CCT
     // Emergency 05).
     let register = match seen.iter().find(|l| l.frame.data().starts_with(&[0x10, 0x82])) {
-        Some(emcy) => register_agrees(ctx, emcy.frame.data(), true, &request)?,
+        Some(emcy) => {
+            ctx.performed("Emergency 05");
+            register_agrees(ctx, emcy.frame.data(), true, &request)?
+        }
         None => None,
     };
     // Leave no error behind for the next test: a PDO of the right length clears the condition.
@@ -476,6 +485,8 @@ fn error_history(ctx: &mut Ctx<'_, '_>, request: &str) -> Result<Finding, Stop> 
     let Some(highest) = ctx.model().objects.get(&0x1003).map(|o| o.highest_sub()) else {
         return Ok(Finding::not_applicable("the EDS has no 1003h"));
     };
+    ctx.performed("Emergency 03");
+    ctx.performed("Emergency 06");
     let count = match ctx.read(0x1003, 0)? {
         Reply::Done(d) if d.len() == 1 => d[0],
         other => {
@@ -572,6 +583,8 @@ fn heartbeat_period(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .iter()
         .copied()
         .max_by(|a, b| (a - period).abs().total_cmp(&(b - period).abs()));
+    ctx.performed("Heartbeat 01");
+    ctx.performed("Heartbeat 02");
     Ok(match worst {
         _ if frames.len() < 7 => Finding::fail(
             format!(
@@ -630,6 +643,8 @@ fn heartbeat_off(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let frames = ctx.listen(Duration::from_millis(u64::from(TEST_HEARTBEAT_MS) * 3), |f| {
         f.id() == id && !f.is_remote()
     })?;
+    ctx.performed("Heartbeat 03");
+    ctx.performed("Heartbeat versus guarding 02");
     Ok(if frames.is_empty() {
         Finding::pass("no heartbeat after 1017h = 0")
     } else {
@@ -681,6 +696,8 @@ fn no_guarding_with_heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
             .listen(Duration::from_millis(20), |f| f.id() == id && !f.is_remote())?
             .len();
     }
+    ctx.performed("Heartbeat versus guarding 05");
+    ctx.performed("Heartbeat versus guarding 07");
     Ok(if answers == 0 {
         Finding::pass("3 guarding requests, none answered")
     } else {
@@ -744,6 +761,10 @@ fn guarding_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     let toggles_alternate = got.windows(2).all(|w| (w[0] ^ w[1]) & 0x80 != 0);
     let state_right = got.iter().all(|b| b & 0x7F == 0x7F);
+    ctx.performed("Guarding 01");
+    ctx.performed("Guarding 02");
+    ctx.performed("Guarding 03");
+    ctx.performed("Heartbeat versus guarding 03");
     Ok(if toggles_alternate && state_right {
         Finding::pass(format!("answers {}", hex(&got)))
     } else {
@@ -856,6 +877,9 @@ fn heartbeat_over_guarding(ctx: &mut Ctx<'_, '_>) -> Outcome {
         }
         seen.push(format!("{} with {what}", frames.len()));
     }
+    ctx.performed("Heartbeat versus guarding 01");
+    ctx.performed("Heartbeat versus guarding 04");
+    ctx.performed("Heartbeat versus guarding 06");
     Ok(Finding::pass(format!("heartbeats: {}", seen.join("; "))))
 }
 
@@ -910,6 +934,7 @@ fn guarding_id_range(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let own = ctx.id(0x700 + u16::from(node));
     ctx.send_remote(0x700 + u16::from(node), 1)?;
     let answer = ctx.wait_for(Duration::from_millis(100), |f| f.id() == own && !f.is_remote())?;
+    ctx.performed("Guarding 04");
     Ok(match answer {
         Some(answer) => Finding::pass(format!(
             "{} not answered; {:#X} answered {}",

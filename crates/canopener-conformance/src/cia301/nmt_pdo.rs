@@ -14,11 +14,15 @@ use canopener_wire::NmtCommand;
 
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{PdoDirection, PdoModel};
-use crate::finding::{Evidence, Finding, Outcome, Stop};
+use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
+use crate::model::Verdict;
 use crate::procedures::entries::another_value;
 use crate::procedures::nmt::{back_to_pre_operational, enter};
 use crate::procedures::sdo::{download_text, u32_of, upload_text};
-use crate::procedures::tpdo::{configurable_tpdo, configure_tpdo};
+use crate::procedures::tpdo::{
+    Setting, Step as ConfigStep, configurable_tpdo_at, configure_tpdo, judge_step, none_configurable,
+    not_writable,
+};
 use crate::recorder::Logged;
 use crate::requirements as req;
 use crate::test_def::TestDef;
@@ -156,10 +160,21 @@ impl Trigger {
         }
     }
 
-    fn settings(&self) -> Vec<(u8, Vec<u8>)> {
+    fn settings(&self) -> Vec<Setting> {
         match self {
-            Trigger::EventTimer => vec![(2, vec![0xFF]), (5, TEST_EVENT_TIMER_MS.to_le_bytes().to_vec())],
-            Trigger::Sync(_) => vec![(2, vec![1])],
+            Trigger::EventTimer => vec![
+                Setting::new(2, vec![0xFF], "event-driven transmission (type FFh)"),
+                Setting::new(
+                    5,
+                    TEST_EVENT_TIMER_MS.to_le_bytes().to_vec(),
+                    "the event timer (18xxh:05) at this value",
+                ),
+            ],
+            Trigger::Sync(_) => vec![Setting::new(
+                2,
+                vec![1],
+                "cyclic synchronous transmission (type 1)",
+            )],
         }
     }
 
@@ -211,44 +226,66 @@ const WALK: [Step; 4] = [
     ),
 ];
 
-/// The TPDO the state tests drive, its COB-ID, and the triggers it can be set up for.
-fn tpdo_under_test(ctx: &mut Ctx<'_, '_>) -> Result<Option<(PdoModel, u32, Vec<Trigger>)>, Stop> {
-    let Some((pdo, cob)) = configurable_tpdo(ctx, &[1, 2])? else {
-        return Ok(None);
-    };
-    let mut triggers = Vec::new();
-    if ctx.model().entry(pdo.comm, 5).is_some_and(|e| e.writable()) {
-        triggers.push(Trigger::EventTimer);
+/// A TPDO the state tests drive: its model, its COB-ID as read, and the triggers it can be set up for.
+type TpdoUnderTest = (PdoModel, u32, Vec<Trigger>);
+
+/// The TPDO the state tests drive, its COB-ID, and the triggers it can be set up for; when none
+/// can be, the reasons per TPDO (the EDS key that rules each out).
+fn tpdo_under_test(ctx: &mut Ctx<'_, '_>) -> Prepared<Result<TpdoUnderTest, Vec<String>>> {
+    let mut passed_over = Vec::new();
+    for pdo in ctx.model().pdos(PdoDirection::Transmit) {
+        if let Some(why) = not_writable(ctx, pdo.comm, 2, None) {
+            passed_over.push(format!("TPDO{}: {why}", pdo.number));
+            continue;
+        }
+        let cob = match configurable_tpdo_at(ctx, &pdo, &[])? {
+            Ok(Ok(cob)) => cob,
+            Ok(Err(why)) => {
+                passed_over.push(format!("TPDO{}: {why}", pdo.number));
+                continue;
+            }
+            Err(failed) => return Ok(Err(failed)),
+        };
+        let mut triggers = Vec::new();
+        if ctx.model().entry(pdo.comm, 5).is_some_and(|e| e.writable()) {
+            triggers.push(Trigger::EventTimer);
+        }
+        if let Some(source) = SyncSource::of(ctx)? {
+            triggers.push(Trigger::Sync(source));
+        }
+        return Ok(Ok(Ok((pdo, cob, triggers))));
     }
-    if let Some(source) = SyncSource::of(ctx)? {
-        triggers.push(Trigger::Sync(source));
-    }
-    Ok(Some((pdo, cob, triggers)))
+    Ok(Ok(Err(passed_over)))
 }
 
-/// Sets the TPDO up for `trigger`, with RTR allowed if the device takes it; `Err` is the refusal.
+/// Sets the TPDO up for `trigger`, with RTR allowed if the device takes it (`true`); `Ok(Err)` is
+/// the reason the device does not support the trigger (a refusal CiA 301 allows, see
+/// [`judge_step`]); any other refusal or a timeout fails the test.
 fn set_up(
     ctx: &mut Ctx<'_, '_>,
     pdo: &PdoModel,
     cob: u32,
     trigger: &Trigger,
-) -> Result<Result<bool, String>, Stop> {
+) -> Prepared<Result<bool, String>> {
     let settings = trigger.settings();
-    if configure_tpdo(ctx, pdo, cob, &settings, true)?.is_none() {
-        return Ok(Ok(true));
+    match configure_tpdo(ctx, pdo, cob, &settings, true)? {
+        Ok(()) => return Ok(Ok(Ok(true))),
+        // RTR on PDOs is optional (CiA 301 §7.2.2.2.1): without it the remote frames are left out.
+        Err(finding) if finding.verdict == Verdict::NotApplicable => {}
+        Err(failed) => return Ok(Err(failed)),
     }
-    // RTR on PDOs is optional (CiA 301 §7.2.2.2.1): without it the remote frames are left out.
     Ok(match configure_tpdo(ctx, pdo, cob, &settings, false)? {
-        None => Ok(false),
-        Some(refused) => Err(refused),
+        Ok(()) => Ok(Ok(false)),
+        Err(finding) if finding.verdict == Verdict::NotApplicable => Ok(Err(finding.reason)),
+        Err(failed) => Err(failed),
     })
 }
 
 fn tpdo_per_state(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob, triggers)) = tpdo_under_test(ctx)? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID and transmission type and mapped data",
-        ));
+    let (pdo, cob, triggers) = match tpdo_under_test(ctx)? {
+        Ok(Ok(found)) => found,
+        Ok(Err(passed_over)) => return Ok(none_configurable(passed_over.as_slice())),
+        Err(failed) => return Ok(failed),
     };
     if triggers.is_empty() {
         return Ok(Finding::not_applicable(format!(
@@ -261,11 +298,12 @@ fn tpdo_per_state(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let mut refusals = Vec::new();
     for mut trigger in triggers {
         let rtr = match set_up(ctx, &pdo, cob, &trigger)? {
-            Ok(rtr) => rtr,
-            Err(refused) => {
+            Ok(Ok(rtr)) => rtr,
+            Ok(Err(refused)) => {
                 refusals.push(format!("{}: {refused}", trigger.name()));
                 continue;
             }
+            Err(failed) => return Ok(failed),
         };
         let what = trigger.describe(pdo.number);
         let mut trail = Vec::new();
@@ -323,10 +361,10 @@ fn tpdo_per_state(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn invalid_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let Some((pdo, cob, mut triggers)) = tpdo_under_test(ctx)? else {
-        return Ok(Finding::not_applicable(
-            "no TPDO with writable COB-ID and transmission type and mapped data",
-        ));
+    let (pdo, cob, mut triggers) = match tpdo_under_test(ctx)? {
+        Ok(Ok(found)) => found,
+        Ok(Err(passed_over)) => return Ok(none_configurable(passed_over.as_slice())),
+        Err(failed) => return Ok(failed),
     };
     // One trigger is enough to show the bit is obeyed; the event timer needs no SYNCs.
     let Some(mut trigger) = (!triggers.is_empty()).then(|| triggers.remove(0)) else {
@@ -339,18 +377,25 @@ fn invalid_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let invalid = (cob | 0x8000_0000).to_le_bytes().to_vec();
     let valid = (cob & 0x7FFF_FFFF).to_le_bytes().to_vec();
     // Disabled first: CiA 301 §7.5.2.35 allows changing the parameters of a PDO that is not valid.
-    let mut steps = vec![(1u8, invalid.clone())];
-    steps.extend(trigger.settings());
-    for (sub, data) in steps {
-        let reply = ctx.modify(pdo.comm, sub, data.clone())?;
-        if !matches!(reply, Reply::Done(_)) {
-            return Ok(Finding::not_applicable(format!(
-                "TPDO{} cannot use its {}: {} got {}",
-                pdo.number,
-                trigger.name(),
-                download_text((pdo.comm, sub), &data),
-                reply.describe()
-            )));
+    let mut steps = vec![(ConfigStep::Disable, 1u8, invalid.clone())];
+    steps.extend(
+        trigger
+            .settings()
+            .into_iter()
+            .map(|s| (ConfigStep::Setting(s.feature), s.sub, s.value)),
+    );
+    let mut done = Vec::new();
+    for (step, sub, data) in steps {
+        let request = download_text((pdo.comm, sub), &data);
+        let reply = ctx.modify(pdo.comm, sub, data)?;
+        done.push(request);
+        if let Some(finding) = judge_step(
+            &format!("TPDO{}", pdo.number),
+            step,
+            &done.join(", then "),
+            &reply,
+        ) {
+            return Ok(finding);
         }
     }
     let what = trigger.describe(pdo.number);

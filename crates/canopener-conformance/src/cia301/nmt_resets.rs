@@ -318,7 +318,11 @@ fn reset_node_areas(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "no boot-up within 2 s of the reset node sent in operational (cia301.nmt.1 judges the boot-up): values not compared",
         ));
     }
-    if let Some((c, reply)) = first_wrong(ctx, &all, |c| &c.default)? {
+    // CCT State 01: the boot-up, then the parameters back at their default values.
+    let found = first_wrong(ctx, &all, |c| &c.default)?;
+    ctx.performed("State 01");
+    ctx.performed("Transition 01");
+    if let Some((c, reply)) = found {
         let area = if c.entry.index < 0x2000 {
             "communication"
         } else {

@@ -69,7 +69,7 @@ pub fn tests() -> Vec<TestDef> {
             suite: "cia301",
             group: "od",
             title: "Sub-index 0 of arrays and records equals the EDS's highest sub-index",
-            references: &[req::OBJECT_DICTIONARY, "CCT OD 05"],
+            references: &[req::OBJECT_DICTIONARY],
             precondition: "arrays and records whose sub-index 0 is not a count of entries in use",
             tags: &["od"],
             run: highest_sub,
@@ -89,10 +89,26 @@ pub fn tests() -> Vec<TestDef> {
             suite: "cia301",
             group: "od",
             title: "Every rw entry accepts its own value written back",
-            references: &[req::SDO_DOWNLOAD, "CCT OD 09", "CCT SDO 02"],
+            references: &[
+                req::SDO_DOWNLOAD,
+                "CCT OD 01",
+                "CCT OD 07",
+                "CCT OD 09",
+                "CCT SDO 02",
+            ],
             precondition: "rw entries without ObjFlags bit 0",
             tags: &["od", "writes"],
             run: write_back,
+        },
+        TestDef {
+            id: "cia301.od.9",
+            suite: "cia301",
+            group: "od",
+            title: "Sub-index FFh, where the device has it, gives the object code and data type the EDS states",
+            references: &[req::OBJECT_DICTIONARY, "CCT OD 05"],
+            precondition: "always; the structure sub-index is optional, so a device without it on every object is not_applicable, unless the EDS describes one",
+            tags: &["od"],
+            run: structure_subs,
         },
     ]
 }
@@ -123,6 +139,15 @@ impl Walk {
                     cause: finding.analysis,
                 },
             ));
+        }
+    }
+
+    /// Records the CCT `cases` as performed when the walk checked anything.
+    fn record(&self, ctx: &mut Ctx<'_, '_>, cases: &[&str]) {
+        if self.checked > 0 {
+            for case in cases {
+                ctx.performed(case);
+            }
         }
     }
 
@@ -208,6 +233,7 @@ fn read_all(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ),
         }
     }
+    walk.record(ctx, &["OD 01", "OD 07"]);
     Ok(walk.finding("readable entries"))
 }
 
@@ -261,6 +287,7 @@ fn defaults(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ),
         }
     }
+    walk.record(ctx, &["OD 02", "OD 08"]);
     Ok(walk.finding("entries with a DefaultValue"))
 }
 
@@ -297,6 +324,7 @@ fn write_read_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ),
         );
     }
+    walk.record(ctx, &["OD 03"]);
     Ok(walk.finding("ro/const entries"))
 }
 
@@ -323,6 +351,7 @@ fn read_write_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
             ),
         );
     }
+    walk.record(ctx, &["OD 04"]);
     Ok(walk.finding("entries with AccessType=wo"))
 }
 
@@ -414,6 +443,7 @@ fn limits(ctx: &mut Ctx<'_, '_>) -> Outcome {
             );
         }
     }
+    walk.record(ctx, &["OD 06"]);
     Ok(walk.finding("entries with LowLimit or HighLimit"))
 }
 
@@ -510,6 +540,102 @@ fn write_back(ctx: &mut Ctx<'_, '_>) -> Outcome {
         } else {
             walk.checked += 1;
         }
+        // CCT SDO 02 reads and writes back an rw entry of the communication area.
+        if (0x1000..=0x1FFF).contains(&at.0) {
+            ctx.performed("SDO 02");
+        }
     }
+    walk.record(ctx, &["OD 01", "OD 07", "OD 09"]);
     Ok(walk.finding("rw entries"))
+}
+
+/// Sub-index FFh of an object (CiA 301 §7.4.3): its object code in bits 0-7 and the data type
+/// index in the bits above (8-23; the standard types all fit in bits 8-15, where some readings of
+/// CiA 301 end the field), bits 24-31 reserved (0). The reference notes do not quote the layout;
+/// for every type below 100h both readings give the same value. Read for every object: where the
+/// device answers, the value must match the EDS's ObjectType and DataType (CCT OD 05); an absent
+/// sub-index FFh (0609 0011h) is allowed unless the EDS describes one.
+fn structure_subs(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    use crate::device_model::ObjectKind;
+    let objects: Vec<_> = ctx.model().objects.values().cloned().collect();
+    let mut walk = Walk::new();
+    let mut absent = 0;
+    for object in objects {
+        let at = (object.index, 0xFF);
+        let described = ctx.model().entry(at.0, at.1).is_some();
+        let reply = ctx.read(at.0, at.1)?;
+        let value = match &reply {
+            Reply::Done(d) if d.len() == 4 => u32::from_le_bytes([d[0], d[1], d[2], d[3]]),
+            Reply::Refused(code) if !described && req::NO_SUB_INDEX.accepts(*code) => {
+                absent += 1;
+                continue;
+            }
+            other => {
+                walk.fail(
+                    format!("{:04X}h:FF", at.0),
+                    Evidence {
+                        request: upload_text(at),
+                        requirement: format!(
+                            "{}: sub-index FFh is an UNSIGNED32 describing the object{}",
+                            req::OBJECT_DICTIONARY,
+                            if described {
+                                ", and the EDS describes it"
+                            } else {
+                                ", or is absent (0609 0011h)"
+                            }
+                        ),
+                        answer: other.describe(),
+                        cause: "the structure sub-index is broken, or missing although the EDS describes it"
+                            .to_owned(),
+                    },
+                );
+                continue;
+            }
+        };
+        let code = match object.kind {
+            ObjectKind::Domain => 0x02,
+            ObjectKind::Var => 0x07,
+            ObjectKind::Array => 0x08,
+            ObjectKind::Record => 0x09,
+        };
+        let element = |sub: u8| {
+            ctx.model()
+                .entry(object.index, sub)
+                .and_then(|e| e.data_type)
+                .map(|t| t.0)
+        };
+        let data_type = match object.kind {
+            ObjectKind::Var => element(0),
+            ObjectKind::Domain => Some(0x000F),
+            ObjectKind::Array => object.data_type.or_else(|| element(1)),
+            ObjectKind::Record => object.data_type,
+        };
+        let got_type = ((value >> 8) & 0xFFFF) as u16;
+        let wrong =
+            (value & 0xFF) as u8 != code || value >> 24 != 0 || data_type.is_some_and(|t| t != got_type);
+        if wrong {
+            walk.fail(
+                format!("{:04X}h:FF", at.0),
+                Evidence {
+                    request: upload_text(at),
+                    requirement: format!(
+                        "{}: sub-index FFh holds the object code {code:02X}h{} (reserved bits 0)",
+                        req::OBJECT_DICTIONARY,
+                        data_type.map_or(String::new(), |t| format!(" and the data type {t:04X}h")),
+                    ),
+                    answer: format!("{value:#010X}"),
+                    cause: "the device describes the object's structure otherwise than its EDS".to_owned(),
+                },
+            );
+        } else {
+            walk.checked += 1;
+        }
+    }
+    if walk.checked == 0 && walk.failures.is_empty() {
+        return Ok(Finding::not_applicable(format!(
+            "no object has sub-index FFh (optional in CiA 301): {absent} answered 0609 0011h or 0800 0000h"
+        )));
+    }
+    walk.record(ctx, &["OD 05"]);
+    Ok(walk.finding("structure sub-indices (FFh)"))
 }

@@ -5,12 +5,13 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
+use crate::cia301::pdo_transmission::{nmt_path, served_outside_operational};
 use crate::context::{Ctx, Reply, hex};
 use crate::device_model::{PdoDirection, PdoModel};
 use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::nmt::back_to_pre_operational;
 use crate::procedures::sdo::{download_text, expect_refusal, read_described, u32_of, upload_text};
-use crate::procedures::tpdo::{Setting, Step, judge_step, open_mapping, set_up_tpdo};
+use crate::procedures::tpdo::{Setting, Step, judge_step, set_up_tpdo};
 use crate::requirements as req;
 use crate::test_def::TestDef;
 
@@ -42,7 +43,7 @@ pub fn tests() -> Vec<TestDef> {
             suite: "cia301",
             group: "pdo",
             title: "Operational: a TPDO that allows RTR answers a remote frame",
-            references: &[req::PDO, "CCT PDO 03", "CCT PDO 15"],
+            references: &[req::PDO, "CCT PDO 03"],
             precondition: "a TPDO set up for RTR (type FCh/FDh, bit 30 = 0) or whose COB-ID and type the EDS makes writable; not_applicable only when the device refuses bit 30 = 0 or type FDh with 0609 0030h/0031h/0032h (RTR is optional); any other refusal or a timeout fails",
             tags: &["pdo", "nmt"],
             run: tpdo_rtr,
@@ -51,8 +52,8 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.15",
             suite: "cia301",
             group: "pdo",
-            title: "Stopped: a TPDO that answers a remote frame in operational does not answer it",
-            references: &[req::PDO, req::NMT_STATES, "CCT PDO 09"],
+            title: "Stopped and pre-operational: a TPDO that answers a remote frame in operational does not answer it",
+            references: &[req::PDO, req::NMT_STATES, "CCT PDO 09", "CCT PDO 15"],
             precondition: "as cia301.pdo.3; a TPDO that does not answer in operational makes it inconclusive",
             tags: &["pdo", "nmt"],
             run: tpdo_rtr_stopped,
@@ -71,9 +72,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.5",
             suite: "cia301",
             group: "pdo",
-            title: "Mapping an object with PDOMapping=0 is refused during the mapping procedure",
+            title: "Mapping an object with PDOMapping=0 is refused during the mapping procedure: 1000h into a TPDO, a writable object into an RPDO",
             references: &[req::PDO_PARAMETERS, "CCT PDO 29", "CCT PDO 32"],
-            precondition: "a TPDO with a writable mapping and an object with PDOMapping=0 (1000h)",
+            precondition: "a TPDO with writable COB-ID and mapping and a 1000h with PDOMapping=0 (PDO 32); an RPDO with writable COB-ID and mapping and a writable 8/16/32-bit object with PDOMapping=0, 1017h first (PDO 29)",
             tags: &["pdo", "writes"],
             run: unmappable,
         },
@@ -93,6 +94,11 @@ fn communication_parameters(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     for pdo in &pdos {
         let cob = ctx.read(pdo.comm, 1)?;
+        // CCT PDO 01 scans the RPDOs, PDO 02 the TPDOs.
+        ctx.performed(match pdo.direction {
+            PdoDirection::Receive => "PDO 01",
+            PdoDirection::Transmit => "PDO 02",
+        });
         let Some(cob_id) = u32_of(&cob) else {
             return Ok(fail_param(pdo, 1, &cob, "a 4-byte COB-ID"));
         };
@@ -173,6 +179,7 @@ fn default_mappings(ctx: &mut Ctx<'_, '_>) -> Outcome {
             }
             checked += 1;
             let reply = ctx.read(index, target_sub)?;
+            ctx.performed("PDO 21");
             if matches!(reply, Reply::Refused(code) if code == canopener_wire::abort::OBJECT_DOES_NOT_EXIST || code == canopener_wire::abort::SUB_INDEX_DOES_NOT_EXIST)
             {
                 return Ok(Finding::fail(
@@ -249,6 +256,7 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
     let answer: Vec<_> = ask_tpdo(ctx, cob)?.into_iter().collect();
+    ctx.performed("PDO 03");
     back_to_pre_operational(ctx)?;
     Ok(if answer.is_empty() {
         Finding::fail(
@@ -312,6 +320,7 @@ fn restricted_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let value = (cob & 0x4000_0000) | 0x701;
     let data = value.to_le_bytes().to_vec();
     let reply = ctx.modify(pdo.comm, 1, data.clone())?;
+    ctx.performed("Testing other 10");
     Ok(expect_refusal(
         &format!("{disable}, then {}", download_text((pdo.comm, 1), &data)),
         &reply,
@@ -322,36 +331,77 @@ fn restricted_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn unmappable(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    if ctx.model().entry(0x1000, 0).is_none_or(|e| e.pdo_mapping) {
-        return Ok(Finding::not_applicable(
+    use crate::cia301::pdo_mapping::entry_value;
+    // CCT PDO 32: 1000h:00 (never mappable) into a TPDO, as the CCT does.
+    let tpdo = match ctx.model().entry(0x1000, 0).filter(|e| !e.pdo_mapping) {
+        None => Finding::not_applicable(
             "the EDS gives 1000h PDOMapping=1 (or has no 1000h): no object with PDOMapping=0 to try",
-        ));
-    }
-    let (pdo, cob) = match writable_tpdo(ctx)? {
-        Ok(Some(found)) => found,
-        Ok(None) => return Ok(Finding::not_applicable(NO_WRITABLE_COB_ID)),
-        Err(failed) => return Ok(failed),
-    };
-    let writable = |m: u16, sub: u8| ctx.model().entry(m, sub).is_some_and(|e| e.writable());
-    let Some(mapping) = pdo.mapping.filter(|m| writable(*m, 0) && writable(*m, 1)) else {
-        return Ok(Finding::not_applicable(format!(
-            "the EDS has no writable {:04X}h:00 and :01 (AccessType) for TPDO{}",
-            pdo.comm + 0x200,
-            pdo.number
-        )));
-    };
-    // The mapping procedure (CiA 301 §7.5.2.38): disable the PDO, set 0 entries, write the entry.
-    if let Err(failed) = open_mapping(ctx, &pdo, cob, mapping)? {
-        return Ok(failed);
-    }
-    let entry = 0x1000_0020u32.to_le_bytes().to_vec();
-    let reply = ctx.modify(mapping, 1, entry.clone())?;
-    Ok(expect_refusal(
-        &format!(
-            "mapping procedure on TPDO{}: {} (1000h:00, 32 bits; PDOMapping=0)",
-            pdo.number,
-            download_text((mapping, 1), &entry)
         ),
+        Some(_) => refused_alone(
+            ctx,
+            PdoDirection::Transmit,
+            0x1000_0020,
+            "1000h:00 (PDOMapping=0)",
+            "PDO 32",
+        )?,
+    };
+    // CCT PDO 29: a writable object with PDOMapping=0 into an RPDO (the CCT maps 1401h:05); a
+    // writable one, so that only the mapping attribute forbids it.
+    let candidate = {
+        let model = ctx.model();
+        let fits = |e: &&crate::device_model::EntryModel| {
+            !e.pdo_mapping
+                && e.writable()
+                && !(0x1600..=0x17FF).contains(&e.index)
+                && !(0x1A00..=0x1BFF).contains(&e.index)
+        };
+        model
+            .entry(0x1017, 0)
+            .filter(fits)
+            .or_else(|| {
+                model
+                    .entries
+                    .values()
+                    .filter(fits)
+                    .find(|e| entry_value(e).is_some())
+            })
+            .and_then(|e| entry_value(e).map(|v| (v, e.label())))
+    };
+    let rpdo = match candidate {
+        None => Finding::not_applicable(
+            "the EDS has no writable 8/16/32-bit object with PDOMapping=0 (AccessType, PDOMapping, DataType)",
+        ),
+        Some((entry, label)) => refused_alone(
+            ctx,
+            PdoDirection::Receive,
+            entry,
+            &format!("{label}, PDOMapping=0"),
+            "PDO 29",
+        )?,
+    };
+    Ok(Finding::of_steps(vec![
+        ("TPDO (PDO 32)", tpdo),
+        ("RPDO (PDO 29)", rpdo),
+    ]))
+}
+
+/// Maps `entry` alone into the first PDO of `direction` with a writable mapping (the mapping
+/// procedure of CiA 301 §7.5.2.38) and expects the refusal of a non-mappable object; records
+/// `case` once the answer is judged.
+fn refused_alone(
+    ctx: &mut Ctx<'_, '_>,
+    direction: PdoDirection,
+    entry: u32,
+    what: &str,
+    case: &str,
+) -> Result<Finding, Stop> {
+    let (request, reply) = match crate::cia301::pdo_mapping::map_alone(ctx, direction, entry)? {
+        Ok(done) => done,
+        Err(finding) => return Ok(finding),
+    };
+    ctx.performed(case);
+    Ok(expect_refusal(
+        &format!("{request} ({what})"),
         &reply,
         req::NOT_MAPPABLE,
         req::PDO_PARAMETERS,
@@ -367,31 +417,37 @@ fn tpdo_rtr_stopped(ctx: &mut Ctx<'_, '_>) -> Outcome {
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
     let operational = ask_tpdo(ctx, cob)?;
-    ctx.nmt(NmtCommand::StopRemoteNode, false)?;
-    ctx.listen(Duration::from_millis(20), |_| false)?;
-    let stopped = match operational {
-        Some(_) => ask_tpdo(ctx, cob)?,
-        None => None,
-    };
-    back_to_pre_operational(ctx)?;
-    Ok(match (operational, stopped) {
-        (None, _) => Finding::inconclusive(format!(
+    if operational.is_none() {
+        back_to_pre_operational(ctx)?;
+        return Ok(Finding::inconclusive(format!(
             "TPDO{number} ({cob:#X}) did not answer a remote frame in operational either (see cia301.pdo.3)"
-        )),
-        (Some(_), Some(answer)) => Finding::fail(
-            format!("TPDO{number} ({cob:#X}) answered a remote frame in stopped"),
-            Evidence {
-                request: format!(
-                    "TPDO{number} with transmission type {kind:02X}h and RTR allowed; NMT start, a remote frame (answered), NMT stop, a remote frame on {cob:#X}"
+        )));
+    }
+    // CCT PDO 09 in stopped; PDO 15 read as the same request in pre-operational (the CCT runs
+    // its PDO cases in operational, stopped and pre-operational in turn).
+    let mut steps = Vec::new();
+    for (command, state, case) in [
+        (NmtCommand::StopRemoteNode, "stopped", "PDO 09"),
+        (NmtCommand::EnterPreOperational, "pre-operational", "PDO 15"),
+    ] {
+        ctx.nmt(command, false)?;
+        ctx.listen(Duration::from_millis(20), |_| false)?;
+        let answer = ask_tpdo(ctx, cob)?;
+        ctx.performed(case);
+        let finding = match answer {
+            Some(answer) => served_outside_operational(
+                format!("TPDO{number} ({cob:#X}) answered a remote frame in {state}"),
+                format!(
+                    "TPDO{number} with transmission type {kind:02X}h and RTR allowed; NMT start, a remote frame (answered), {}, a remote frame on {cob:#X}",
+                    nmt_path(state)
                 ),
-                requirement: format!(
-                    "{}: in stopped only NMT and error control are served, no PDO",
-                    req::NMT_STATES
-                ),
-                answer: format!("the TPDO {}", hex(answer.frame.data())),
-                cause: "PDO communication is not switched off in stopped".to_owned(),
-            },
-        ),
-        (Some(_), None) => Finding::pass(format!("TPDO{number} answered in operational, not in stopped")),
-    })
+                state,
+                format!("the TPDO {}", hex(answer.frame.data())),
+            ),
+            None => Finding::pass(format!("no answer in {state}")),
+        };
+        steps.push((case, finding));
+    }
+    back_to_pre_operational(ctx)?;
+    Ok(Finding::of_steps(steps))
 }

@@ -32,9 +32,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.9",
             suite: "cia301",
             group: "pdo",
-            title: "A mapping entry written while the PDO is valid and sub-index 0 is not 0 is refused",
+            title: "A mapping entry written without the mapping procedure is refused: PDO invalid but sub-index 0 not 0, and PDO valid",
             references: &[req::PDO_PARAMETERS, "CCT PDO 23", "CCT PDO 24"],
-            precondition: "a valid TPDO with a writable mapping and at least one mapped object",
+            precondition: "a TPDO with writable COB-ID and mapping and at least one mapped object; the valid-PDO step needs the TPDO valid or one that can be made valid",
             tags: &["pdo", "writes"],
             run: without_procedure,
         },
@@ -42,9 +42,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.10",
             suite: "cia301",
             group: "pdo",
-            title: "A mapping longer than 64 bits is refused",
+            title: "A mapping with more objects than the mapping has entries, and one longer than 64 bits, are refused",
             references: &[req::PDO_PARAMETERS, "CCT PDO 25", "CCT PDO 26"],
-            precondition: "a TPDO with writable COB-ID and mapping, and a mappable object that fills 64 bits in fewer entries than the mapping has",
+            precondition: "a TPDO with writable COB-ID and mapping; too many objects: a mappable object whose length times the mapping's entries fits 64 bits; too long: one that exceeds 64 bits in fewer entries than the mapping has",
             tags: &["pdo", "writes"],
             run: too_long,
         },
@@ -53,7 +53,7 @@ pub fn tests() -> Vec<TestDef> {
             suite: "cia301",
             group: "pdo",
             title: "A read-only (process input) object is refused in an RPDO mapping",
-            references: &[req::PDO_PARAMETERS, "CCT PDO 28", "CCT PDO 27"],
+            references: &[req::PDO_PARAMETERS, "CCT PDO 28"],
             precondition: "an RPDO with writable COB-ID and mapping, and a mappable ro object",
             tags: &["pdo", "writes"],
             run: wrong_direction,
@@ -87,6 +87,16 @@ pub fn tests() -> Vec<TestDef> {
             precondition: "[DummyUsage] enables one of 0002h–0007h, and an RPDO with writable COB-ID and mapping",
             tags: &["pdo", "writes"],
             run: dummy_into_rpdo,
+        },
+        TestDef {
+            id: "cia301.pdo.19",
+            suite: "cia301",
+            group: "pdo",
+            title: "A mappable process output (rww or wo, PDOMapping=1) is accepted in an RPDO mapping",
+            references: &[req::PDO_PARAMETERS, "CCT PDO 27"],
+            precondition: "an RPDO with writable COB-ID and mapping, and an rww or wo object with PDOMapping=1",
+            tags: &["pdo", "writes"],
+            run: output_into_rpdo,
         },
     ]
 }
@@ -287,6 +297,7 @@ fn correct_mapping(ctx: &mut Ctx<'_, '_>) -> Outcome {
         download_text((m.pdo.comm, 1), &(m.cob | 0x8000_0000).to_le_bytes()),
         download_text((m.mapping, 0), &[0]),
     ];
+    ctx.performed("PDO 22");
     for (index, sub, data) in steps {
         requests.push(download_text((index, sub), &data));
         let reply = ctx.modify(index, sub, data.clone())?;
@@ -452,54 +463,97 @@ fn without_procedure(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let Some(m) = prepared!(mappable(ctx, PdoDirection::Transmit)?) else {
         return Ok(no_mappable(PdoDirection::Transmit));
     };
-    if m.entries.is_empty() || m.cob & 0x8000_0000 != 0 {
+    if m.entries.is_empty() {
         return Ok(Finding::not_applicable(format!(
-            "TPDO{} is not valid ({:04X}h:01 = {:#010X}) or maps nothing ({:04X}h:00 = {}): nothing to write while it is valid",
-            m.pdo.number,
-            m.pdo.comm,
-            m.cob,
-            m.mapping,
-            m.entries.len()
+            "TPDO{} maps nothing ({:04X}h:00 = 0): no entry to write back while it is valid",
+            m.pdo.number, m.mapping
         )));
     }
-    let data = m.entries[0].to_le_bytes().to_vec();
-    let reply = ctx.modify(m.mapping, 1, data.clone())?;
-    Ok(expect_refusal(
-        &format!(
-            "{} while TPDO{} is valid with {} entries",
-            download_text((m.mapping, 1), &data),
-            m.pdo.number,
-            m.entries.len()
-        ),
-        &reply,
-        req::MAPPING_SEQUENCE,
-        req::PDO_PARAMETERS,
-        "the mapping can be changed without the procedure (PDO invalid, sub-index 0 = 0)",
-    ))
+    let entry = m.entries[0].to_le_bytes().to_vec();
+    let pdo = format!("TPDO{}", m.pdo.number);
+    // CCT PDO 23: the PDO made invalid (step 1 of the procedure), sub-index 0 left as it is
+    // (step 2 skipped): the entry must be refused.
+    let invalid = (m.cob | 0x8000_0000).to_le_bytes().to_vec();
+    let disabled = ctx.modify(m.pdo.comm, 1, invalid.clone())?;
+    let step_23 = if matches!(disabled, Reply::Done(_)) {
+        let reply = ctx.modify(m.mapping, 1, entry.clone())?;
+        ctx.performed("PDO 23");
+        expect_refusal(
+            &format!(
+                "{}, then {} while sub-index 0 is {}",
+                download_text((m.pdo.comm, 1), &invalid),
+                download_text((m.mapping, 1), &entry),
+                m.entries.len()
+            ),
+            &reply,
+            req::MAPPING_SEQUENCE,
+            req::PDO_PARAMETERS,
+            "mapping entries can be changed while sub-index 0 is not 0 (step 2 of the procedure skipped)",
+        )
+    } else {
+        Finding::inconclusive(format!(
+            "{} got {}",
+            download_text((m.pdo.comm, 1), &invalid),
+            disabled.describe()
+        ))
+    };
+    // CCT PDO 24: the PDO valid (step 1 skipped): 0 to sub-index 0, then the entry; the first of
+    // them that the device takes must not be the last.
+    let valid = (m.cob & !0x8000_0000).to_le_bytes().to_vec();
+    let enabled = ctx.modify(m.pdo.comm, 1, valid.clone())?;
+    let step_24 = if !matches!(enabled, Reply::Done(_)) {
+        Finding::not_applicable(format!(
+            "{pdo} cannot be made valid: {} got {}",
+            download_text((m.pdo.comm, 1), &valid),
+            enabled.describe()
+        ))
+    } else {
+        let mut requests = vec![download_text((m.pdo.comm, 1), &valid)];
+        let mut reply = Reply::Done(Vec::new());
+        for (sub, data) in [(0u8, vec![0]), (1, entry.clone())] {
+            requests.push(download_text((m.mapping, sub), &data));
+            reply = ctx.modify(m.mapping, sub, data)?;
+            if !matches!(reply, Reply::Done(_)) {
+                break;
+            }
+        }
+        ctx.performed("PDO 24");
+        expect_refusal(
+            &format!("{} while {pdo} is valid", requests.join(", ")),
+            &reply,
+            req::MAPPING_SEQUENCE,
+            req::PDO_PARAMETERS,
+            "the mapping can be changed while the PDO is valid (step 1 of the procedure skipped)",
+        )
+    };
+    Ok(Finding::of_steps(vec![
+        ("PDO invalid, sub-index 0 not 0 (PDO 23)", step_23),
+        ("PDO valid (PDO 24)", step_24),
+    ]))
 }
 
-/// A mappable object for `direction` of 8, 16 or 32 bits (the longest first), as a mapping entry
-/// value, with its size in bits.
+/// A mappable object for `direction` of 8, 16 or 32 bits (the longest first, from 2000h on), as
+/// a mapping entry value, with its size in bits.
 fn mappable_object(ctx: &Ctx<'_, '_>, direction: PdoDirection) -> Option<(u32, u32)> {
-    let fits = |e: &&EntryModel| {
-        e.pdo_mapping
-            && match direction {
-                PdoDirection::Transmit => e.readable(),
-                PdoDirection::Receive => e.writable(),
-            }
-    };
-    [4usize, 2, 1].into_iter().find_map(|size| {
+    mappable_object_of(ctx, direction, [4, 2, 1], 0x2000)
+}
+
+/// The first object of the sizes `sizes` (bytes, in that order) from index `from` on that may be
+/// mapped into a PDO of `direction`, as a mapping entry value with its length in bits.
+fn mappable_object_of(
+    ctx: &Ctx<'_, '_>,
+    direction: PdoDirection,
+    sizes: [usize; 3],
+    from: u16,
+) -> Option<(u32, u32)> {
+    sizes.into_iter().find_map(|size| {
         ctx.model()
             .entries
             .values()
-            .filter(fits)
-            .find(|e| e.size() == Some(size) && e.index >= 0x2000)
-            .map(|e| {
-                (
-                    (u32::from(e.index) << 16) | (u32::from(e.sub) << 8) | (size as u32 * 8),
-                    size as u32 * 8,
-                )
-            })
+            .filter(|e| mappable_into(e, direction))
+            .find(|e| e.size() == Some(size) && e.index >= from)
+            .and_then(entry_value)
+            .map(|value| (value, size as u32 * 8))
     })
 }
 
@@ -507,35 +561,82 @@ fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let Some(m) = prepared!(mappable(ctx, PdoDirection::Transmit)?) else {
         return Ok(no_mappable(PdoDirection::Transmit));
     };
+    let entries = ctx.model().objects.get(&m.mapping).map_or(0, |o| o.highest_sub());
+    let steps = vec![
+        ("too many objects (PDO 25)", too_many_objects(ctx, &m, entries)?),
+        ("longer than 64 bits (PDO 26)", longer_than_64(ctx, &m, entries)?),
+    ];
+    Ok(Finding::of_steps(steps))
+}
+
+/// CCT PDO 25: every entry of the mapping filled with objects short enough to fit 64 bits
+/// together (the CCT: eight 8-bit objects), then sub-index 0 set to one more than the mapping has
+/// entries.
+fn too_many_objects(ctx: &mut Ctx<'_, '_>, m: &Mappable, entries: u8) -> Result<Finding, Stop> {
+    let Some((entry, bits)) = mappable_object_of(ctx, PdoDirection::Transmit, [1, 2, 4], 0) else {
+        return Ok(Finding::not_applicable(
+            "no mappable 8/16/32-bit object for a TPDO",
+        ));
+    };
+    if entries == 0 || u32::from(entries) * bits > 64 {
+        return Ok(Finding::not_applicable(format!(
+            "the mapping {:04X}h has {entries} entries: {bits}-bit objects in all of them exceed 64 bits, so one more object could not be told from too long",
+            m.mapping
+        )));
+    }
+    let (mut requests, last) = match fill_mapping(ctx, m, entry, entries)? {
+        Ok(filled) => filled,
+        Err(finding) => return Ok(finding),
+    };
+    if !matches!(last, Reply::Done(_)) {
+        return Ok(Finding::inconclusive(format!(
+            "{} (correct entries) got {}",
+            requests.last().map_or("", String::as_str),
+            last.describe()
+        )));
+    }
+    let count = entries + 1;
+    requests.push(download_text((m.mapping, 0), &[count]));
+    let reply = ctx.modify(m.mapping, 0, vec![count])?;
+    ctx.performed("PDO 25");
+    Ok(expect_refusal(
+        &format!(
+            "mapping procedure on TPDO{}: {} ({count} objects, the mapping has {entries} entries)",
+            m.pdo.number,
+            requests.join(", ")
+        ),
+        &reply,
+        req::MAPPING_LENGTH,
+        req::PDO_PARAMETERS,
+        "sub-index 0 is not checked against the number of entries the mapping has",
+    ))
+}
+
+/// CCT PDO 26: objects whose lengths add up to more than 64 bits in fewer entries than the
+/// mapping has.
+fn longer_than_64(ctx: &mut Ctx<'_, '_>, m: &Mappable, entries: u8) -> Result<Finding, Stop> {
     let Some((entry, bits)) = mappable_object(ctx, PdoDirection::Transmit) else {
         return Ok(Finding::not_applicable(
             "no mappable 8/16/32-bit object for a TPDO",
         ));
     };
     let count = (64 / bits + 1) as u8;
-    let subs = ctx.model().objects.get(&m.mapping).map_or(0, |o| o.highest_sub());
-    if subs < count {
+    if entries < count {
         return Ok(Finding::not_applicable(format!(
-            "the mapping {:04X}h has {subs} entries, {count} of {bits} bits are needed to exceed 64",
+            "the mapping {:04X}h has {entries} entries, {count} of {bits} bits are needed to exceed 64",
             m.mapping
         )));
     }
-    prepared!(open_mapping(ctx, &m.pdo, m.cob, m.mapping)?);
-    let data = entry.to_le_bytes().to_vec();
-    let mut requests = Vec::new();
     // The refusal may come at the entry that exceeds 64 bits or at sub-index 0.
-    let mut last = Reply::Done(Vec::new());
-    for sub in 1..=count {
-        requests.push(download_text((m.mapping, sub), &data));
-        last = ctx.modify(m.mapping, sub, data.clone())?;
-        if !matches!(last, Reply::Done(_)) {
-            break;
-        }
-    }
+    let (mut requests, mut last) = match fill_mapping(ctx, m, entry, count)? {
+        Ok(filled) => filled,
+        Err(finding) => return Ok(finding),
+    };
     if matches!(last, Reply::Done(_)) {
         requests.push(download_text((m.mapping, 0), &[count]));
         last = ctx.modify(m.mapping, 0, vec![count])?;
     }
+    ctx.performed("PDO 26");
     Ok(expect_refusal(
         &format!(
             "mapping procedure on TPDO{}: {} ({} × {bits} bits = {} bits)",
@@ -549,6 +650,41 @@ fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
         req::PDO_PARAMETERS,
         "the total length of the mapping is not checked against 64 bits",
     ))
+}
+
+/// Starts the mapping procedure on `m` and writes `entry` to sub-indices 1..=`count`, stopping at
+/// the first answer that is not a confirmation; the requests and that (or the last) answer, or the
+/// finding when the procedure cannot start.
+fn fill_mapping(
+    ctx: &mut Ctx<'_, '_>,
+    m: &Mappable,
+    entry: u32,
+    count: u8,
+) -> Result<Result<(Vec<String>, Reply), Finding>, Stop> {
+    if let Err(failed) = open_mapping(ctx, &m.pdo, m.cob, m.mapping)? {
+        return Ok(Err(failed));
+    }
+    let data = entry.to_le_bytes().to_vec();
+    let mut requests = Vec::new();
+    let mut last = Reply::Done(Vec::new());
+    for sub in 1..=count {
+        requests.push(download_text((m.mapping, sub), &data));
+        last = ctx.modify(m.mapping, sub, data.clone())?;
+        if !matches!(last, Reply::Done(_)) {
+            break;
+        }
+    }
+    Ok(Ok((requests, last)))
+}
+
+/// Whether `e` may be mapped into a PDO of `direction`: PDOMapping=1 and readable for a TPDO,
+/// writable for an RPDO.
+fn mappable_into(e: &EntryModel, direction: PdoDirection) -> bool {
+    e.pdo_mapping
+        && match direction {
+            PdoDirection::Transmit => e.readable(),
+            PdoDirection::Receive => e.writable(),
+        }
 }
 
 fn wrong_direction(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -578,6 +714,7 @@ fn wrong_direction(ctx: &mut Ctx<'_, '_>) -> Outcome {
     prepared!(open_mapping(ctx, &m.pdo, m.cob, m.mapping)?);
     let data = entry.to_le_bytes().to_vec();
     let reply = ctx.modify(m.mapping, 1, data.clone())?;
+    ctx.performed("PDO 28");
     Ok(expect_refusal(
         &format!(
             "mapping procedure on RPDO{}: {} ({label}, ro)",
@@ -592,7 +729,7 @@ fn wrong_direction(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 /// The mapping entry value of `e` (index, sub-index, length in bits), for 1-, 2- and 4-byte entries.
-fn entry_value(e: &EntryModel) -> Option<u32> {
+pub(crate) fn entry_value(e: &EntryModel) -> Option<u32> {
     let size = e.size().filter(|s| matches!(s, 1 | 2 | 4))?;
     Some((u32::from(e.index) << 16) | (u32::from(e.sub) << 8) | (size as u32 * 8))
 }
@@ -610,7 +747,7 @@ fn mappable_with_access(ctx: &Ctx<'_, '_>, access: &[canopener_eds::AccessType])
 /// `entry` alone (sub-index 1, then 1 to sub-index 0); every value written back after the test.
 /// Returns the requests and the first answer that is not a confirmation (or the last one), or the
 /// finding that ends the test first.
-fn map_alone(
+pub(crate) fn map_alone(
     ctx: &mut Ctx<'_, '_>,
     direction: PdoDirection,
     entry: u32,
@@ -645,22 +782,45 @@ fn map_alone(
 
 fn input_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
     use canopener_eds::AccessType;
-    let Some((entry, label)) = mappable_with_access(ctx, &[AccessType::Ro, AccessType::Rwr]) else {
-        return Ok(Finding::not_applicable(
-            "the EDS has no object with AccessType=ro or rwr and PDOMapping=1",
-        ));
+    accepted_alone(
+        ctx,
+        PdoDirection::Transmit,
+        &[AccessType::Ro, AccessType::Rwr],
+        "PDO 30",
+        "a process input (ro/rwr, PDOMapping=1)",
+    )
+}
+
+/// Maps the first object with PDOMapping=1 and one of `access` alone into a PDO of `direction`,
+/// where CiA 301 allows it, and expects the mapping procedure to be accepted; records `case` once
+/// the answer is judged. `what` names such an object.
+fn accepted_alone(
+    ctx: &mut Ctx<'_, '_>,
+    direction: PdoDirection,
+    access: &[canopener_eds::AccessType],
+    case: &str,
+    what: &str,
+) -> Outcome {
+    let Some((entry, label)) = mappable_with_access(ctx, access) else {
+        return Ok(Finding::not_applicable(format!(
+            "the EDS has no object that is {what}"
+        )));
     };
-    let (request, reply) = match map_alone(ctx, PdoDirection::Transmit, entry)? {
+    let (request, reply) = match map_alone(ctx, direction, entry)? {
         Ok(done) => done,
         Err(finding) => return Ok(finding),
     };
+    ctx.performed(case);
     Ok(match reply {
-        Reply::Done(_) => Finding::pass(format!("{label} mapped into a TPDO")),
+        Reply::Done(_) => Finding::pass(format!("{label} mapped into {}", direction.name())),
         other => refused_unexpectedly(
             &format!("{request} ({label})"),
             &other,
             req::PDO_PARAMETERS,
-            "a process input with PDOMapping=1 cannot be mapped into a transmit PDO",
+            &format!(
+                "{what} cannot be mapped into {}, where CiA 301 allows it",
+                direction.name()
+            ),
         ),
     })
 }
@@ -675,6 +835,7 @@ fn output_into_tpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Ok(done) => done,
         Err(finding) => return Ok(finding),
     };
+    ctx.performed("PDO 31");
     Ok(expect_refusal(
         &format!("{request} ({label}, wo)"),
         &reply,
@@ -702,6 +863,7 @@ fn dummy_into_rpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Ok(done) => done,
         Err(finding) => return Ok(finding),
     };
+    ctx.performed("PDO 33");
     Ok(match reply {
         Reply::Done(_) => Finding::pass(format!("dummy {index:04X}h mapped into an RPDO")),
         other => refused_unexpectedly(
@@ -711,4 +873,15 @@ fn dummy_into_rpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "[DummyUsage] enables the dummy entry but the device refuses it",
         ),
     })
+}
+
+fn output_into_rpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    use canopener_eds::AccessType;
+    accepted_alone(
+        ctx,
+        PdoDirection::Receive,
+        &[AccessType::Rww, AccessType::Wo],
+        "PDO 27",
+        "a process output (rww/wo, PDOMapping=1)",
+    )
 }

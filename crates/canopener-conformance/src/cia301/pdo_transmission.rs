@@ -43,8 +43,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.6",
             suite: "cia301",
             group: "pdo",
-            title: "Event timer: an event-driven TPDO with 100 ms in 18xxh:05 comes every 100 ms, never later, and sooner only with new data",
+            title: "Event timer: an event-driven TPDO with 100 ms in 18xxh:05 comes every 100 ms in operational, never later, sooner only with new data, and never in stopped or pre-operational",
             references: &[
+                req::NMT_STATES,
                 req::PDO,
                 req::PDO_PARAMETERS,
                 "CCT PDO 05",
@@ -59,8 +60,15 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.7",
             suite: "cia301",
             group: "pdo",
-            title: "Synchronous type 3: one TPDO after every 3rd SYNC",
-            references: &[req::PDO, req::SYNC, "CCT PDO 06", "CCT PDO 12", "CCT PDO 18"],
+            title: "Synchronous type 3: one TPDO after every 3rd SYNC in operational, none in stopped or pre-operational",
+            references: &[
+                req::NMT_STATES,
+                req::PDO,
+                req::SYNC,
+                "CCT PDO 06",
+                "CCT PDO 12",
+                "CCT PDO 18",
+            ],
             precondition: "a TPDO with writable COB-ID and transmission type and mapped data; a refusal is not_applicable",
             tags: &["pdo", "sync", "writes", "nmt"],
             run: synchronous,
@@ -69,8 +77,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.12",
             suite: "cia301",
             group: "pdo",
-            title: "Event-driven TPDO (type FFh): TPDOs follow the event timer but never within the inhibit time",
+            title: "Event-driven TPDO (type FFh): in operational TPDOs follow the event timer but never within the inhibit time; none in stopped or pre-operational",
             references: &[
+                req::NMT_STATES,
                 req::PDO,
                 req::PDO_PARAMETERS,
                 "CCT PDO 04",
@@ -85,8 +94,15 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.13",
             suite: "cia301",
             group: "pdo",
-            title: "Synchronous acyclic (type 0): a TPDO only right after a SYNC, at most one per SYNC",
-            references: &[req::PDO, req::SYNC, "CCT PDO 07", "CCT PDO 13", "CCT PDO 19"],
+            title: "Synchronous acyclic (type 0): in operational a TPDO only right after a SYNC, at most one per SYNC; none in stopped or pre-operational",
+            references: &[
+                req::NMT_STATES,
+                req::PDO,
+                req::SYNC,
+                "CCT PDO 07",
+                "CCT PDO 13",
+                "CCT PDO 19",
+            ],
             precondition: "a TPDO with writable COB-ID and transmission type and mapped data; a refusal is not_applicable",
             tags: &["pdo", "sync", "writes", "nmt"],
             run: synchronous_acyclic,
@@ -95,8 +111,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.pdo.14",
             suite: "cia301",
             group: "pdo",
-            title: "SYNC start value: a cyclic TPDO starts at the SYNC whose counter equals 18xxh:06",
+            title: "SYNC start value: in operational a cyclic TPDO starts at the SYNC whose counter equals 18xxh:06; none in stopped or pre-operational",
             references: &[
+                req::NMT_STATES,
                 req::PDO,
                 req::PDO_PARAMETERS,
                 req::SYNC_OBJECTS,
@@ -142,7 +159,12 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Duration::from_millis(u64::from(TEST_EVENT_TIMER_MS) * 13 / 2),
         |f| f.id() == id && !f.is_remote(),
     )?;
-    back_to_pre_operational(ctx)?;
+    let outside = silent_outside_operational(
+        ctx,
+        cob,
+        Outside::Watch(NOT_OPERATIONAL_WATCH_EVENT_TIMER),
+        ["PDO 11", "PDO 17"],
+    )?;
     // The first TPDO may come at once on entering operational; the timer's intervals follow it.
     let intervals = measure_intervals(ctx, "event_timer_interval", &frames);
     let period = f64::from(TEST_EVENT_TIMER_MS);
@@ -167,7 +189,7 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         *interval < period * (1.0 - EVENT_TIMER_TOLERANCE)
             && frames[i + 1].frame.data() == frames[*i].frame.data()
     });
-    Ok(if frames.len() < 5 {
+    let operational = if frames.len() < 5 {
         Finding::fail(
             format!(
                 "{} TPDOs in 6.5 periods of a {TEST_EVENT_TIMER_MS} ms event timer",
@@ -210,7 +232,8 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "{} TPDOs, none later than the timer and none sooner with the same data",
             frames.len()
         ))
-    })
+    };
+    Ok(outside.with_operational(ctx, "PDO 05", operational))
 }
 
 fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -223,7 +246,12 @@ fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
     let after_sync = tpdos_after_syncs(ctx, sync, cob, &[None; TEST_SYNCS])?;
-    back_to_pre_operational(ctx)?;
+    let outside = silent_outside_operational(
+        ctx,
+        cob,
+        Outside::Syncs(sync, &[None; TEST_SYNC_EVERY as usize]),
+        ["PDO 12", "PDO 18"],
+    )?;
     let pattern = sync_pattern(&after_sync);
     let sent: Vec<usize> = after_sync
         .iter()
@@ -235,29 +263,28 @@ fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .windows(2)
         .all(|w| w[1] - w[0] == usize::from(TEST_SYNC_EVERY));
     let expected = TEST_SYNCS / usize::from(TEST_SYNC_EVERY);
-    Ok(
-        if sent.len() == expected && evenly && after_sync.iter().all(|n| *n <= 1) {
-            Finding::pass(format!("TPDOs after SYNCs {pattern}"))
-        } else {
-            Finding::fail(
-                format!("TPDOs after {TEST_SYNCS} SYNCs: {pattern} (T: a TPDO followed)"),
-                Evidence {
-                    request: format!(
-                        "TPDO{} ({:#X}) with transmission type {TEST_SYNC_EVERY}; NMT start, {TEST_SYNCS} SYNCs on {sync:#X}, {} ms apart",
-                        pdo.number,
-                        cob & 0x7FF,
-                        SYNC_SPACING.as_millis()
-                    ),
-                    requirement: format!(
-                        "{}: a synchronous TPDO of type n is sent after every n-th SYNC ({expected} here)",
-                        req::PDO
-                    ),
-                    answer: format!("{pattern} ({} TPDOs)", after_sync.iter().sum::<usize>()),
-                    cause: "the SYNCs are not counted, or the TPDO is not sent on the n-th".to_owned(),
-                },
-            )
-        },
-    )
+    let operational = if sent.len() == expected && evenly && after_sync.iter().all(|n| *n <= 1) {
+        Finding::pass(format!("TPDOs after SYNCs {pattern}"))
+    } else {
+        Finding::fail(
+            format!("TPDOs after {TEST_SYNCS} SYNCs: {pattern} (T: a TPDO followed)"),
+            Evidence {
+                request: format!(
+                    "TPDO{} ({:#X}) with transmission type {TEST_SYNC_EVERY}; NMT start, {TEST_SYNCS} SYNCs on {sync:#X}, {} ms apart",
+                    pdo.number,
+                    cob & 0x7FF,
+                    SYNC_SPACING.as_millis()
+                ),
+                requirement: format!(
+                    "{}: a synchronous TPDO of type n is sent after every n-th SYNC ({expected} here)",
+                    req::PDO
+                ),
+                answer: format!("{pattern} ({} TPDOs)", after_sync.iter().sum::<usize>()),
+                cause: "the SYNCs are not counted, or the TPDO is not sent on the n-th".to_owned(),
+            },
+        )
+    };
+    Ok(outside.with_operational(ctx, "PDO 06", operational))
 }
 
 /// The inhibit time `cia301.pdo.12` sets, in 100 µs: 50 ms.
@@ -294,7 +321,12 @@ fn inhibit_time(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let id = ctx.id((cob & 0x7FF) as u16);
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     let frames = ctx.listen(WATCH, |f| f.id() == id && !f.is_remote())?;
-    back_to_pre_operational(ctx)?;
+    let outside = silent_outside_operational(
+        ctx,
+        cob,
+        Outside::Watch(NOT_OPERATIONAL_WATCH_SHORT_TIMER),
+        ["PDO 10", "PDO 16"],
+    )?;
     let intervals = measure_intervals(ctx, "inhibited_interval", &frames);
     let inhibit_ms = f64::from(TEST_INHIBIT_100US) / 10.0;
     let request = format!(
@@ -315,7 +347,7 @@ fn inhibit_time(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .iter()
         .copied()
         .find(|i| *i < inhibit_ms - INHIBIT_SLACK_MS);
-    Ok(if let Some(early) = early {
+    let operational = if let Some(early) = early {
         Finding::fail(
             format!("two TPDOs {early:.1} ms apart with an inhibit time of {inhibit_ms} ms"),
             Evidence {
@@ -344,7 +376,8 @@ fn inhibit_time(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "{} TPDOs, none closer than the {inhibit_ms} ms inhibit time",
             frames.len()
         ))
-    })
+    };
+    Ok(outside.with_operational(ctx, "PDO 04", operational))
 }
 
 fn synchronous_acyclic(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -359,7 +392,8 @@ fn synchronous_acyclic(ctx: &mut Ctx<'_, '_>) -> Outcome {
     // Without SYNC a synchronous TPDO has no occasion to go out, whatever its events.
     let unsynced = ctx.listen(UNSYNCED_WATCH, |f| f.id() == id && !f.is_remote())?;
     let after_sync = tpdos_after_syncs(ctx, sync, cob, &[None; ACYCLIC_SYNCS])?;
-    back_to_pre_operational(ctx)?;
+    let outside =
+        silent_outside_operational(ctx, cob, Outside::Syncs(sync, &[None; 2]), ["PDO 13", "PDO 19"])?;
     let pattern = sync_pattern(&after_sync);
     let request = format!(
         "TPDO{} ({:#X}) with transmission type 0; NMT start, {} ms without SYNC, then {ACYCLIC_SYNCS} SYNCs on {sync:#X}, {} ms apart",
@@ -372,7 +406,7 @@ fn synchronous_acyclic(ctx: &mut Ctx<'_, '_>) -> Outcome {
         "{}: a TPDO of type 0 is sent after a SYNC when an event occurred, so never without SYNC and at most once per SYNC",
         req::PDO
     );
-    Ok(if !unsynced.is_empty() {
+    let operational = if !unsynced.is_empty() {
         Finding::fail(
             format!("{} TPDOs while no SYNC was sent", unsynced.len()),
             Evidence {
@@ -401,7 +435,8 @@ fn synchronous_acyclic(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Finding::pass(format!(
             "none without SYNC; after the SYNCs {pattern} (T: a TPDO followed; the application decides the events)"
         ))
-    })
+    };
+    Ok(outside.with_operational(ctx, "PDO 07", operational))
 }
 
 fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -466,7 +501,12 @@ fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .map(|i| Some((i % usize::from(TEST_OVERFLOW)) as u8 + 1))
         .collect();
     let after_sync = tpdos_after_syncs(ctx, sync, cob, &counters)?;
-    back_to_pre_operational(ctx)?;
+    let outside = silent_outside_operational(
+        ctx,
+        cob,
+        Outside::Syncs(sync, &START_VALUE_SYNCS_OUTSIDE),
+        ["PDO 14", "PDO 20"],
+    )?;
     let pattern = sync_pattern(&after_sync);
     // CiA 301 §7.5.2.35: the SYNC whose counter equals the start value "shall be regarded as the
     // first received SYNC". Stacks read that two ways for n > 1: CANopenNode transmits at that SYNC,
@@ -487,7 +527,7 @@ fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let at_start = expect_from(usize::from(TEST_START_VALUE) - 1);
     let counted = expect_from(usize::from(TEST_START_VALUE) - 1 + every - 1);
     let expected = format!("{at_start} or {counted}");
-    Ok(if pattern == at_start || pattern == counted {
+    let operational = if pattern == at_start || pattern == counted {
         Finding::pass(format!(
             "TPDOs after the SYNCs {pattern} (counters 1..{TEST_OVERFLOW})"
         ))
@@ -508,7 +548,8 @@ fn sync_start_value(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 cause: "the SYNC start value 18xxh:06 is ignored, or the SYNC counter is not read".to_owned(),
             },
         )
-    })
+    };
+    Ok(outside.with_operational(ctx, "PDO 08", operational))
 }
 
 /// `index`:00 as UNSIGNED32 when the EDS describes it readable (`None` when it does not); a failure
@@ -666,6 +707,8 @@ fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
             format!("{name}: {counts:?}")
         })
         .collect();
+    ctx.performed("Synchronization 03");
+    ctx.performed("Synchronization 04");
     Ok(if wrong.is_empty() {
         Finding::pass(format!(
             "{} followed each of {CONSUMER_SYNCS} SYNCs once",
@@ -686,4 +729,142 @@ fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         )
     })
+}
+
+/// How long an event-driven TPDO with the 100 ms event timer is watched in stopped and in
+/// pre-operational: a timer period and its tolerance, in which a TPDO that kept running would come.
+pub const NOT_OPERATIONAL_WATCH_EVENT_TIMER: Duration = Duration::from_millis(110);
+/// The same for the 10 ms event timer of `cia301.pdo.12` (the 50 ms inhibit time, and more).
+pub const NOT_OPERATIONAL_WATCH_SHORT_TIMER: Duration = Duration::from_millis(60);
+/// After an NMT command, how long a TPDO already on its way may still arrive: a hub or a busy
+/// device may have sent it before the command took effect.
+pub const NMT_GRACE: Duration = Duration::from_millis(10);
+/// The SYNC counters `cia301.pdo.14` sends in stopped and pre-operational: its start value (5) and
+/// the next, at one of which a TPDO that ignored the state would be due (either reading of the
+/// start value).
+pub const START_VALUE_SYNCS_OUTSIDE: [Option<u8>; 2] = [Some(5), Some(6)];
+
+/// What the TPDO is given in a state where it must stay silent.
+#[derive(Debug, Clone, Copy)]
+enum Outside<'a> {
+    /// Nothing: watch this long.
+    Watch(Duration),
+    /// SYNCs on this CAN-ID with these counters, [`SYNC_SPACING`] apart.
+    Syncs(u16, &'a [Option<u8>]),
+}
+
+/// The verdicts in stopped and in pre-operational, with their CCT cases.
+struct OutsideOperational {
+    stopped: (String, Finding),
+    pre_operational: (String, Finding),
+}
+
+impl OutsideOperational {
+    /// The test's verdict: the operational phase (`case`, recorded now that it is judged) and the
+    /// two states after it.
+    fn with_operational(self, ctx: &mut Ctx<'_, '_>, case: &str, operational: Finding) -> Finding {
+        ctx.performed(case);
+        let operational_name = format!("operational ({case})");
+        let (stopped, stopped_finding) = self.stopped;
+        let (pre_operational, pre_operational_finding) = self.pre_operational;
+        Finding::of_steps(vec![
+            (&operational_name, operational),
+            (&stopped, stopped_finding),
+            (&pre_operational, pre_operational_finding),
+        ])
+    }
+}
+
+/// CiA 301 §7.2.8.2: PDOs are served in operational only. The CCT runs its TPDO cases in
+/// operational (PDO 04-08), stopped (10-14) and pre-operational (16-20); with the TPDO still set
+/// up as for the operational phase, the device is stopped, then put into pre-operational, and in
+/// each state the TPDO on `cob` must not come while the tester does `outside`. `cases` are the CCT
+/// cases of the two states, recorded as each is judged. The device is left pre-operational.
+fn silent_outside_operational(
+    ctx: &mut Ctx<'_, '_>,
+    cob: u32,
+    outside: Outside<'_>,
+    cases: [&str; 2],
+) -> Result<OutsideOperational, Stop> {
+    let id = ctx.id((cob & 0x7FF) as u16);
+    let mut findings = Vec::new();
+    for ((command, state), case) in [
+        (NmtCommand::StopRemoteNode, "stopped"),
+        (NmtCommand::EnterPreOperational, "pre-operational"),
+    ]
+    .into_iter()
+    .zip(cases)
+    {
+        ctx.nmt(command, false)?;
+        ctx.listen(NMT_GRACE, |_| false)?;
+        let (sent, doing) = match outside {
+            Outside::Watch(watch) => (
+                ctx.listen(watch, |f| f.id() == id && !f.is_remote())?.len(),
+                format!("{} ms", watch.as_millis()),
+            ),
+            Outside::Syncs(sync, counters) => (
+                tpdos_after_syncs(ctx, sync, cob, counters)?.iter().sum(),
+                format!(
+                    "{} SYNCs on {sync:#X}, {} ms apart",
+                    counters.len(),
+                    SYNC_SPACING.as_millis()
+                ),
+            ),
+        };
+        ctx.performed(case);
+        findings.push((
+            format!("{state} ({case})"),
+            if sent == 0 {
+                Finding::pass(format!("no TPDO in {doing}"))
+            } else {
+                served_outside_operational(
+                    format!("{sent} TPDOs on {:#X} in {state}", cob & 0x7FF),
+                    format!(
+                        "the TPDO as set up for operational; {}, then {doing}",
+                        nmt_path(state)
+                    ),
+                    state,
+                    format!("{sent} TPDOs"),
+                )
+            },
+        ));
+    }
+    let not_run = || (String::new(), Finding::inconclusive("not run"));
+    let pre_operational = findings.pop().unwrap_or_else(not_run);
+    let stopped = findings.pop().unwrap_or_else(not_run);
+    Ok(OutsideOperational {
+        stopped,
+        pre_operational,
+    })
+}
+
+/// The NMT commands that lead from operational to `state` (stopped or pre-operational), as the
+/// tests send them.
+pub(crate) fn nmt_path(state: &str) -> &'static str {
+    if state == "stopped" {
+        "NMT stop"
+    } else {
+        "NMT stop, NMT enter pre-operational"
+    }
+}
+
+/// The failure of a TPDO that went out in `state` (stopped or pre-operational).
+pub(crate) fn served_outside_operational(
+    reason: String,
+    request: String,
+    state: &str,
+    answer: String,
+) -> Finding {
+    Finding::fail(
+        reason,
+        Evidence {
+            request,
+            requirement: format!(
+                "{}: PDOs are served in operational only, not in {state}",
+                req::NMT_STATES
+            ),
+            answer,
+            cause: format!("PDO communication is not switched off in {state}"),
+        },
+    )
 }

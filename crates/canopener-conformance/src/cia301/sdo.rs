@@ -1,7 +1,7 @@
 //! SDO tests (CCT group "SDO"): expedited, segmented and block transfers, and the refusals CiA 301
 //! §7.2.4.3.17 requires with their abort codes.
 
-use canopener_master::sdo_client::{DownloadMode, UploadMode};
+use canopener_master::sdo_client::DownloadMode;
 use canopener_wire::abort;
 
 use crate::context::{Ctx, Reply, hex};
@@ -19,8 +19,13 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.sdo.1",
             suite: "cia301",
             group: "sdo",
-            title: "Read 1000h:00 (device type) with an expedited upload",
-            references: &[req::SDO_UPLOAD, "CCT SDO 01"],
+            title: "Read 1000h:00 (device type): the value the EDS states, and 4 bytes whether the server answers expedited or segmented",
+            references: &[
+                req::SDO_UPLOAD,
+                req::SDO_UPLOAD_SEGMENT,
+                "CCT SDO 01",
+                "CCT SDO 13",
+            ],
             precondition: "always (1000h is mandatory)",
             tags: &["sdo"],
             run: read_device_type,
@@ -99,9 +104,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.sdo.9",
             suite: "cia301",
             group: "sdo",
-            title: "A value above HighLimit is refused",
-            references: &[req::SDO_ABORT, req::EDS_OBJECTS, "CCT SDO 10"],
-            precondition: "the EDS has a writable entry with a HighLimit below its type's maximum",
+            title: "A value above CiA 301's range for the entry (1003h:00 takes only 0) or above its EDS HighLimit is refused",
+            references: &[req::SDO_ABORT, req::ERROR_OBJECTS, req::EDS_OBJECTS, "CCT SDO 10"],
+            precondition: "a writable entry that CiA 301's value ranges (canopener-check's rule table) or an EDS HighLimit bound below its type's maximum",
             tags: &["sdo", "writes", "limits"],
             run: above_high_limit,
         },
@@ -129,11 +134,10 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.sdo.12",
             suite: "cia301",
             group: "sdo",
-            title: "A value longer than 4 bytes reads segmented with the size the server indicated",
+            title: "A value longer than 4 bytes reads segmented: the size indicated, alternating toggles, the last segment's unused bytes",
             references: &[
                 req::SDO_UPLOAD,
                 req::SDO_UPLOAD_SEGMENT,
-                "CCT SDO 13",
                 "CCT SDO 16",
                 "CCT SDO 18",
             ],
@@ -165,9 +169,9 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.sdo.15",
             suite: "cia301",
             group: "sdo",
-            title: "Block upload with CRC, or the refusal 0504 0001h of a device without block transfer",
+            title: "Block upload of 1000h:00 without CRC, and of a value longer than 4 bytes without and with CRC, reads what an ordinary upload reads",
             references: &[req::SDO_BLOCK_UPLOAD, "CCT SDO 19", "CCT SDO 22", "CCT SDO 23"],
-            precondition: "block transfer is optional: a refusal with 0504 0001h is not_applicable",
+            precondition: "block transfer is optional: a refusal of the first block upload with 0504 0001h is not_applicable; the longer value needs a readable entry longer than 4 bytes (else 1000h:00 with CRC)",
             tags: &["sdo", "block"],
             run: block_upload,
         },
@@ -175,15 +179,15 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.sdo.16",
             suite: "cia301",
             group: "sdo",
-            title: "Block download with CRC of 1017h (or 100Ch) reads back the value written",
+            title: "Block downloads of 100Ch and 1017h, each without and with CRC, read back the value written",
             references: &[
                 req::SDO_BLOCK_DOWNLOAD,
-                "CCT SDO 21",
-                "CCT SDO 25",
                 "CCT SDO 20",
+                "CCT SDO 21",
                 "CCT SDO 24",
+                "CCT SDO 25",
             ],
-            precondition: "a writable 1017h or 100Ch; block transfer optional (0504 0001h → not_applicable)",
+            precondition: "a writable 2-byte 100Ch (guarding) or 1017h (heartbeat), each tried; block transfer optional (0504 0001h for the first block download → not_applicable)",
             tags: &["sdo", "block", "writes"],
             run: block_download,
         },
@@ -248,7 +252,8 @@ pub fn tests() -> Vec<TestDef> {
 fn read_device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let reply = ctx.read(0x1000, 0)?;
     let request = upload_text((0x1000, 0));
-    Ok(match &reply {
+    ctx.performed("SDO 01");
+    let finding = match &reply {
         Reply::Done(data) if data.len() == 4 => match ctx
             .model()
             .entry(0x1000, 0)
@@ -280,7 +285,124 @@ fn read_device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
             req::SDO_UPLOAD,
             "1000h is mandatory in every device",
         ),
-    })
+    };
+    let Reply::Done(value) = reply else {
+        return Ok(finding);
+    };
+    if finding.verdict != crate::model::Verdict::Pass {
+        return Ok(finding);
+    }
+    // CCT SDO 13: the same request from a client that also takes a segmented answer.
+    let either = device_type_either_way(ctx, &value)?;
+    ctx.performed("SDO 13");
+    Ok(either.unwrap_or(finding))
+}
+
+/// CCT SDO 13 ("read 1000h:00 with segmented transfer"): CiA 301 §7.2.4.3.6 lets the server answer
+/// an initiate upload of 4 bytes expedited or segmented, so the tester sends the request and follows
+/// whichever the server chooses. Either answer must give 4 bytes, `value` (what the ordinary read
+/// got); a failure, or `None` when it does.
+fn device_type_either_way(ctx: &mut Ctx<'_, '_>, value: &[u8]) -> Result<Option<Finding>, Stop> {
+    let initiate = [0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0];
+    let request = format!(
+        "SDO upload 1000h:00 from a client ready for a segmented answer ({})",
+        hex(&initiate)
+    );
+    let fail = |answer: String, requirement: &str, cause: &str| {
+        Some(Finding::fail(
+            format!("1000h:00: {answer}"),
+            Evidence {
+                request: request.clone(),
+                requirement: format!("{}: {requirement}", req::SDO_UPLOAD),
+                answer,
+                cause: cause.to_owned(),
+            },
+        ))
+    };
+    let Some(answer) = ctx.raw_sdo(initiate)? else {
+        return Ok(fail(
+            "no answer".to_owned(),
+            "the server answers an initiate upload",
+            "the server did not answer a request it answered a moment before",
+        ));
+    };
+    let command = answer.first().copied().unwrap_or(0);
+    let mux_ok = answer.get(1..4) == Some(&[0x00, 0x10, 0x00][..]);
+    if command >> 5 != 2 || !mux_ok || answer.len() != 8 {
+        return Ok(fail(
+            format!("the frame {}", hex(&answer)),
+            "an initiate upload response (scs 2) for 1000h:00",
+            "the server answers with another frame or multiplexer",
+        ));
+    }
+    let expedited = command & 0x02 != 0;
+    let sized = command & 0x01 != 0;
+    if expedited {
+        let size = if sized {
+            4 - usize::from((command >> 2) & 0x03)
+        } else {
+            4
+        };
+        return Ok((size != 4 || answer[4..8] != *value).then(|| {
+            Finding::fail(
+                format!(
+                    "the expedited answer {} does not carry the 4 bytes {}",
+                    hex(&answer),
+                    hex(value)
+                ),
+                Evidence {
+                    request: request.clone(),
+                    requirement: format!(
+                        "{}: n = 4 − size when s = 1; the value is 1000h's",
+                        req::SDO_UPLOAD
+                    ),
+                    answer: format!("the frame {}", hex(&answer)),
+                    cause: "the size or the value differs between two reads of 1000h".to_owned(),
+                },
+            )
+        }));
+    }
+    // Segmented: the size (when indicated) is 4, and one segment with toggle 0, c = 1 and 3 unused
+    // bytes carries the value (§7.2.4.3.7).
+    if sized && answer[4..8] != 4u32.to_le_bytes() {
+        return Ok(fail(
+            format!(
+                "the segmented answer {} indicates another size than 4",
+                hex(&answer)
+            ),
+            "a segmented upload indicates the size of the value, 4 bytes for 1000h",
+            "the server indicates a wrong size",
+        ));
+    }
+    let Some(segment) = ctx.raw_sdo([0x60, 0, 0, 0, 0, 0, 0, 0])? else {
+        return Ok(fail(
+            format!("{} and then no segment", hex(&answer)),
+            "the server sends the segment the client asks for",
+            "the segmented upload server stops after the initiate",
+        ));
+    };
+    if segment.first().is_some_and(|c| c & 0xE1 == 0x00) {
+        // Not the last segment: end the transfer the server still thinks is running.
+        let [a, b, c, d] = abort::GENERAL_ERROR.to_le_bytes();
+        ctx.send(
+            0x600 + u16::from(ctx.node()),
+            &[0x80, 0x00, 0x10, 0x00, a, b, c, d],
+        )?;
+    }
+    Ok((segment.len() != 8 || segment[0] != 0x07 || segment[1..5] != *value).then(|| {
+        Finding::fail(
+            format!("the one segment of 1000h is {}, not 07 {}", hex(&segment), hex(value)),
+            Evidence {
+                request: format!("{request}, then 60 00 00 00 00 00 00 00"),
+                requirement: format!(
+                    "{}: the last segment has c = 1, the unused bytes in n (3 for 4 bytes) and the toggle of the request",
+                    req::SDO_UPLOAD_SEGMENT
+                ),
+                answer: format!("the frame {}", hex(&segment)),
+                cause: "the segmented upload server frames a 4-byte value wrongly".to_owned(),
+            },
+        )
+    }))
 }
 
 fn write_device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -297,6 +419,7 @@ fn write_device_type(ctx: &mut Ctx<'_, '_>) -> Outcome {
         }
     };
     let reply = ctx.write(0x1000, 0, current.clone())?;
+    ctx.performed("SDO 03");
     Ok(expect_refusal(
         &download_text((0x1000, 0), &current),
         &reply,
@@ -317,6 +440,7 @@ fn read_write_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
     };
     let at = (entry.index, entry.sub);
     let reply = ctx.read(at.0, at.1)?;
+    ctx.performed("SDO 04");
     Ok(expect_refusal(
         &upload_text(at),
         &reply,
@@ -328,6 +452,7 @@ fn read_write_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn read_absent_sub(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let reply = ctx.read(0x1000, 1)?;
+    ctx.performed("SDO 05");
     Ok(expect_refusal(
         &upload_text((0x1000, 1)),
         &reply,
@@ -351,6 +476,7 @@ fn read_absent_object(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ));
     };
     let reply = ctx.read(index, 0)?;
+    ctx.performed("SDO 06");
     Ok(expect_refusal(
         &upload_text((index, 0)),
         &reply,
@@ -365,6 +491,7 @@ fn bad_command(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let request = [0xE0, 0x00, 0x10, 0x00, 0, 0, 0, 0];
     let answer = ctx.raw_sdo(request)?;
     let text = format!("SDO request {} (client command specifier 7)", hex(&request));
+    ctx.performed("SDO 07");
     Ok(expect_refusal(
         &text,
         &Reply::of_raw(answer),
@@ -375,21 +502,22 @@ fn bad_command(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn too_long(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    wrong_length(ctx, &[1, 2], "8- or 16-bit", 4, req::TOO_LONG)
+    wrong_length(ctx, &[1, 2], "8- or 16-bit", 4, req::TOO_LONG, "SDO 08")
 }
 
 fn too_short(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    wrong_length(ctx, &[2, 4], "16- or 32-bit", 1, req::TOO_SHORT)
+    wrong_length(ctx, &[2, 4], "16- or 32-bit", 1, req::TOO_SHORT, "SDO 09")
 }
 
 /// Downloads `length` zero bytes to the first writable entry of one of `sizes` bytes: a length that
-/// does not match the entry's type must be refused with the abort `requirement` names.
+/// does not match the entry's type must be refused with the abort `requirement` names (CCT `case`).
 fn wrong_length(
     ctx: &mut Ctx<'_, '_>,
     sizes: &[usize],
     sizes_text: &str,
     length: usize,
     requirement: Accepted,
+    case: &str,
 ) -> Outcome {
     let Some(entry) = writable_of_size(ctx, sizes) else {
         return Ok(Finding::not_applicable(format!(
@@ -404,6 +532,7 @@ fn wrong_length(
     } else {
         format!("{length} bytes")
     };
+    ctx.performed(case);
     Ok(expect_refusal(
         &format!("{} ({bytes} for {})", download_text(at, &data), entry.label()),
         &reply,
@@ -414,16 +543,70 @@ fn wrong_length(
 }
 
 fn above_high_limit(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    beyond_limit(ctx, true)
+    // CiA 301's own ranges first (the CCT's SDO 10 writes FFh to 1003h:00, which takes only 0),
+    // then the EDS's HighLimit.
+    let mut targets = value_rule_targets(ctx);
+    targets.extend(eds_limit_target(ctx, true));
+    if targets.is_empty() {
+        return Ok(Finding::not_applicable(
+            "neither CiA 301's value ranges (canopener-check's table) nor the EDS's HighLimits give a writable entry a value its type can hold above them",
+        ));
+    }
+    let mut refused = Vec::new();
+    for target in targets {
+        let at = (target.index, target.sub);
+        let reply = ctx.modify(at.0, at.1, target.data.clone())?;
+        ctx.performed("SDO 10");
+        let finding = expect_refusal(
+            &format!("{} ({})", download_text(at, &target.data), target.why),
+            &reply,
+            req::TOO_HIGH,
+            req::SDO_ABORT,
+            &target.cause,
+        );
+        if finding.verdict != crate::model::Verdict::Pass {
+            return Ok(finding);
+        }
+        refused.push(format!(
+            "{:04X}h:{:02X} = {} {}",
+            at.0, at.1, target.value, finding.reason
+        ));
+    }
+    Ok(Finding::pass(refused.join("; ")))
 }
 
 fn below_low_limit(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    beyond_limit(ctx, false)
+    let Some(target) = eds_limit_target(ctx, false) else {
+        return Ok(Finding::not_applicable(
+            "the EDS gives no writable entry a LowLimit its type can go below",
+        ));
+    };
+    let at = (target.index, target.sub);
+    let reply = ctx.modify(at.0, at.1, target.data.clone())?;
+    ctx.performed("SDO 11");
+    Ok(expect_refusal(
+        &format!("{} ({})", download_text(at, &target.data), target.why),
+        &reply,
+        req::TOO_LOW,
+        req::SDO_ABORT,
+        &target.cause,
+    ))
 }
 
-/// Writes the value just beyond the first limit the EDS gives (HighLimit when `up`).
-pub fn beyond_limit(ctx: &mut Ctx<'_, '_>, up: bool) -> Outcome {
-    let found = ctx.model().entries.values().find_map(|e| {
+/// A value just beyond what an entry allows, and where the bound comes from.
+struct LimitTarget {
+    index: u16,
+    sub: u8,
+    data: Vec<u8>,
+    value: String,
+    why: String,
+    cause: String,
+}
+
+/// The first writable entry with a LowLimit/HighLimit its type can exceed, and the value just
+/// beyond it (HighLimit when `up`).
+fn eds_limit_target(ctx: &Ctx<'_, '_>, up: bool) -> Option<LimitTarget> {
+    let (entry, limit, data, value) = ctx.model().entries.values().find_map(|e| {
         let limit = if up { e.high } else { e.low }?;
         let data_type = e.data_type?;
         if !e.writable() || crate::procedures::entries::is_pdo_or_special(e.index) {
@@ -431,34 +614,68 @@ pub fn beyond_limit(ctx: &mut Ctx<'_, '_>, up: bool) -> Outcome {
         }
         let value = step_beyond(limit, up, data_type)?;
         Some((e, limit, number_bytes(value, data_type)?, value))
-    });
-    let Some((entry, limit, data, value)) = found else {
-        return Ok(Finding::not_applicable(format!(
-            "the EDS gives no writable entry a {} its type can exceed",
-            if up { "HighLimit" } else { "LowLimit" }
-        )));
-    };
-    let at = (entry.index, entry.sub);
-    let label = entry.label();
-    let reply = ctx.modify(at.0, at.1, data.clone())?;
-    let (accepted, name) = if up {
-        (req::TOO_HIGH, "HighLimit")
-    } else {
-        (req::TOO_LOW, "LowLimit")
-    };
-    Ok(expect_refusal(
-        &format!(
-            "{} ({} {}, {name} {})",
-            download_text(at, &data),
-            label,
+    })?;
+    let name = if up { "HighLimit" } else { "LowLimit" };
+    Some(LimitTarget {
+        index: entry.index,
+        sub: entry.sub,
+        data,
+        value: number_text(value),
+        why: format!(
+            "{} {}, {name} {} in the EDS",
+            entry.label(),
             number_text(value),
             number_text(limit)
         ),
-        &reply,
-        accepted,
-        req::SDO_ABORT,
-        &format!("the server does not check the value against the {name} its EDS states"),
-    ))
+        cause: format!("the server does not check the value against the {name} its EDS states"),
+    })
+}
+
+/// Writable entries with a CiA 301 value range (canopener-check's rule table) and the first value
+/// above it their type can hold. PDO parameters, store/restore and SYNC objects are left to the
+/// tests of their own procedures, whose refusals depend on the device's state.
+fn value_rule_targets(ctx: &Ctx<'_, '_>) -> Vec<LimitTarget> {
+    use canopener_eds::TypeKind;
+    let model = ctx.model();
+    let mut targets = Vec::new();
+    for e in model.entries.values() {
+        if !e.writable() || matches!(e.index, 0x1005 | 0x1010 | 0x1011 | 0x1019 | 0x1400..=0x1BFF) {
+            continue;
+        }
+        let Some(data_type) = e.data_type else { continue };
+        let (low, high, signed) = match data_type.kind() {
+            Some(TypeKind::Unsigned(bits)) => (0, canopener_eds::value::range_of(bits, false).1, false),
+            Some(TypeKind::Signed(bits)) => {
+                let (low, high) = canopener_eds::value::range_of(bits, true);
+                (low, high, true)
+            }
+            _ => continue,
+        };
+        let var = model.objects.get(&e.index).is_some_and(|o| !o.is_structured());
+        for range in canopener_check::value_rules::ranges_for(e.index, e.sub, var) {
+            let Some(value) = range.first_refused_above_allowed(low..=high) else {
+                continue;
+            };
+            let number = if signed {
+                canopener_od::Number::Signed(value as i64)
+            } else {
+                canopener_od::Number::Unsigned(value as u64)
+            };
+            let Some(data) = number_bytes(number, data_type) else {
+                continue;
+            };
+            targets.push(LimitTarget {
+                index: e.index,
+                sub: e.sub,
+                data,
+                value: value.to_string(),
+                why: format!("{} {value}: {} ({})", e.label(), range.text(), range.source()),
+                cause: "the server does not check the value against the range CiA 301 gives the entry"
+                    .to_owned(),
+            });
+        }
+    }
+    targets
 }
 
 fn server_parameter(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -468,6 +685,7 @@ fn server_parameter(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let node = u32::from(ctx.node());
     for (sub, expected) in [(1u8, 0x600 + node), (2, 0x580 + node)] {
         let reply = ctx.read(0x1200, sub)?;
+        ctx.performed("SDO 12");
         let request = upload_text((0x1200, sub));
         let got = match &reply {
             Reply::Done(data) if data.len() == 4 => u32::from_le_bytes([data[0], data[1], data[2], data[3]]),
@@ -518,16 +736,137 @@ fn segmented_read(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "the EDS has no readable entry longer than 4 bytes",
         ));
     };
-    let reply = ctx.read(at.0, at.1)?;
-    Ok(match reply {
-        Reply::Done(data) => Finding::pass(format!("{} bytes", data.len())),
-        other => refused_unexpectedly(
-            &upload_text(at),
-            &other,
-            req::SDO_UPLOAD_SEGMENT,
-            "segmented upload is broken",
+    // The value as the client reads it, to compare the segments with.
+    let expected = match ctx.read(at.0, at.1)? {
+        Reply::Done(data) => data,
+        other => {
+            return Ok(refused_unexpectedly(
+                &upload_text(at),
+                &other,
+                req::SDO_UPLOAD_SEGMENT,
+                "a readable entry of the EDS cannot be read",
+            ));
+        }
+    };
+    let read = segments(ctx, at)?;
+    ctx.performed("SDO 16");
+    ctx.performed("SDO 18");
+    let finding = match read {
+        Ok(data) if data == expected => Finding::pass(format!(
+            "{} bytes in {} segments, size indicated, toggles alternating",
+            data.len(),
+            data.len().div_ceil(7)
+        )),
+        Ok(data) => Finding::fail(
+            format!(
+                "{} read segment by segment differs from the same upload read by the client",
+                upload_text(at)
+            ),
+            Evidence {
+                request: upload_text(at),
+                requirement: format!("{}: the segments carry the value", req::SDO_UPLOAD_SEGMENT),
+                answer: format!("{} (the client read {})", hex(&data), hex(&expected)),
+                cause: "the server sends different data in two reads of a constant value".to_owned(),
+            },
         ),
-    })
+        Err((frames, requirement, cause)) => Finding::fail(
+            format!("{}: {requirement}", upload_text(at)),
+            Evidence {
+                request: format!("{} segment by segment", upload_text(at)),
+                requirement: format!("{}: {requirement}", req::SDO_UPLOAD_SEGMENT),
+                answer: frames,
+                cause: cause.to_owned(),
+            },
+        ),
+    };
+    Ok(finding)
+}
+
+/// How a segmented upload went wrong: the frames, what CiA 301 requires, the likely cause.
+type BrokenUpload = (String, &'static str, &'static str);
+
+/// A segmented upload of `at` request by request (CiA 301 §7.2.4.3.6/7): the initiate response
+/// must be segmented (e = 0); when it indicates the size, the segments must add up to it; each
+/// segment response must carry the toggle of its request, the last one c = 1 and its unused bytes
+/// in n. `Err` holds the frames, what was required and the likely cause.
+fn segments(ctx: &mut Ctx<'_, '_>, at: (u16, u8)) -> Result<Result<Vec<u8>, BrokenUpload>, Stop> {
+    let [lo, hi] = at.0.to_le_bytes();
+    let Some(first) = ctx.raw_sdo([0x40, lo, hi, at.1, 0, 0, 0, 0])? else {
+        return Ok(Err((
+            "no answer".to_owned(),
+            "the server answers the initiate upload",
+            "the server does not answer",
+        )));
+    };
+    if first.len() != 8 || first[0] & 0xE2 != 0x40 {
+        return Ok(Err((
+            format!("the frame {}", hex(&first)),
+            "a value longer than 4 bytes is answered with a segmented initiate response (e = 0)",
+            "the server answers the initiate upload wrongly",
+        )));
+    }
+    let size =
+        (first[0] & 0x01 != 0).then(|| u32::from_le_bytes([first[4], first[5], first[6], first[7]]) as usize);
+    let mut data = Vec::new();
+    let mut frames = vec![hex(&first)];
+    let mut toggle = 0u8;
+    // Enough segments for the indicated size, or for any value a test reads.
+    let most = size.map_or(1024, |n| n / 7 + 2);
+    for _ in 0..most {
+        let request = 0x60 | toggle;
+        let Some(segment) = ctx.raw_sdo([request, 0, 0, 0, 0, 0, 0, 0])? else {
+            return Ok(Err((
+                format!("{}, then no answer", frames.join(", ")),
+                "the server answers every segment request",
+                "the segmented upload server stops",
+            )));
+        };
+        frames.push(hex(&segment));
+        if segment.len() != 8 || segment[0] >> 5 != 0 {
+            return Ok(Err((
+                frames.join(", "),
+                "each segment request is answered with a segment (scs 0)",
+                "the server answers a segment request with another frame",
+            )));
+        }
+        if segment[0] & 0x10 != toggle {
+            let [a, b, c, d] = abort::TOGGLE_BIT_NOT_ALTERNATED.to_le_bytes();
+            ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
+            return Ok(Err((
+                frames.join(", "),
+                "each segment carries the toggle bit of the request it answers",
+                "the server does not echo the toggle bit",
+            )));
+        }
+        let last = segment[0] & 0x01 != 0;
+        let unused = if last {
+            usize::from((segment[0] >> 1) & 0x07)
+        } else {
+            0
+        };
+        data.extend_from_slice(&segment[1..8 - unused]);
+        if last {
+            return Ok(match size {
+                Some(size) if size != data.len() => Err((
+                    frames.join(", "),
+                    "the segments carry exactly the size the initiate response indicated",
+                    "the size indicated or the unused bytes of the last segment are wrong",
+                )),
+                _ => Ok(data),
+            });
+        }
+        toggle ^= 0x10;
+    }
+    let [a, b, c, d] = abort::GENERAL_ERROR.to_le_bytes();
+    ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
+    Ok(Err((
+        format!(
+            "{} ... (no last segment)",
+            frames[..3.min(frames.len())].join(", ")
+        ),
+        "the last segment (c = 1) ends the transfer within the size indicated",
+        "the server sends more segments than the size it indicated",
+    )))
 }
 
 fn wrong_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -560,6 +899,7 @@ fn wrong_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
         hex(&segment)
     );
     let reply = Reply::of_raw(answer);
+    ctx.performed("SDO 17");
     let finding = expect_refusal(
         &text,
         &reply,
@@ -628,66 +968,165 @@ fn expedited_size(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn block_upload(ctx: &mut Ctx<'_, '_>) -> Outcome {
-    let at = long_entry(ctx).unwrap_or((0x1000, 0));
-    let reply = ctx.read_with(at.0, at.1, UploadMode::Block)?;
-    let request = format!("SDO block upload {:04X}h:{:02X} with CRC", at.0, at.1);
-    Ok(match reply {
-        Reply::Done(data) => Finding::pass(format!("{} bytes, CRC correct", data.len())),
-        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) => {
-            Finding::not_applicable("the device has no block transfer (0504 0001h)")
-        }
-        other => Finding::fail(
-            format!("{request}: {}", other.describe()),
-            Evidence {
-                request,
-                requirement: format!(
-                    "{}: the server sends the value in sub-blocks with a correct CRC, or refuses block transfer with {}",
-                    req::SDO_BLOCK_UPLOAD,
-                    req::NO_BLOCK_TRANSFER.list()
-                ),
-                answer: other.describe(),
-                cause: "the block upload server is broken (CRC, sequence numbers, end frame), or a server without \
-                        block transfer answers instead of refusing with 0504 0001h"
-                    .to_owned(),
-            },
-        ),
-    })
+    // CCT SDO 19: 1000h:00 without CRC; SDO 22: a value longer than 4 bytes without CRC (as the
+    // CCT's log asks for it); SDO 23: the same with CRC. Without such a value, 1000h:00 with CRC.
+    let mut steps = vec![("SDO 19", (0x1000u16, 0u8), false)];
+    match long_entry(ctx) {
+        Some(at) => steps.extend([("SDO 22", at, false), ("SDO 23", at, true)]),
+        None => steps.push(("SDO 23", (0x1000, 0), true)),
+    }
+    let mut results = Vec::new();
+    for (case, at, crc) in steps {
+        let request = format!("SDO block upload {:04X}h:{:02X} {}", at.0, at.1, crc_text(crc));
+        let expected = match ctx.read(at.0, at.1)? {
+            Reply::Done(data) => data,
+            other => {
+                return Ok(Finding::inconclusive(format!(
+                    "{} (to compare the block upload with) got {}",
+                    upload_text(at),
+                    other.describe()
+                )));
+            }
+        };
+        let reply = ctx.read_block(at.0, at.1, crc)?;
+        let refused = reply == Reply::Refused(abort::COMMAND_SPECIFIER_INVALID);
+        let finding = match reply {
+            Reply::Done(data) if data == expected => {
+                Finding::pass(format!("{case}: {} bytes {}", data.len(), crc_text(crc)))
+            }
+            Reply::Done(data) => Finding::fail(
+                format!("{request} read {}, an ordinary upload {}", hex(&data), hex(&expected)),
+                Evidence {
+                    request,
+                    requirement: format!("{}: the sub-blocks carry the value", req::SDO_BLOCK_UPLOAD),
+                    answer: hex(&data),
+                    cause: "the block upload server sends other data than the value".to_owned(),
+                },
+            ),
+            other => Finding::fail(
+                format!("{request}: {}", other.describe()),
+                Evidence {
+                    request,
+                    requirement: format!(
+                        "{}: the server sends the value in sub-blocks ({}), or refuses every block transfer with {}",
+                        req::SDO_BLOCK_UPLOAD,
+                        if crc {
+                            "with a correct CRC, since the client offers it"
+                        } else {
+                            "the CRC field 0: the client asked for none"
+                        },
+                        req::NO_BLOCK_TRANSFER.list()
+                    ),
+                    answer: other.describe(),
+                    cause: "the block upload server is broken (CRC, sequence numbers, end frame), or serves block \
+                            transfers only with (or only without) CRC"
+                        .to_owned(),
+                },
+            ),
+        };
+        results.push((case, refused, finding));
+    }
+    Ok(block_verdict(ctx, results))
+}
+
+/// `with CRC` / `without CRC`.
+fn crc_text(crc: bool) -> &'static str {
+    if crc { "with CRC" } else { "without CRC" }
+}
+
+/// The verdict on block transfer steps (CCT case, refused with 0504 0001h, finding): a device that
+/// refuses every one with 0504 0001h has no block transfer (optional, not_applicable); one that
+/// serves some must serve all, since CRC is negotiated and a client may ask for none. Records the
+/// cases performed.
+fn block_verdict(ctx: &mut Ctx<'_, '_>, results: Vec<(&str, bool, Finding)>) -> Finding {
+    if results.iter().all(|(_, refused, _)| *refused) {
+        return Finding::not_applicable(
+            "the device has no block transfer: every block request was refused with 0504 0001h",
+        );
+    }
+    for (case, _, _) in &results {
+        ctx.performed(case);
+    }
+    let passed: Vec<String> = results
+        .iter()
+        .filter(|(_, _, f)| f.verdict == crate::model::Verdict::Pass)
+        .map(|(_, _, f)| f.reason.clone())
+        .collect();
+    match results
+        .into_iter()
+        .find(|(_, _, f)| f.verdict != crate::model::Verdict::Pass)
+    {
+        Some((_, _, failed)) => failed,
+        None => Finding::pass(passed.join("; ")),
+    }
 }
 
 fn block_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // CCT SDO 20/24: 100Ch (guarding) without and with CRC; SDO 21/25: 1017h (heartbeat).
     let model = ctx.model();
-    let at = [(0x1017u16, 0u8), (0x100C, 0)].into_iter().find(|(i, s)| {
+    let targets: Vec<((u16, u8), [&str; 2])> = [
+        ((0x100Cu16, 0u8), ["SDO 20", "SDO 24"]),
+        ((0x1017, 0), ["SDO 21", "SDO 25"]),
+    ]
+    .into_iter()
+    .filter(|((i, s), _)| {
         model
             .entry(*i, *s)
             .is_some_and(|e| e.writable() && e.size() == Some(2))
-    });
-    let Some(at) = at else {
-        return Ok(Finding::not_applicable("the EDS has no writable 1017h or 100Ch"));
-    };
-    let value = 1234u16.to_le_bytes().to_vec();
-    Ok(
-        match download_and_read_back(
-            ctx,
-            at,
-            value,
-            DownloadMode::Block,
-            "block",
-            req::SDO_BLOCK_DOWNLOAD,
-        )? {
-            Err(Reply::Refused(abort::COMMAND_SPECIFIER_INVALID)) => {
-                Finding::not_applicable("the device has no block transfer (0504 0001h)")
-            }
-            Err(other) => Finding::inconclusive(format!("{} failed: {}", upload_text(at), other.describe())),
-            Ok(finding) => finding,
-        },
-    )
+    })
+    .collect();
+    if targets.is_empty() {
+        return Ok(Finding::not_applicable(
+            "the EDS has no writable 2-byte 100Ch or 1017h",
+        ));
+    }
+    let mut results = Vec::new();
+    for (at, cases) in targets {
+        for (case, crc) in cases.into_iter().zip([false, true]) {
+            let what = format!("block ({})", crc_text(crc));
+            let value = 1234u16.to_le_bytes().to_vec();
+            let mut refused = false;
+            let finding = match download_and_read_back(
+                ctx,
+                at,
+                value,
+                Transfer::Block { crc },
+                &what,
+                req::SDO_BLOCK_DOWNLOAD,
+            )? {
+                Err(Reply::Refused(code)) => {
+                    refused = code == abort::COMMAND_SPECIFIER_INVALID;
+                    refused_unexpectedly(
+                        &format!("SDO {what} download {:04X}h:{:02X}", at.0, at.1),
+                        &Reply::Refused(code),
+                        req::SDO_BLOCK_DOWNLOAD,
+                        "the block download server is broken, or serves block transfers only with (or only without) CRC",
+                    )
+                }
+                Err(other) => {
+                    return Ok(Finding::inconclusive(format!(
+                        "{} failed: {}",
+                        upload_text(at),
+                        other.describe()
+                    )));
+                }
+                Ok(finding) => finding,
+            };
+            let finding = match finding.verdict {
+                crate::model::Verdict::Pass => Finding::pass(format!("{case}: {:04X}h {what}", at.0)),
+                _ => finding,
+            };
+            results.push((case, refused, finding));
+        }
+    }
+    Ok(block_verdict(ctx, results))
 }
 
 fn segmented_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let model = ctx.model();
-    let targets: Vec<(u16, u8)> = [(0x100Cu16, 0u8), (0x1017, 0)]
+    let targets: Vec<((u16, u8), &str)> = [((0x100Cu16, 0u8), "SDO 14"), ((0x1017, 0), "SDO 15")]
         .into_iter()
-        .filter(|(i, s)| {
+        .filter(|((i, s), _)| {
             model
                 .entry(*i, *s)
                 .is_some_and(|e| e.writable() && e.size() == Some(2))
@@ -697,13 +1136,13 @@ fn segmented_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
         return Ok(Finding::not_applicable("the EDS has no writable 100Ch or 1017h"));
     }
     let mut done = Vec::new();
-    for at in targets {
+    for (at, case) in targets {
         let value = 1234u16.to_le_bytes().to_vec();
         match download_and_read_back(
             ctx,
             at,
             value,
-            DownloadMode::Segmented,
+            Transfer::Segmented,
             "segmented",
             req::SDO_DOWNLOAD_SEGMENT,
         )? {
@@ -714,8 +1153,13 @@ fn segmented_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
                     other.describe()
                 )));
             }
-            Ok(finding) if finding.verdict != crate::model::Verdict::Pass => return Ok(finding),
-            Ok(_) => done.push(format!("{:04X}h", at.0)),
+            Ok(finding) => {
+                ctx.performed(case);
+                if finding.verdict != crate::model::Verdict::Pass {
+                    return Ok(finding);
+                }
+                done.push(format!("{:04X}h", at.0));
+            }
         }
     }
     Ok(Finding::pass(format!(
@@ -724,15 +1168,22 @@ fn segmented_download(ctx: &mut Ctx<'_, '_>) -> Outcome {
     )))
 }
 
-/// Writes `value` to `at` in `mode` (`what` names it), reads it back and writes the original value
-/// back with an ordinary download (the test must not depend on the write path under test). `Err`
-/// holds the answer to the first read when the entry cannot be read, or the refusal of the
-/// download when it is one the caller decides about (0504 0001h).
+/// How [`download_and_read_back`] writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Transfer {
+    Segmented,
+    Block { crc: bool },
+}
+
+/// Writes `value` to `at` by `transfer` (`what` names it), reads it back and writes the original
+/// value back with an ordinary download (the test must not depend on the write path under test).
+/// `Err` holds the answer to the first read when the entry cannot be read, or a block download's
+/// refusal, which the caller judges (0504 0001h: no block transfer at all).
 fn download_and_read_back(
     ctx: &mut Ctx<'_, '_>,
     at: (u16, u8),
     value: Vec<u8>,
-    mode: DownloadMode,
+    transfer: Transfer,
     what: &str,
     clause: &str,
 ) -> Result<Result<Finding, Reply>, Stop> {
@@ -740,10 +1191,13 @@ fn download_and_read_back(
         Reply::Done(data) => data,
         other => return Ok(Err(other)),
     };
-    let reply = ctx.write_with(at.0, at.1, value.clone(), mode)?;
+    let reply = match transfer {
+        Transfer::Segmented => ctx.write_with(at.0, at.1, value.clone(), DownloadMode::Segmented)?,
+        Transfer::Block { crc } => ctx.write_block(at.0, at.1, value.clone(), crc)?,
+    };
     let request = format!("SDO {what} download {:04X}h:{:02X} = {}", at.0, at.1, hex(&value));
     let finding = match reply {
-        Reply::Refused(abort::COMMAND_SPECIFIER_INVALID) if mode == DownloadMode::Block => {
+        Reply::Refused(_) if matches!(transfer, Transfer::Block { .. }) => {
             return Ok(Err(reply));
         }
         Reply::Done(_) => match ctx.read(at.0, at.1)? {
@@ -816,6 +1270,7 @@ fn block_size_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
         let [a, b, c, d] = abort::INVALID_BLOCK_SIZE.to_le_bytes();
         ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
     }
+    ctx.performed("SDO 26");
     Ok(expect_refusal(
         &text,
         &reply,
@@ -870,6 +1325,7 @@ fn further_sdo_channels(ctx: &mut Ctx<'_, '_>) -> Outcome {
             }
         }
     }
+    ctx.performed("SDO 28");
     // CCT SDO 29: change one value, reset communication, and every default is back. A node-ID
     // (sub-index 3) or a valid COB-ID (made invalid) can always change (CiA 301 §7.5.2.33/34).
     let change = current.iter().find_map(|(e, d)| {
@@ -891,6 +1347,7 @@ fn further_sdo_channels(ctx: &mut Ctx<'_, '_>) -> Outcome {
     if !crate::procedures::nmt::reset_communication(ctx)? {
         return Ok(Finding::inconclusive("no boot-up after the reset communication"));
     }
+    ctx.performed("SDO 29");
     for e in &entries {
         let Some(default) = &e.default else { continue };
         let reply = ctx.read(e.index, e.sub)?;
@@ -989,6 +1446,7 @@ fn block_ack_sequence_128(ctx: &mut Ctx<'_, '_>) -> Outcome {
         let [a, b, c, d] = abort::INVALID_SEQUENCE_NUMBER.to_le_bytes();
         ctx.send(0x600 + node, &[0x80, lo, hi, at.1, a, b, c, d])?;
     }
+    ctx.performed("SDO 27");
     Ok(expect_refusal(
         &format!(
             "{text}, start, {last_seq} sub-block(s) received, block acknowledge {}",

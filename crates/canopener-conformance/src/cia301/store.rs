@@ -16,6 +16,10 @@ use crate::test_def::TestDef;
 pub const SAVE: &[u8] = b"save";
 /// The signature that restores the defaults ("load", CiA 301 §7.5.2.14).
 pub const LOAD: &[u8] = b"load";
+/// The CCT's wrong signature: its log prints signatures as UNSIGNED32 read from the most
+/// significant byte ('evas' is "save", 65766173h, sent 73 61 76 65), so its 'wron' is 77726F6Eh,
+/// sent as the bytes 6E 6F 72 77 (CCT Testing other 01, 03, 05, 07).
+pub const WRON: [u8; 4] = 0x7772_6F6Eu32.to_le_bytes();
 
 /// The store/restore tests.
 pub fn tests() -> Vec<TestDef> {
@@ -24,15 +28,13 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.other.1",
             suite: "cia301",
             group: "other",
-            title: "Every sub-index of 1010h and 1011h that saves/restores on command refuses \"wron\" and the reversed signature",
+            title: "Every sub-index of 1010h and 1011h that saves/restores on command refuses the CCT's 'wron' (6E 6F 72 77) and the signature with its bytes reversed",
             references: &[
                 req::STORE_RESTORE,
                 "CCT Testing other 01",
                 "CCT Testing other 03",
                 "CCT Testing other 05",
-                "CCT Testing other 06",
                 "CCT Testing other 07",
-                "CCT Testing other 08",
             ],
             precondition: "a sub-index of 1010h / 1011h in the EDS that reads with bit 0 set (the device saves/restores on command)",
             tags: &["store"],
@@ -42,13 +44,8 @@ pub fn tests() -> Vec<TestDef> {
             id: "cia301.other.2",
             suite: "cia301",
             group: "other",
-            title: "A saved 1017h survives a reset node; restoring the defaults brings its default back",
-            references: &[
-                req::STORE_RESTORE,
-                "CCT Testing other 02",
-                "CCT Testing other 04",
-                "CCT Testing other 09",
-            ],
+            title: "A 1017h saved with \"save\" to 1010h:01 survives a reset node; \"load\" to 1011h:01 brings its default back",
+            references: &[req::STORE_RESTORE, "CCT Testing other 02", "CCT Testing other 04"],
             precondition: "1010h:01 and 1011h:01 with bit 0 set, and a writable 1017h with a DefaultValue",
             tags: &["store", "writes", "nmt"],
             run: save_and_restore,
@@ -78,12 +75,31 @@ pub fn tests() -> Vec<TestDef> {
             tags: &["store", "sdo", "writes", "nmt"],
             run: save_sdo_channel,
         },
+        TestDef {
+            id: "cia301.other.5",
+            suite: "cia301",
+            group: "other",
+            title: "A 1017h saved with \"save\" to 1010h:02 (communication parameters) survives a reset node; \"load\" to 1011h:02 brings its default back",
+            references: &[req::STORE_RESTORE, "CCT Testing other 06", "CCT Testing other 08"],
+            precondition: "1010h:02 and 1011h:02 with bit 0 set, and a writable 1017h with a DefaultValue",
+            tags: &["store", "writes", "nmt"],
+            run: save_communication,
+        },
+        TestDef {
+            id: "cia301.other.6",
+            suite: "cia301",
+            group: "other",
+            title: "A configuration date and time written to 1020h and saved with 1010h:01 survive a reset node; \"load\" brings 1020h's defaults back",
+            references: &[
+                req::STORE_RESTORE,
+                req::VERIFY_CONFIGURATION,
+                "CCT Testing other 09",
+            ],
+            precondition: "1010h:01 and 1011h:01 with bit 0 set, and writable 1020h:01/02 with DefaultValues",
+            tags: &["store", "writes", "nmt"],
+            run: verify_configuration,
+        },
     ]
-}
-
-/// Whether `index`:01 is described and reads with bit 0 set.
-fn on_command(ctx: &mut Ctx<'_, '_>, index: u16) -> Prepared<bool> {
-    on_command_at(ctx, index, 1)
 }
 
 /// Whether `index`:`sub` is described and reads with bit 0 set (the device saves/restores that
@@ -101,11 +117,11 @@ fn on_command_at(ctx: &mut Ctx<'_, '_>, index: u16, sub: u8) -> Prepared<bool> {
 
 fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let mut checked = Vec::new();
-    // "wron" (CCT Testing other 07) and the right word in the wrong byte order (a device comparing
-    // the signature as a big-endian number takes it).
+    // The CCT's 'wron' and the right word in the wrong byte order (a device comparing the
+    // signature as a big-endian number takes it; not a CCT case).
     let cases: [(u16, &str, [&[u8]; 2]); 2] = [
-        (0x1010, "save", [b"wron", b"evas"]),
-        (0x1011, "load", [b"wron", b"daol"]),
+        (0x1010, "save", [&WRON, b"evas"]),
+        (0x1011, "load", [&WRON, b"daol"]),
     ];
     for (index, what, wrongs) in cases {
         // Sub-index 1 is all parameters, 2 communication, 3 application, 4..7Fh manufacturer
@@ -118,8 +134,18 @@ fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
             }
             for wrong in wrongs {
                 let reply = ctx.write(index, sub, wrong.to_vec())?;
+                if *wrong == WRON {
+                    // CCT Testing other 01 (1010h:01), 03 (1011h:01), 05 (1010h:02), 07 (1011h:02).
+                    match (index, sub) {
+                        (0x1010, 1) => ctx.performed("Testing other 01"),
+                        (0x1011, 1) => ctx.performed("Testing other 03"),
+                        (0x1010, 2) => ctx.performed("Testing other 05"),
+                        (0x1011, 2) => ctx.performed("Testing other 07"),
+                        _ => {}
+                    }
+                }
                 let finding = expect_refusal(
-                    &format!("{} (not \"{what}\")", download_text((index, sub), wrong),),
+                    &format!("{} (not \"{what}\")", download_text((index, sub), wrong)),
                     &reply,
                     req::WRONG_SIGNATURE,
                     req::STORE_RESTORE,
@@ -142,6 +168,16 @@ fn wrong_signatures(ctx: &mut Ctx<'_, '_>) -> Outcome {
 }
 
 fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    heartbeat_saved_in(ctx, ALL, ["Testing other 02", "Testing other 04"])
+}
+
+fn save_communication(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    heartbeat_saved_in(ctx, COMMUNICATION, ["Testing other 06", "Testing other 08"])
+}
+
+/// A new 1017h saved and restored with the parameter group `group` of 1010h/1011h (CCT `cases`:
+/// the save, the restore).
+fn heartbeat_saved_in(ctx: &mut Ctx<'_, '_>, group: u8, cases: [&str; 2]) -> Outcome {
     let Some(target) = stored_target(
         ctx,
         0x1017,
@@ -150,7 +186,40 @@ fn save_and_restore(ctx: &mut Ctx<'_, '_>) -> Outcome {
     ) else {
         return Ok(Finding::not_applicable("no writable 1017h with a DefaultValue"));
     };
-    survives_reset(ctx, &[target], Reset::Node)
+    survives_reset(ctx, &[target], Reset::Node, group, cases)
+}
+
+/// 1020h (CiA 301 §7.5.2): a configuration tool writes the date (days since 1 January 1984) and
+/// time (ms after midnight) of the configuration it downloaded, then saves with 1010h:01; after a
+/// reset the device holds them (CCT Testing other 09), and after "load" its defaults again.
+fn verify_configuration(ctx: &mut Ctx<'_, '_>) -> Outcome {
+    // 2024-01-01 (14610 days after 1984-01-01), 12:00:00.000.
+    let date = stored_target_at(
+        ctx,
+        0x1020,
+        1,
+        14_610u32.to_le_bytes().to_vec(),
+        14_611u32.to_le_bytes().to_vec(),
+    );
+    let time = stored_target_at(
+        ctx,
+        0x1020,
+        2,
+        43_200_000u32.to_le_bytes().to_vec(),
+        43_200_001u32.to_le_bytes().to_vec(),
+    );
+    let (Some(date), Some(time)) = (date, time) else {
+        return Ok(Finding::not_applicable(
+            "no writable 1020h:01 and 1020h:02 (verify configuration) with DefaultValues",
+        ));
+    };
+    survives_reset(
+        ctx,
+        &[date, time],
+        Reset::Node,
+        ALL,
+        ["Testing other 09", "Testing other 09"],
+    )
 }
 
 fn save_sync_settings(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -173,21 +242,38 @@ fn save_sync_settings(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "no writable 1019h (with 1006h = 0) or 1007h with a DefaultValue",
         ));
     }
-    survives_reset(ctx, &targets, Reset::Node)
+    survives_reset(
+        ctx,
+        &targets,
+        Reset::Node,
+        ALL,
+        ["Synchronization 08", "Synchronization 10"],
+    )
 }
 
 /// A value to save: `index`:00, its DefaultValue and a value other than the default (`value`, or
 /// `other` when the default is `value`); `None` unless the EDS makes it writable with a default.
 fn stored_target(ctx: &Ctx<'_, '_>, index: u16, value: Vec<u8>, other: Vec<u8>) -> Option<Stored> {
+    stored_target_at(ctx, index, 0, value, other)
+}
+
+/// [`stored_target`] for `index`:`sub`.
+fn stored_target_at(
+    ctx: &Ctx<'_, '_>,
+    index: u16,
+    sub: u8,
+    value: Vec<u8>,
+    other: Vec<u8>,
+) -> Option<Stored> {
     let default = ctx
         .model()
-        .entry(index, 0)
+        .entry(index, sub)
         .filter(|e| e.writable() && e.size() == Some(value.len()))
         .and_then(|e| e.default.clone())?;
     let value = if default == value { other } else { value };
     Some(Stored {
         index,
-        sub: 0,
+        sub,
         default,
         value,
     })
@@ -201,16 +287,28 @@ struct Stored {
     value: Vec<u8>,
 }
 
-/// Writes every target's value, saves all parameters ("save" to 1010h:01), resets the node and
-/// expects the values back; then restores the defaults ("load" to 1011h:01), resets the node and
-/// expects the defaults.
-fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Outcome {
+/// 1010h/1011h sub-index 1: all parameters.
+const ALL: u8 = 1;
+/// 1010h/1011h sub-index 2: the communication parameters (1000h-1FFFh).
+const COMMUNICATION: u8 = 2;
+
+/// Writes every target's value, saves the parameter group `group` ("save" to 1010h:`group`),
+/// resets and expects the values back (the first of `cases`, recorded once judged); then restores
+/// that group's defaults ("load" to 1011h:`group`), resets the node and expects the defaults (the
+/// second case).
+fn survives_reset(
+    ctx: &mut Ctx<'_, '_>,
+    targets: &[Stored],
+    reset: Reset,
+    group: u8,
+    cases: [&str; 2],
+) -> Outcome {
     for index in [0x1010, 0x1011] {
-        match on_command(ctx, index)? {
+        match on_command_at(ctx, index, group)? {
             Ok(true) => {}
             Ok(false) => {
                 return Ok(Finding::not_applicable(format!(
-                    "{index:04X}h:01 is not in the EDS or reads with bit 0 clear: the device does not {} all parameters on command",
+                    "{index:04X}h:{group:02X} is not in the EDS or reads with bit 0 clear: the device does not {} this parameter group on command",
                     if index == 0x1010 { "save" } else { "restore" }
                 )));
             }
@@ -225,7 +323,7 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Ou
     let steps = format!(
         "{}, {}, NMT {}, {}",
         written.join(", "),
-        download_text((0x1010, 1), SAVE),
+        download_text((0x1010, group), SAVE),
         reset.name(),
         read.join(", ")
     );
@@ -235,26 +333,27 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Ou
             Reply::Done(_)
         ) {
             // The verdict is already decided; the restore only puts the device back.
-            let _ = restore_defaults(ctx, targets)?;
+            let _ = restore_defaults(ctx, targets, group)?;
             return Ok(Finding::inconclusive(format!(
-                "{:04X}h did not accept a new value",
-                target.index
+                "{:04X}h:{:02X} did not accept a new value",
+                target.index, target.sub
             )));
         }
     }
-    let saved = ctx.write(0x1010, 1, SAVE.to_vec())?;
+    let saved = ctx.write(0x1010, group, SAVE.to_vec())?;
     if !matches!(saved, Reply::Done(_)) {
-        let _ = restore_defaults(ctx, targets)?;
+        let _ = restore_defaults(ctx, targets, group)?;
+        ctx.performed(cases[0]);
         return Ok(Finding::fail(
-            format!("\"save\" to 1010h:01 refused: {}", saved.describe()),
+            format!("\"save\" to 1010h:{group:02X} refused: {}", saved.describe()),
             Evidence {
-                request: download_text((0x1010, 1), SAVE),
+                request: download_text((0x1010, group), SAVE),
                 requirement: format!(
                     "{}: with bit 0 set the device saves on the signature \"save\"",
                     req::STORE_RESTORE
                 ),
                 answer: saved.describe(),
-                cause: "1010h:01 claims saving on command but refuses the signature".to_owned(),
+                cause: format!("1010h:{group:02X} claims saving on command but refuses the signature"),
             },
         ));
     }
@@ -263,7 +362,7 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Ou
         Reset::Communication => crate::procedures::nmt::reset_communication(ctx)?,
     };
     if !reset_ok {
-        let _ = restore_defaults(ctx, targets)?;
+        let _ = restore_defaults(ctx, targets, group)?;
         return Ok(Finding::inconclusive(format!(
             "no boot-up after the {}",
             reset.name()
@@ -277,7 +376,8 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Ou
             break;
         }
     }
-    let restored = restore_defaults(ctx, targets)?;
+    ctx.performed(cases[0]);
+    let restored = restore_defaults(ctx, targets, group)?;
     if let Some((target, after)) = lost {
         return Ok(Finding::fail(
             format!(
@@ -298,21 +398,28 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Ou
             },
         ));
     }
-    let names: Vec<String> = targets.iter().map(|t| format!("{:04X}h", t.index)).collect();
+    if !matches!(restored, Err((_, None))) {
+        ctx.performed(cases[1]);
+    }
+    let names: Vec<String> = targets
+        .iter()
+        .map(|t| format!("{:04X}h:{:02X}", t.index, t.sub))
+        .collect();
     Ok(match restored {
         Ok(()) => Finding::pass(format!(
-            "{} saved across a reset, defaults back after \"load\"",
-            names.join(" and ")
+            "{} saved with 1010h:{group:02X} across a {}, defaults back after \"load\" to 1011h:{group:02X}",
+            names.join(" and "),
+            reset.name()
         )),
         Err((target, other)) => Finding::fail(
             format!(
-                "after \"load\" to 1011h:01 and a reset, {:04X}h is not its default",
-                target.index
+                "after \"load\" to 1011h:{group:02X} and a reset, {:04X}h:{:02X} is not its default",
+                target.index, target.sub
             ),
             Evidence {
                 request: format!(
                     "{}, NMT reset node, {}",
-                    download_text((0x1011, 1), LOAD),
+                    download_text((0x1011, group), LOAD),
                     upload_text((target.index, target.sub))
                 ),
                 requirement: format!(
@@ -327,13 +434,14 @@ fn survives_reset(ctx: &mut Ctx<'_, '_>, targets: &[Stored], reset: Reset) -> Ou
     })
 }
 
-/// "load" to 1011h:01, reset node, and the first target that then does not read its default, with
-/// what it read (`None` without a boot-up).
+/// "load" to 1011h:`group`, reset node, and the first target that then does not read its default,
+/// with what it read (`None` without a boot-up).
 fn restore_defaults<'t>(
     ctx: &mut Ctx<'_, '_>,
     targets: &'t [Stored],
+    group: u8,
 ) -> Result<Result<(), (&'t Stored, Option<Reply>)>, Stop> {
-    ctx.write(0x1011, 1, LOAD.to_vec())?;
+    ctx.write(0x1011, group, LOAD.to_vec())?;
     if !reset_node(ctx)? {
         return Ok(targets.first().map_or(Ok(()), |t| Err((t, None))));
     }
@@ -388,5 +496,5 @@ fn save_sdo_channel(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "no writable node-ID or valid COB-ID with a DefaultValue in 1201h–12FFh",
         ));
     };
-    survives_reset(ctx, &[target], Reset::Communication)
+    survives_reset(ctx, &[target], Reset::Communication, ALL, ["SDO 30", "SDO 30"])
 }

@@ -83,6 +83,7 @@ fn default_cob_id(ctx: &mut Ctx<'_, '_>) -> Outcome {
         return Ok(Finding::not_applicable("the EDS has no 1005h"));
     }
     let reply = ctx.read(0x1005, 0)?;
+    ctx.performed("Synchronization 01");
     Ok(match u32_of(&reply) {
         Some(cob) if cob & 0x1FFF_FFFF == 0x80 => Finding::pass(format!("{cob:#010X}")),
         _ => Finding::fail(
@@ -160,6 +161,8 @@ fn reserved_counter(ctx: &mut Ctx<'_, '_>) -> Outcome {
             "1019h refuses 0 (SYNC without counter), a value CiA 301 allows",
         ));
     }
+    ctx.performed("Synchronization 05");
+    ctx.performed("Synchronization 06");
     Ok(Finding::pass("1 and 241 refused, 0 accepted"))
 }
 
@@ -199,6 +202,7 @@ fn counter_while_running(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ctx.send(sync, &[])?;
     }
     let reply = ctx.modify(0x1019, 0, vec![TEST_COUNTER])?;
+    ctx.performed("Synchronization 09");
     if producer {
         stop_producer(ctx)?;
     } else {
@@ -342,6 +346,8 @@ fn producer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .windows(2)
         .all(|w| w[1] == if w[0] >= TEST_COUNTER { 1 } else { w[0] + 1 })
         && counters.iter().all(|c| (1..=TEST_COUNTER).contains(c));
+    ctx.performed("Synchronization 02");
+    ctx.performed("Synchronization 07");
     Ok(if frames.len() < least {
         Finding::fail(
             format!(

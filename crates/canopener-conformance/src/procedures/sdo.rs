@@ -31,9 +31,21 @@ pub fn expect_refusal(
                     accepted.source
                 ),
                 answer: other.describe(),
-                cause: cause.to_owned(),
+                cause: cause_of(other, cause),
             },
         ),
+    }
+}
+
+/// The cause a failure names: `cause` for a wrong answer to the request itself, the protocol
+/// error for one that broke it (then the request's own outcome is unknown).
+fn cause_of(reply: &Reply, cause: &str) -> String {
+    match reply {
+        Reply::Broken { .. } => {
+            "the SDO server broke the SDO protocol (CiA 301 §7.2.4.3), so what it does with the request itself is unknown"
+                .to_owned()
+        }
+        _ => cause.to_owned(),
     }
 }
 
@@ -45,7 +57,7 @@ pub fn refused_unexpectedly(request: &str, reply: &Reply, clause: &str, cause: &
             request: request.to_owned(),
             requirement: format!("{clause}: the server confirms the transfer"),
             answer: reply.describe(),
-            cause: cause.to_owned(),
+            cause: cause_of(reply, cause),
         },
     )
 }

@@ -830,6 +830,7 @@ mod tests {
             },
             measurements,
             duration_s: 0.75,
+            performed: Vec::new(),
             telegrams: vec![
                 telegram(0.001, Direction::Tx, "SDO upload 1000h:00"),
                 telegram(0.0015, Direction::Rx, "<script>alert(1)</script>"),

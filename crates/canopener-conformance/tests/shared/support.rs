@@ -95,8 +95,14 @@ pub(crate) fn run_cancelled_on(name: &str, only: &[&str], on_frame: &dyn Fn(&Can
     )
 }
 
+/// A vendored corpus EDS, or this crate's own test data (`test_data/...`).
 fn vendored(name: &str) -> std::path::PathBuf {
-    canopener_testkit::corpus::eds(name)
+    match name.strip_prefix("test_data/") {
+        Some(file) => std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("test_data")
+            .join(file),
+        None => canopener_testkit::corpus::eds(name),
+    }
 }
 
 /// Runs every test against a simulated device from a file only the extended corpus holds (the

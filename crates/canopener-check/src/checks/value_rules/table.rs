@@ -269,6 +269,21 @@ pub(crate) const RULES: &[Rule] = &[
         Check::Existing(&["C537"]),
     ),
     Rule {
+        first: 0x1003,
+        last: 0x1003,
+        subs: Subs::One(0),
+        kind: Kind::Range,
+        when: &[],
+        then: &[when(THIS, ZERO)],
+        text: "only 0 can be written to the number of errors in the pre-defined error field (it clears the history); any other value is refused",
+        help: "",
+        severity: Severity::Error,
+        source: "CiA 301 1003h; C§4.3 (writing 0 to sub0 clears the list; any other value → 0609 0030h; CCT SDO 10 writes FFh and expects the refusal)",
+        check: Check::NotChecked(
+            "a rule on values written to the device, which the device test cia301.sdo.9 checks; a file's sub 0 holds the errors present at power-on, and the corpus has files that give it the number of entries (3 or 8), not reported until reviewed",
+        ),
+    },
+    Rule {
         first: 0x1005,
         last: 0x1005,
         subs: Subs::Object,
