@@ -29,7 +29,9 @@
 //!   and the application is told ([`Application::on_write`]); RPDO writes tell the application
 //!   of every mapped entry as well.
 //! - Application changes ([`AppChanges`], [`Device::app_changed`]) become PDO application events
-//!   and TPDO triggers.
+//!   and TPDO triggers. The application may refuse a download first
+//!   ([`Application::check_write`]) and hears of every reset communication with the node-ID it
+//!   brings ([`Application::reset_communication`]).
 //! - EMCY: a lost consumed heartbeat or lost life guarding raises 8130h, RPDO length errors
 //!   8210h/8220h, the RPDO deadline 8250h, a SYNC of the wrong length 8240h, each with error
 //!   register bit 4 (communication error); they clear when the cause goes away. 1001h and 1003h
@@ -829,6 +831,9 @@ impl Device {
             let changes = self.app.reset(now, &mut self.od);
             self.apply_changes(now, &changes);
         }
+        let node = self.configured.then_some(self.node);
+        let changes = self.app.reset_communication(now, node, &mut self.od);
+        self.apply_changes(now, &changes);
         self.faults.reset_guard_toggle();
         self.nmt.set_node_id(self.node);
         if self.configured {
@@ -1015,6 +1020,7 @@ impl Core for Device {
         }
         if state.is_active(CommService::Sdo) {
             let mut hooks = Hooks {
+                app: &*self.app,
                 pdo: &self.pdo,
                 sync: &self.sync,
                 time: &self.time,
@@ -1126,6 +1132,7 @@ fn dummy_usage(eds: &Eds) -> DummyUsage {
 
 /// The device's checks on SDO transfers, over the cores that own the rules.
 struct Hooks<'a> {
+    app: &'a dyn Application,
     pdo: &'a PdoEngine,
     sync: &'a SyncService,
     time: &'a TimeService,
@@ -1142,6 +1149,7 @@ struct Hooks<'a> {
 
 impl SdoHooks for Hooks<'_> {
     fn check_download(&mut self, key: ObjectKey, data: &[u8], od: &DynamicOd) -> Result<(), u32> {
+        self.app.check_write(key, data, od)?;
         match self.pdo.check_write(key, data, od) {
             Err(PdoConfigError::NotMappable { .. }) if self.faults.contains(Fault::UnmappableAccepted) => {}
             Err(PdoConfigError::RestrictedCanId { .. }) if self.faults.contains(Fault::PdoCobIdUnchecked) => {
