@@ -16,16 +16,18 @@
 //!    node-ID over a power cycle, so no store configuration is sent.
 //! 3. **Heartbeat consumption.** At each managed device's boot-up: its heartbeat producer time
 //!    1017h := [`ControllerConfig::device_heartbeat_ms`] and its consumer entry 1016h:01 := node 1,
-//!    [`ControllerConfig::device_consumer_ms`] (the device watches the controller); the controller
-//!    itself watches the device with [`ControllerConfig::consumer_time`]; then NMT start.
+//!    [`ControllerConfig::device_consumer_ms`] (the device watches the controller); then NMT start.
+//!    The controller watches the device with [`ControllerConfig::consumer_time`] from its first
+//!    heartbeat after the boot-up on.
 //! 4. **The EMS walk** by SDO, on the assumed objects of the [`EmsProfile`]: read the status word,
 //!    write the control word for the next step (Connected → Compatibility check → Limiting →
 //!    Operating; Masterless → Compatibility check), write the current limit
 //!    [`ControllerConfig::current_limit_ma`] in Limiting, read again, until the device reports
 //!    Operating. A device in Disconnected is read again after [`ControllerConfig::status_poll`] (it
 //!    steps to Connected on its own); a control word the device refuses (it stepped on its own
-//!    meanwhile) is followed by a new read. A failed transfer is tried again after the poll time,
-//!    three times.
+//!    meanwhile) is followed by a new read after the poll time. A failed transfer is tried again
+//!    after the poll time, for as long as the device's heartbeat says it is there: a device that is
+//!    gone is the heartbeat's business (5.), not the walk's.
 //! 5. **Reactions.** A managed device's boot-up (it reset) starts step 3 again. A lost heartbeat
 //!    ([`NodeMonitor`]) makes the controller send NMT reset node to the device (an EnergyBus device
 //!    then forgets its node-ID: if it is still there, the next scan brings it back), free its
@@ -52,9 +54,6 @@ use crate::sdo_client::{DownloadMode, SdoClient, SdoClientEvent, SdoTransferErro
 
 /// The controller's node-ID (EnergyBus: the active EBC is always node 1).
 pub const CONTROLLER_NODE_ID: u8 = 1;
-
-/// How often a failed transfer of the walk is tried again before the controller gives up on it.
-pub const WALK_TRIES: u8 = 3;
 
 /// The controller's settings.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -168,7 +167,7 @@ pub enum ControllerEvent {
         /// The device.
         node: NodeId,
     },
-    /// A transfer of the walk failed; it is tried again, or given up after [`WALK_TRIES`].
+    /// A transfer of the walk failed; it is tried again after the poll time.
     StepFailed {
         /// The device.
         node: NodeId,
@@ -176,8 +175,6 @@ pub enum ControllerEvent {
         step: String,
         /// Why.
         error: SdoTransferError,
-        /// Whether the controller gave up on the device.
-        gave_up: bool,
     },
     /// No heartbeat from a managed device within the consumer time.
     HeartbeatLost {
@@ -235,14 +232,8 @@ impl fmt::Display for ControllerEvent {
                 write!(f, "node {node}: current limit {limit_ma} mA")
             }
             ControllerEvent::Operating { node } => write!(f, "node {node}: EMS Operating"),
-            ControllerEvent::StepFailed {
-                node,
-                step,
-                error,
-                gave_up,
-            } => {
-                let then = if *gave_up { "giving up" } else { "trying again" };
-                write!(f, "node {node}: {step} failed ({error}); {then}")
+            ControllerEvent::StepFailed { node, step, error } => {
+                write!(f, "node {node}: {step} failed ({error}); trying again")
             }
             ControllerEvent::HeartbeatLost { node } => write!(f, "node {node}: heartbeat lost"),
             ControllerEvent::ResetSent { node } => {
@@ -270,8 +261,8 @@ pub enum Phase {
     Walking,
     /// It reports Operating.
     Operating,
-    /// A transfer failed [`WALK_TRIES`] times.
-    GaveUp,
+    /// The description gives a transition the walk needs no control word value: it cannot go on.
+    Stuck,
     /// Handed over: the controller leaves it alone.
     HandedOver,
 }
@@ -316,7 +307,6 @@ struct Managed {
     /// The step whose transfer runs, or waits for `wake`.
     step: Option<Step>,
     wake: Option<Instant>,
-    tries: u8,
 }
 
 /// The EnergyBus controller (see the [module docs](self)).
@@ -437,7 +427,6 @@ impl EnergyBusController {
                         client: new_client(node, self.config.sdo_timeout),
                         step: None,
                         wake: None,
-                        tries: 0,
                     },
                 );
                 self.foreign_reset.remove(&node);
@@ -481,7 +470,9 @@ impl EnergyBusController {
         match event {
             MonitorEvent::BootUp { .. } => {
                 self.events.push_back(ControllerEvent::BootUp { node });
-                self.monitor.set_consumer_time(node, ConsumerTime::Off);
+                // Watched from its first heartbeat after the boot-up on (CiA 301 §7.2.8.3.2).
+                self.monitor
+                    .set_consumer_time(node, ConsumerTime::Fixed(self.config.consumer_time));
                 if let Some(managed) = self.devices.get_mut(&node) {
                     // A transfer of the walk before the reset is void.
                     managed.client = new_client(node, self.config.sdo_timeout);
@@ -500,11 +491,10 @@ impl EnergyBusController {
         }
     }
 
-    /// Starts `step` on `node` now, in `phase`, with fresh tries.
+    /// Starts `step` on `node` now, in `phase`.
     fn begin(&mut self, now: Instant, node: NodeId, phase: Phase, step: Step) {
         if let Some(managed) = self.devices.get_mut(&node) {
             managed.status.phase = phase;
-            managed.tries = 0;
         }
         self.run(now, node, step);
     }
@@ -577,8 +567,6 @@ impl EnergyBusController {
                 self.run(now, node, Step::WriteConsumer)
             }
             (Step::WriteConsumer, SdoClientEvent::Downloaded { .. }) => {
-                self.monitor
-                    .set_consumer_time(node, ConsumerTime::Fixed(self.config.consumer_time));
                 self.nmt
                     .send(now, NmtCommand::StartRemoteNode, NmtTarget::Node(node));
                 self.events
@@ -608,17 +596,11 @@ impl EnergyBusController {
                     ..
                 },
             ) if code == self.profile.refused_abort => {
-                // The device may have stepped on its own meanwhile: see where it is now. Refusals in
-                // a state that does not change count as failures.
+                // The device may have stepped on its own meanwhile: see where it is now, after the
+                // poll time (a device that refuses every time is not asked at the bus's speed).
                 self.events
                     .push_back(ControllerEvent::ControlRefused { node, value, code });
-                let error = SdoTransferError::AbortedByServer { code };
-                self.failed(now, node, step, error);
-                if let Some(managed) = self.devices.get_mut(&node)
-                    && managed.step.is_some()
-                {
-                    self.run(now, node, Step::ReadStatus);
-                }
+                self.later(now, node, Step::ReadStatus);
             }
             (Step::WriteLimit, SdoClientEvent::Downloaded { .. }) => {
                 self.events.push_back(ControllerEvent::LimitWritten {
@@ -634,23 +616,12 @@ impl EnergyBusController {
     }
 
     fn failed(&mut self, now: Instant, node: NodeId, step: Step, error: SdoTransferError) {
-        let Some(managed) = self.devices.get_mut(&node) else {
-            return;
-        };
-        managed.tries += 1;
-        let gave_up = managed.tries >= WALK_TRIES;
         self.events.push_back(ControllerEvent::StepFailed {
             node,
             step: step.to_string(),
             error,
-            gave_up,
         });
-        if gave_up {
-            managed.status.phase = Phase::GaveUp;
-            managed.step = None;
-        } else {
-            self.later(now, node, step);
-        }
+        self.later(now, node, step);
     }
 
     fn control(&mut self, now: Instant, node: NodeId, transition: EmsTransition) {
@@ -659,7 +630,7 @@ impl EnergyBusController {
             // The description gives the transition no value: the walk cannot go on.
             None => {
                 if let Some(managed) = self.devices.get_mut(&node) {
-                    managed.status.phase = Phase::GaveUp;
+                    managed.status.phase = Phase::Stuck;
                     managed.step = None;
                 }
             }
@@ -671,9 +642,6 @@ impl EnergyBusController {
         self.events
             .push_back(ControllerEvent::StateRead { node, status, state });
         if let Some(managed) = self.devices.get_mut(&node) {
-            if managed.status.state != state {
-                managed.tries = 0;
-            }
             managed.status.state = state;
         }
         match state {
