@@ -33,6 +33,15 @@ pub(crate) fn parse_fault(text: &str) -> Result<canopener_device::faults::Fault,
         .map_err(|e: canopener_device::faults::UnknownFault| e.to_string())
 }
 
+/// Reads a fault name of the device fault catalogue or an EnergyBus fault (`mbt --energybus`, `sim
+/// --energybus`); the error lists every name.
+pub(crate) fn parse_device_fault(
+    text: &str,
+) -> Result<canopener_device::energybus::station::DeviceFault, String> {
+    text.parse()
+        .map_err(|e: canopener_device::energybus::station::UnknownDeviceFault| e.to_string())
+}
+
 /// Reads an object index as CANopen tools write it: hexadecimal, with or without `0x` or `h`.
 pub(crate) fn parse_index(text: &str) -> Result<u16, String> {
     let t = text.trim();
