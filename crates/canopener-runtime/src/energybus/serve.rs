@@ -7,7 +7,10 @@ use std::time::Duration;
 
 use canopener_can::Instant;
 
-use crate::energybus::system::{EnergyBusBus, StationEvent};
+use canopener_master::energybus_controller::ControllerEvent;
+use canopener_wire::NodeId;
+
+use crate::energybus::system::{EnergyBusBus, Station, StationEvent, controller};
 use crate::link::{BusLink, Link, LinkError};
 
 /// The longest the real bus is read before the simulation catches up with the wall clock.
@@ -15,11 +18,13 @@ const POLL: Duration = Duration::from_millis(2);
 
 /// Runs `system` (started at virtual time zero) against `bus` until `bus` is cancelled or `limit`
 /// (of the wall clock since the start) passes, reporting each station event with the time since the
-/// start.
+/// start. Once the controller reports `hand_over` Operating, it hands that node over (to a tester on
+/// the real bus).
 pub fn serve(
     system: &mut EnergyBusBus,
     bus: &mut BusLink,
     limit: Option<Duration>,
+    hand_over: Option<NodeId>,
     mut on_event: impl FnMut(Duration, StationEvent),
 ) -> Result<(), LinkError> {
     let started = bus.now();
@@ -33,12 +38,29 @@ pub fn serve(
             bus.send(&frame)?;
         }
         while let Some(event) = system.network_mut().poll_event() {
+            let operating = match &event.event {
+                StationEvent::Controller(ControllerEvent::Operating { node }) => Some(*node),
+                _ => None,
+            };
             on_event(event.at - Instant::ZERO, event.event);
+            if operating.is_some() && operating == hand_over {
+                hand(system, operating);
+            }
         }
         system.network_mut().take_recording();
         let until = bus.now() + POLL;
         while let Some((_, frame)) = bus.recv_until(until)? {
             system.send(&frame)?;
         }
+    }
+}
+
+/// Hands `node` over to whoever else is on the bus.
+fn hand(system: &mut EnergyBusBus, node: Option<NodeId>) {
+    let (Some(node), Some((id, _))) = (node, controller(system)) else {
+        return;
+    };
+    if let Some(Station::Controller(c)) = system.network_mut().node_mut(id) {
+        c.hand_over(node);
     }
 }

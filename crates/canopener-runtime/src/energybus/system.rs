@@ -8,7 +8,7 @@
 use std::time::Duration;
 
 use canopener_bus_engine::network::{StationId, Timing};
-use canopener_can::{CanFrame, Core, Instant};
+use canopener_can::{Bitrate, CanFrame, Core, Instant};
 use canopener_device::device::DeviceEvent;
 use canopener_device::energybus::station::{DeviceFault, EnergyBusDevice, StationError};
 use canopener_device::energybus::{EDS, EnergyBusError, profile};
@@ -181,6 +181,11 @@ impl EnergyBusSystem {
         self
     }
 
+    /// On a bus that times every frame bit by bit at `bitrate`, as a wire would.
+    pub fn bit_accurate(self, bitrate: Bitrate) -> EnergyBusSystem {
+        self.timing(Timing::BitAccurate(bitrate))
+    }
+
     /// How many devices.
     pub fn device_count(&self) -> usize {
         self.devices
@@ -306,6 +311,7 @@ pub fn boot(bus: &mut EnergyBusBus, limit: Instant, linger: Duration) -> Result<
         let next = (bus.now() + BOOT_SLICE).min(until);
         bus.idle_until(next)?;
         while let Some(event) = bus.network_mut().poll_event() {
+            let at = event.at;
             let StationEvent::Controller(event) = event.event else {
                 continue;
             };
@@ -315,18 +321,14 @@ pub fn boot(bus: &mut EnergyBusBus, limit: Instant, linger: Duration) -> Result<
                     .map(|(_, status)| status.address);
                 if let Some(address) = address {
                     report.operating.retain(|w| w.node != node);
-                    report.operating.push(Walked {
-                        node,
-                        address,
-                        at: bus.now(),
-                    });
+                    report.operating.push(Walked { node, address, at });
                 }
             }
-            report.events.push((bus.now(), event));
+            report.events.push((at, event));
         }
         let all = controller(bus).is_some_and(|(_, c)| c.operating().len() == expected);
         if all && report.all_operating_at.is_none() {
-            report.all_operating_at = Some(bus.now());
+            report.all_operating_at = report.operating.iter().map(|w| w.at).max();
             until = bus.now() + linger;
         }
     }
