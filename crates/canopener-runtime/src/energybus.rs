@@ -8,7 +8,10 @@
 //!   the device under test handed over by the controller).
 //! - [`telegrams`]: every frame decoded with the bus decoder, and the EMS objects named.
 //! - [`serve`]: the system on a real bus, in real time.
+//! - [`graphs`]: the FORTE paper's test purposes as complete test graphs, and runs checked against
+//!   them.
 
+pub mod graphs;
 pub mod serve;
 pub mod system;
 pub mod telegrams;
