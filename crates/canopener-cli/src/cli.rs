@@ -11,6 +11,7 @@ use crate::master::args::{
 };
 use crate::mbt::args::MbtCommand;
 use crate::net::args::NetCommand;
+use crate::serve::args::ServeArgs;
 use crate::sim::args::SimArgs;
 use crate::test::args::TestArgs;
 
@@ -37,20 +38,26 @@ pub(crate) const EXIT_CODES_HELP: &str = "\
 Exit codes:
   0  success
   1  internal error (a bug: please report it)
-  2  usage error: bad command-line arguments
+  2  usage error: bad command-line arguments, or a missing or malformed --bus
   3  invalid input: a file, frame or value could not be read (the message names file:line)
   4  bus error: the CAN bus could not be opened, or the connection was lost
   5  output error: a result could not be written (file exists, disk full, permission)
-  6  check failed: the command ran and found a problem (e.g. frames lost in `demo --monitor`)
+  6  check failed: the command ran and found a problem (a test or model verdict fail or
+     inconclusive, frames lost in `demo --monitor`)
   7  device error: the device refused a request (SDO abort, LSS error) or did not answer in time
-130  interrupted: Ctrl-C or SIGTERM while talking to a device (a running transfer is aborted on the bus)
+130  interrupted: Ctrl-C or SIGTERM while talking to a device (a running transfer is aborted
+     on the bus)
 
-`eds` and `net` commands (except `net monitor`) follow diff(1) instead:
+`eds` commands and `net check|show|convert|draw` follow diff(1) instead:
   0  success (`eds diff`: both files describe the same device and object dictionary;
      `eds check`/`eds fix`: no errors, or no warnings either with --deny warnings)
-  1  `eds diff`: the files differ; `eds check`/`eds fix`/`net check`: errors found (or warnings with
-     --deny warnings)
-  2  any trouble: bad arguments, a file that cannot be read, refused or written";
+  1  `eds diff`: the files differ; `eds fmt --check`: not canonical;
+     `eds check`/`eds fix`/`net check`: errors found (or warnings with --deny warnings)
+  2  any trouble: bad arguments, a file that cannot be read, refused or written
+Why two rules: the file commands stand beside compilers and linters in CI scripts, which read
+1 as \"found something\" and 2 as \"could not run\" (diff, grep, clippy). Commands that talk to a
+bus can end in more ways (the bus, the device, an interruption), so they need the whole table,
+where a failed verdict is 6.";
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum Command {
@@ -60,6 +67,7 @@ pub(crate) enum Command {
   canopener demo                                  # the tour; reports in ./canopener-demo/ (clean.html, fault-*.html)
   canopener demo --dir /tmp/tour --fault no-emcy  # another fault, another directory
   canopener demo --format json | jq .runs         # one JSON summary for machines
+  canopener demo --serve                          # the tour in a browser: http://127.0.0.1:8080/ (monitor, checks, runs)
   canopener demo --monitor                        # replay a 4-node session through an in-process hub, decoded
   canopener demo --monitor --speed 0              # as fast as possible
   canopener demo --monitor --bus 'virtual:demo?bitrate=500k'  # bit-accurate simulated 500 kbit/s bus, bus load
@@ -109,6 +117,18 @@ Each test resets what it changed and leaves the device pre-operational; the run 
 Exit status: 0 every applicable test passed, 6 a test failed or could not decide, 7 the device does not
 answer at all, 2 bad arguments, 3 unreadable EDS or criteria file, 4 bus error, 130 interrupted (partial report written).")]
     Test(TestArgs),
+    /// A local web application: the system monitor on the machine's drawing, EDS checks and conformance
+    /// runs with their history, in a browser.
+    #[command(after_help = "Examples:
+  canopener serve                                          # http://127.0.0.1:8080/: /check and /test (simulated device)
+  canopener serve --nodelist Nodelist.graphml --bus socketcand://127.0.0.1:29536/can0 --data runs/
+  canopener serve --nodelist Nodelist.graphml --bus 1=socketcan:can0 --bus 2=socketcan:can1
+  canopener serve --listen 0.0.0.0:8080 --token-file token.txt  # other machines: every request needs the token
+  canopener demo --serve                                   # the tour: a simulated system, cables cut and repaired
+Pages: / (monitor), /check, /test, /history; API: /api/state, /api/events (server-sent events: the JSON events of
+`net monitor --format json`), docs/web.md. Exit status: 0 stopped by Ctrl-C, 2 bad arguments or address,
+3 unreadable system or token file, 5 --data cannot be written.")]
+    Serve(ServeArgs),
     /// Read and write objects of a device over SDO (expedited, segmented, block).
     #[command(subcommand)]
     Sdo(SdoCommand),

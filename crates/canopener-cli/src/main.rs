@@ -13,10 +13,12 @@ mod cli;
 mod demo;
 mod eds;
 mod error;
+mod grammar;
 mod master;
 mod mbt;
 mod net;
 mod output;
+mod serve;
 mod sim;
 mod stop;
 mod test;
@@ -67,7 +69,9 @@ fn run(cli: Cli) -> Result<(), CliError> {
             format: args.format,
             quiet: args.quiet,
         }),
+        Command::Demo(args) if args.serve => serve::command::demo(&args.dir, args.listen),
         Command::Demo(args) => demo::tour::run(args),
+        Command::Serve(args) => serve::command::run(args),
         Command::Bus(BusCommand::Serve(args)) => bus::serve::run(args),
         Command::Bus(BusCommand::Dump(args)) => bus::dump::run(args),
         Command::Bus(BusCommand::Send(args)) => bus::send::run(args),

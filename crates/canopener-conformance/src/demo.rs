@@ -126,11 +126,19 @@ mod tests {
     #[test]
     fn the_tour_runs_every_suite_of_the_catalogue() {
         let mut seen = 0;
-        let outcome = run(&[], "2024-01-01T00:00:00Z", None, |p| seen = seen.max(p.done)).unwrap();
+        let mut finished = Vec::new();
+        let outcome = run(&[], "2024-01-01T00:00:00Z", None, |p| {
+            seen = seen.max(p.done);
+            finished.extend(p.finished.map(|t| (t.id.clone(), t.verdict)));
+        })
+        .unwrap();
         assert!(outcome.passed());
         let report = outcome.report;
         assert_eq!(report.tests.len(), catalogue().len());
         assert_eq!(seen, report.tests.len());
+        // Every verdict reached the progress callback once, in order, as the test ended.
+        let reported: Vec<_> = report.tests.iter().map(|t| (t.id.clone(), t.verdict)).collect();
+        assert_eq!(finished, reported);
         let mut suites: Vec<&str> = report.tests.iter().map(|t| t.suite.as_str()).collect();
         suites.dedup();
         for suite in crate::catalogue::SUITES.iter().filter(|s| **s != "eds") {

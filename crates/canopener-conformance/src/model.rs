@@ -297,7 +297,7 @@ pub fn rfc3339_utc(time: std::time::SystemTime) -> String {
     let secs = time
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
-    let (year, month, day) = canopener_master::dcf_dump::civil_from_days((secs / 86_400) as i64);
+    let (year, month, day) = canopener_wire::civil_from_days((secs / 86_400) as i64);
     let of_day = secs % 86_400;
     format!(
         "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",

@@ -9,7 +9,6 @@ use canopener_runtime::link::Link;
 use canopener_runtime::sdo_session::SdoSession;
 use canopener_wire::{Decoder, NmtCommand};
 
-use crate::test_def::TestDef;
 use crate::context::{Ctx, Reply};
 use crate::device_model::DeviceModel;
 use crate::finding::{Finding, Stop};
@@ -17,6 +16,7 @@ use crate::model::{BusInfo, DeviceInfo, Identity, REPORT_VERSION, Report, Summar
 use crate::performance::Performance;
 use crate::recorder::{Logged, Recorder};
 use crate::stimulus::Hook;
+use crate::test_def::TestDef;
 
 /// What a run needs besides the link.
 #[derive(Debug, Clone)]
@@ -52,6 +52,9 @@ pub struct Progress<'a> {
     pub total: usize,
     /// The test starting now (`None` when all are done).
     pub current: Option<&'a TestDef>,
+    /// The test that ended just before, with its verdict, so a display can show verdicts as they
+    /// come (`None` before the first test).
+    pub finished: Option<&'a TestReport>,
 }
 
 /// The run could not start.
@@ -147,6 +150,7 @@ pub fn run_stimulated(
                 done,
                 total: tests.len(),
                 current: Some(test),
+                finished: report.tests.last(),
             });
             let test_start = recorder.now();
             let (finding, measurements, left, stopped) =
@@ -176,6 +180,7 @@ pub fn run_stimulated(
             done: report.tests.len(),
             total: tests.len(),
             current: None,
+            finished: report.tests.last(),
         });
     }
     report.duration_s = recorder.now().saturating_duration_since(start).as_secs_f64();

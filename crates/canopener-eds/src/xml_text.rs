@@ -1,5 +1,5 @@
-//! Escaping text for XML 1.0, shared by every writer of XML in canopener (the XDD/XDC writer and the
-//! JUnit report).
+//! Escaping text for XML 1.0, shared by every writer of XML in canopener (the XDD/XDC writer, the
+//! JUnit reports, SVG drawings), and for the HTML pages ([`escape_html`]), which are well-formed XML too.
 //!
 //! The writers differ in two details on purpose, so the escaper takes them as a [`XmlStyle`]: the XDD
 //! writer produces the bytes CANopenEditor's .NET writer produces (hexadecimal character references,
@@ -70,8 +70,36 @@ pub fn escape(text: &str, place: XmlPlace, style: XmlStyle) -> String {
     out
 }
 
+/// Escapes `text` for an HTML (or XHTML) page, in element content and quoted attribute values alike.
+///
+/// Control characters, which HTML and XML reject, are shown rather than dropped, so that a device's or
+/// a file's odd bytes stay visible in a report: C0 controls and DEL as their Unicode control pictures
+/// (`␀`, `␡`), C1 controls and the noncharacters U+FDD0–U+FDEF (HTML parse errors) as U+FFFD. Tab and
+/// line feed stay as they are, written as references.
+pub fn escape_html(text: &str) -> String {
+    let visible: String = text
+        .chars()
+        .map(|c| match c {
+            '\n' | '\t' => c,
+            '\u{0}'..='\u{1F}' => char::from_u32(0x2400 + u32::from(c)).unwrap_or('\u{FFFD}'),
+            '\u{7F}' => '\u{2421}',
+            '\u{80}'..='\u{9F}' | '\u{FDD0}'..='\u{FDEF}' => '\u{FFFD}',
+            _ => c,
+        })
+        .collect();
+    escape(&visible, XmlPlace::Attribute, XmlStyle::DECIMAL)
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn html_shows_controls_and_escapes_markup_for_content_and_attributes() {
+        assert_eq!(
+            escape_html("<script>&'\"\u{0}\u{1B}\u{7F}\u{85}\u{FDD0}\n"),
+            "&lt;script&gt;&amp;&apos;&quot;\u{2400}\u{241B}\u{2421}\u{FFFD}\u{FFFD}&#10;"
+        );
+    }
+
     use super::*;
 
     #[test]

@@ -187,10 +187,7 @@ fn check_same(got: &[u8], expected: &[u8]) -> Result<(), String> {
 
 const BITRATE: Bitrate = Bitrate::M1;
 const NODE: u8 = 0x22;
-const BASE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../canopener-check/test_data/checks/base.eds"
-);
+const BASE: &str = canopener_testkit::fixture::BASE_EDS;
 /// 1018h:01 Vendor-ID of `base.eds`: 0000 0ABCh.
 const VENDOR_ID: ObjectKey = ObjectKey::new(0x1018, 1);
 const VENDOR_ID_VALUE: [u8; 4] = [0xBC, 0x0A, 0, 0];

@@ -558,7 +558,7 @@ fn describe_file(
 fn cia306_date_time(now: SystemTime) -> (String, String) {
     let secs = now.duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
     let days = (secs / 86_400) as i64;
-    let (year, month, day) = civil_from_days(days);
+    let (year, month, day) = canopener_wire::civil_from_days(days);
     let minutes = (secs % 86_400) / 60;
     let (hour, minute) = (minutes / 60, minutes % 60);
     let (hour12, half) = match hour {
@@ -571,21 +571,6 @@ fn cia306_date_time(now: SystemTime) -> (String, String) {
         format!("{month:02}-{day:02}-{year:04}"),
         format!("{hour12:02}:{minute:02}{half}"),
     )
-}
-
-/// The Gregorian date (year, month, day) of a day counted from 1970-01-01 (Howard Hinnant's
-/// `civil_from_days`); reports that state a UTC date use it too.
-pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = (doy - (153 * mp + 2) / 5 + 1) as u32;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    (year, month, day)
 }
 
 /// Puts `header` before the first line and each comment at the end of its section (`;` in column 1,
@@ -741,7 +726,7 @@ mod tests {
         // 2026-05-15 09:45 and 14:30 UTC.
         assert_eq!(at(1_778_838_300), ("05-15-2026".to_owned(), "09:45AM".to_owned()));
         assert_eq!(at(1_778_855_400).1, "02:30PM");
-        assert_eq!(civil_from_days(11_016), (2000, 2, 29));
+        assert_eq!(canopener_wire::civil_from_days(11_016), (2000, 2, 29));
     }
 
     const EDS: &str = "[FileInfo]\r\nFileName=dev.eds\r\n\r\n[DeviceInfo]\r\nProductName=Dev\r\n\r\n\

@@ -88,11 +88,9 @@ impl FromStr for NmtTarget {
         if trimmed.eq_ignore_ascii_case("all") {
             return Ok(NmtTarget::All);
         }
-        let raw = match trimmed.strip_prefix("0x").or_else(|| trimmed.strip_prefix("0X")) {
-            Some(hex) => u8::from_str_radix(hex, 16),
-            None => trimmed.parse::<u8>(),
-        }
-        .map_err(|_| error())?;
+        let raw = crate::value::parse_number(trimmed)
+            .and_then(|raw| u8::try_from(raw).ok())
+            .ok_or_else(error)?;
         NmtTarget::from_raw(raw).ok_or_else(error)
     }
 }

@@ -266,10 +266,7 @@ mod tests {
 
     use super::*;
 
-    const EDS: &str = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../canopener-check/test_data/checks/base.eds"
-    );
+    const EDS: &str = canopener_testkit::fixture::BASE_EDS;
 
     fn device(node: u8) -> Device {
         let eds = canopener_eds::load(&canopener_testkit::fixture::read(EDS).unwrap()).eds;

@@ -997,6 +997,19 @@ fn length_number(text: &str) -> Option<u64> {
     address_number(text, true)
 }
 
+/// Reads an unsigned number as every canopener command takes one, and as [`ValueType::parse`] reads
+/// an unsigned value: decimal unless written in hex with `0x` before it or `h` after it, or in binary
+/// with `0b` (`4660`, `0x1234`, `1234h`, `0b1010`; `_` may group digits). Object indices and
+/// sub-indices ([`parse_index`], [`parse_sub`]) are the other way round, hexadecimal unless marked
+/// `d:`, as CANopen documents write them.
+pub fn parse_number(text: &str) -> Option<u64> {
+    let int = read_int_text(text)?;
+    if int.negative {
+        return None;
+    }
+    int.magnitude.and_then(|m| u64::try_from(m).ok())
+}
+
 /// An object entry as messages name it: `1018h:01`.
 pub fn entry_label(index: u16, sub: u8) -> String {
     format!("{index:04X}h:{sub:02X}")

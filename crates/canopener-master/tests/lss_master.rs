@@ -16,10 +16,7 @@ use canopener_testkit::net::Net;
 use canopener_wire::LssAddress;
 use canopener_wire::{LssAddressPart, NodeId};
 
-const BASE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../canopener-check/test_data/checks/base.eds"
-);
+const BASE: &str = canopener_testkit::fixture::BASE_EDS;
 
 /// The identity of `base.eds` (1018h:01..03); the serial number is set per device.
 const VENDOR_ID: u32 = 0x0000_0ABC;

@@ -14,10 +14,7 @@ use canopener_wire::sdo::{InitiateData, Multiplexer, SdoRequest, SdoResponse};
 use canopener_wire::{NodeId, RPDO_BASES, SDO_RX_BASE, SDO_TX_BASE, TPDO_BASES};
 
 /// The checker's CiA 401 fixture: one TPDO and one RPDO, node-ID from the caller.
-const BASE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../canopener-check/test_data/checks/base.eds"
-);
+const BASE: &str = canopener_testkit::fixture::BASE_EDS;
 /// CANopenNode's CiA 401 example: eight mapping entries per PDO, dummies 0002h–0007h enabled.
 const IO: &str = "CANopenNode__CANopenNode__example__IO.eds";
 

@@ -18,10 +18,7 @@ use canopener_od::{Access, DataType, DynamicOd, Entry, ObjectKey};
 use canopener_testkit::net::Net as TestNet;
 use proptest::prelude::*;
 
-const BASE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../canopener-check/test_data/checks/base.eds"
-);
+const BASE: &str = canopener_testkit::fixture::BASE_EDS;
 
 /// A 10 000-byte DOMAIN, larger than one block sub-block (127 × 7 bytes) many times over.
 const DOMAIN: ObjectKey = ObjectKey::new(0x2100, 0);

@@ -25,10 +25,7 @@ use canopener_testkit::net::Net as TestNet;
 use canopener_testkit::trace::stamp;
 use canopener_wire::{NmtCommand, NodeId};
 
-const BASE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../canopener-check/test_data/checks/base.eds"
-);
+const BASE: &str = canopener_testkit::fixture::BASE_EDS;
 static DS301: LazyLock<String> =
     LazyLock::new(|| vendored("CANopenNode__CANopenNode__example__DS301_profile.eds"));
 static SOCKET: LazyLock<String> =

@@ -155,8 +155,44 @@ fn cable_order(topology: &Topology) -> Vec<usize> {
     order
 }
 
-/// The drawing as a standalone SVG document.
+/// What a drawing shows besides the system: its pictures, and whether it carries live state badges.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct DrawOptions {
+    /// The address of the `Background` picture; `None` draws without one.
+    pub background: Option<String>,
+    /// The address of each vertex's `NodeFig` picture, by index in [`Topology::vertices`]; a vertex
+    /// without one is drawn plain.
+    pub figures: BTreeMap<usize, String>,
+    /// A state badge per network attachment of every device (`<g class="state" data-device="NAME"
+    /// data-network="N" data-state="unknown">`) and `data-suspect="false"` on every cable and device,
+    /// for a live monitor to update (the web front end's page contract, `docs/web.md`).
+    pub live: bool,
+}
+
+impl DrawOptions {
+    /// The pictures as the file names them, which a browser resolves beside the SVG (`net draw`).
+    pub fn as_named(topology: &Topology) -> DrawOptions {
+        DrawOptions {
+            background: topology.background.clone(),
+            figures: topology
+                .vertices
+                .iter()
+                .enumerate()
+                .filter_map(|(i, v)| Some((i, v.fig.clone().filter(|f| !f.trim().is_empty())?)))
+                .collect(),
+            live: false,
+        }
+    }
+}
+
+/// The drawing as a standalone SVG document, its pictures named as the file names them.
 pub fn svg(topology: &Topology) -> String {
+    svg_with(topology, &DrawOptions::as_named(topology))
+}
+
+/// The drawing with `options`: the pictures at the addresses given (a front end that serves them),
+/// and state badges for a live view.
+pub fn svg_with(topology: &Topology, options: &DrawOptions) -> String {
     let placed = layout(topology);
     let at: BTreeMap<usize, (f64, f64)> = placed.iter().map(|p| (p.vertex, (p.x, p.y))).collect();
     let width = placed.iter().map(|p| p.x).fold(0.0, f64::max) + BOX_W / 2.0 + MARGIN;
@@ -168,7 +204,7 @@ pub fn svg(topology: &Topology) -> String {
         r#"<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="11">"#
     );
     let _ = writeln!(out, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    if let Some(background) = &topology.background {
+    if let Some(background) = &options.background {
         let _ = writeln!(
             out,
             r#"<image class="background" href="{0}" xlink:href="{0}" x="0" y="0" width="{width:.0}" height="{height:.0}" preserveAspectRatio="xMinYMin meet" opacity="0.5"/>"#,
@@ -196,11 +232,16 @@ pub fn svg(topology: &Topology) -> String {
         } else {
             ""
         };
+        let suspect = if options.live {
+            r#" data-suspect="false""#
+        } else {
+            ""
+        };
         let _ = writeln!(
             out,
-            r#"<line class="cable" data-network="{net}" x1="{x1:.1}" y1="{y1:.1}" x2="{x2:.1}" y2="{y2:.1}" stroke="{}" stroke-width="3"{dash}><title>{}</title></line>"#,
+            r#"<line class="cable" data-cable="{0}" data-network="{net}"{suspect} x1="{x1:.1}" y1="{y1:.1}" x2="{x2:.1}" y2="{y2:.1}" stroke="{1}" stroke-width="3"{dash}><title>{0}</title></line>"#,
+            escape(&cable.label()),
             network_colour(net),
-            escape(&cable.label())
         );
         let mut label = cable.name.clone().unwrap_or_default();
         if let Some(length) = cable.length {
@@ -234,14 +275,30 @@ pub fn svg(topology: &Topology) -> String {
         let (x, y) = (p.x, p.y);
         let nets = vertex.networks();
         let colour = nets.iter().next().map_or("#555555", |&n| network_colour(n));
+        let suspect = if options.live && vertex.is_device() {
+            r#" data-suspect="false""#
+        } else {
+            ""
+        };
         let _ = write!(
             out,
-            r#"<g class="vertex {}" data-id="{}"><title>{}</title>"#,
+            r#"<g class="vertex {}" data-id="{}" data-name="{}"{suspect}><title>{}</title>"#,
             kind_class(vertex.kind()),
             escape(&vertex.id),
+            escape(vertex.label()),
             escape(vertex.label())
         );
+        let figure = options.figures.get(&p.vertex);
         match vertex.kind() {
+            VertexKind::Passive | VertexKind::Active if figure.is_some() => {
+                let _ = write!(
+                    out,
+                    r#"<image class="node-fig" href="{0}" xlink:href="{0}" x="{1:.1}" y="{2:.1}" width="24" height="24" preserveAspectRatio="xMidYMid meet"/>"#,
+                    escape(figure.map_or("", String::as_str)),
+                    x - 12.0,
+                    y - 12.0
+                );
+            }
             VertexKind::Passive => {
                 let _ = write!(out, r#"<circle cx="{x:.1}" cy="{y:.1}" r="5" fill="{colour}"/>"#);
             }
@@ -259,8 +316,17 @@ pub fn svg(topology: &Topology) -> String {
                 let (left, top) = (x - BOX_W / 2.0, y - BOX_H / 2.0);
                 let _ = write!(
                     out,
-                    r#"<rect x="{left:.1}" y="{top:.1}" width="{BOX_W}" height="{BOX_H}" rx="5" fill="white" stroke="{colour}" stroke-width="2"/>"#
+                    r#"<rect class="box" x="{left:.1}" y="{top:.1}" width="{BOX_W}" height="{BOX_H}" rx="5" fill="white" stroke="{colour}" stroke-width="2"/>"#
                 );
+                if let Some(figure) = figure {
+                    let _ = write!(
+                        out,
+                        r#"<image class="node-fig" href="{0}" xlink:href="{0}" x="{1:.1}" y="{2:.1}" width="{FIG}" height="{FIG}" preserveAspectRatio="xMidYMid meet"/>"#,
+                        escape(figure),
+                        left + 5.0,
+                        y - FIG / 2.0
+                    );
+                }
                 if kind == VertexKind::Gateway {
                     // A gateway: a second frame in the colour of its second network.
                     let second = nets.iter().nth(1).map_or(colour, |&n| network_colour(n));
@@ -276,10 +342,16 @@ pub fn svg(topology: &Topology) -> String {
             }
         }
         let label_y = if vertex.is_device() { y - 4.0 } else { y + 22.0 };
+        // A picture in the box takes the room of a few characters at its left.
+        let (text_x, chars) = if figure.is_some() && vertex.is_device() {
+            (x + (FIG + 5.0) / 2.0, NAME_CHARS - 6)
+        } else {
+            (x, NAME_CHARS)
+        };
         let _ = write!(
             out,
-            r#"<text class="name" x="{x:.1}" y="{label_y:.1}" text-anchor="middle" font-weight="bold">{}</text>"#,
-            escape(&shorten(vertex.label(), NAME_CHARS))
+            r#"<text class="name" x="{text_x:.1}" y="{label_y:.1}" text-anchor="middle" font-weight="bold">{}</text>"#,
+            escape(&shorten(vertex.label(), chars))
         );
         if vertex.is_device() {
             let ids: Vec<String> = vertex
@@ -289,10 +361,13 @@ pub fn svg(topology: &Topology) -> String {
                 .collect();
             let _ = write!(
                 out,
-                r#"<text class="node-id" x="{x:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
+                r#"<text class="node-id" x="{text_x:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
                 y + 12.0,
-                escape(&shorten(&ids.join(" · "), NAME_CHARS + 4))
+                escape(&shorten(&ids.join(" · "), chars + 4))
             );
+            if options.live {
+                state_badges(vertex, (x + BOX_W / 2.0, y - BOX_H / 2.0), &mut out);
+            }
         }
         out.push_str("</g>\n");
     }
@@ -302,6 +377,28 @@ pub fn svg(topology: &Topology) -> String {
     legend(topology, height - legend_height(topology), &mut out);
     out.push_str("</svg>\n");
     out
+}
+
+/// The side of a `NodeFig` picture in a device's box.
+const FIG: f64 = 34.0;
+
+/// One badge per network the device is on, along the top edge of its box from the right corner.
+fn state_badges(vertex: &Vertex, top_right: (f64, f64), out: &mut String) {
+    let nets = vertex
+        .attachments
+        .iter()
+        .filter_map(|a| a.net)
+        .collect::<BTreeSet<u32>>();
+    for (i, net) in nets.into_iter().enumerate() {
+        let cx = top_right.0 - 10.0 - 18.0 * i as f64;
+        let _ = write!(
+            out,
+            r#"<g class="state" data-device="{0}" data-network="{net}" data-state="unknown"><circle cx="{cx:.1}" cy="{1:.1}" r="7" stroke="{2}" stroke-width="2"/><title>{0} on network {net}: unknown</title></g>"#,
+            escape(vertex.label()),
+            top_right.1 + 2.0,
+            network_colour(net),
+        );
+    }
 }
 
 /// A box on the page: left, top, right, bottom.
@@ -457,6 +554,66 @@ mod tests {
         assert!(svg.contains("W1 2.5 m"));
         assert!(svg.contains(network_colour(2)));
         assert!(roxmltree::Document::parse(&svg).is_ok());
+    }
+
+    #[test]
+    fn a_live_drawing_has_a_state_badge_per_network_and_names_cables_and_pictures() {
+        let mut topology = line(3);
+        topology.vertices[1].attachments.push(Attachment {
+            slot: 2,
+            net: Some(2),
+            node_id: Some(9),
+            present: true,
+            ..Attachment::default()
+        });
+        topology.vertices[0].fig = Some("drive.png".to_owned());
+        topology.background = Some("machine.png".to_owned());
+        let plain = svg(&topology);
+        assert!(plain.contains(r#"<image class="background" href="machine.png""#));
+        assert!(plain.contains(r#"<image class="node-fig" href="drive.png""#));
+        assert!(plain.contains(r#"data-cable="W1""#));
+        assert!(
+            !plain.contains("data-state"),
+            "state badges are for live drawings only"
+        );
+        let options = DrawOptions {
+            background: None,
+            figures: BTreeMap::from([(2, "/fig/2".to_owned())]),
+            live: true,
+        };
+        let live = svg_with(&topology, &options);
+        assert!(!live.contains("machine.png") && !live.contains("drive.png"));
+        assert!(live.contains(r#"href="/fig/2""#));
+        let doc = roxmltree::Document::parse(&live).unwrap();
+        let states: Vec<(String, String)> = doc
+            .descendants()
+            .filter(|n| n.attribute("class") == Some("state"))
+            .map(|n| {
+                (
+                    n.attribute("data-device").unwrap().to_owned(),
+                    n.attribute("data-network").unwrap().to_owned(),
+                )
+            })
+            .collect();
+        assert_eq!(
+            states,
+            [
+                ("Device & 1".to_owned(), "2".to_owned()),
+                ("Device & 2".to_owned(), "1".to_owned()),
+                ("Device & 2".to_owned(), "2".to_owned()),
+                ("Device & 3".to_owned(), "2".to_owned()),
+            ]
+        );
+        let cables = doc
+            .descendants()
+            .filter(|n| n.attribute("data-cable").is_some())
+            .count();
+        assert_eq!(cables, 2);
+        assert!(
+            doc.descendants()
+                .filter(|n| n.attribute("data-cable").is_some())
+                .all(|n| n.attribute("data-suspect") == Some("false"))
+        );
     }
 
     #[test]

@@ -130,6 +130,54 @@ impl Event {
     }
 }
 
+/// The monitor's whole picture at one instant ([`SystemMonitor::snapshot`]), for a display that starts
+/// watching late (a web page loading): every device's state and each network's last reported
+/// diagnosis, in the words of the JSON events. Replaying the events since the start gives the same.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Snapshot {
+    /// Seconds since the monitor started.
+    pub time: f64,
+    /// Every device, by network and then wiring order (the monitor's own vertex included, marked).
+    pub devices: Vec<DeviceSnapshot>,
+    /// Per watched network, ascending, the last diagnosis reported (`None` before the first).
+    pub diagnoses: Vec<NetworkDiagnosis>,
+}
+
+/// One device in a [`Snapshot`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DeviceSnapshot {
+    /// The network number.
+    pub network: u32,
+    /// The device's name (as the events name it).
+    pub node: String,
+    /// Its node-ID there.
+    pub node_id: u8,
+    /// Its state; `None` until heard or found silent.
+    pub state: Option<DeviceState>,
+    /// Whether it is the monitor's own vertex (not watched).
+    pub is_monitor: bool,
+}
+
+/// The last diagnosis of one network in a [`Snapshot`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NetworkDiagnosis {
+    /// The network number.
+    pub network: u32,
+    /// The last `diagnosis` event's `time`, `silent` and `explanations`; `None` before the first.
+    pub last: Option<Diagnosed>,
+}
+
+/// What a `diagnosis` event said.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnosed {
+    /// Seconds since the start.
+    pub time: f64,
+    /// The silent devices, in vertex order.
+    pub silent: Vec<String>,
+    /// What explains them.
+    pub explanations: Vec<NamedExplanation>,
+}
+
 /// An EMCY a device sent, for displays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LastEmcy {
@@ -194,6 +242,7 @@ struct Watched {
     settle: Duration,
     due: Option<Instant>,
     reported: BTreeSet<usize>,
+    last: Option<Diagnosed>,
 }
 
 /// The monitor (see the [module docs](self)).
@@ -259,6 +308,7 @@ impl SystemMonitor {
                     settle: longest.mul_f64(SILENCE_FACTOR),
                     due: None,
                     reported: BTreeSet::new(),
+                    last: None,
                 },
             );
         }
@@ -378,6 +428,32 @@ impl SystemMonitor {
         self.networks.get(&net).map(|w| w.wiring.root_vertex())
     }
 
+    /// Every device's state and each network's last reported diagnosis at `now` (see [`Snapshot`]).
+    pub fn snapshot(&self, now: Instant) -> Snapshot {
+        Snapshot {
+            time: self.seconds(now),
+            devices: self
+                .devices
+                .iter()
+                .map(|d| DeviceSnapshot {
+                    network: d.network,
+                    node: d.name.clone(),
+                    node_id: d.node_id,
+                    state: d.state,
+                    is_monitor: d.is_monitor,
+                })
+                .collect(),
+            diagnoses: self
+                .networks
+                .iter()
+                .map(|(net, w)| NetworkDiagnosis {
+                    network: *net,
+                    last: w.last.clone(),
+                })
+                .collect(),
+        }
+    }
+
     /// The explanations of the silent devices of `net` now (what the next diagnosis would say).
     pub fn explain_now(&self, net: u32) -> Vec<NamedExplanation> {
         self.networks
@@ -452,6 +528,11 @@ impl SystemMonitor {
             return;
         }
         watched.reported = silent_set;
+        watched.last = Some(Diagnosed {
+            time,
+            silent: silent.clone(),
+            explanations: explanations.clone(),
+        });
         self.events.push_back(Event::Diagnosis {
             time,
             network: net,
@@ -565,6 +646,52 @@ mod tests {
                 r#"{"event":"state","time":2.01,"network":1,"node":"b","node_id":3,"state":"operational"}"#,
                 r#"{"event":"diagnosis","time":2.16,"network":1,"silent":[],"explanations":[]}"#,
             ]
+        );
+    }
+
+    #[test]
+    fn a_snapshot_holds_the_states_and_the_last_diagnosis_the_events_reported() {
+        let topology = system(
+            &[("m", 1, None), ("a", 2, None), ("b", 3, None)],
+            &[],
+            &[("W1", "m", "a"), ("W2", "a", "b")],
+        );
+        let config = MonitorConfig {
+            networks: vec![1],
+            fallback: Some(Duration::from_millis(100)),
+            ..MonitorConfig::default()
+        };
+        let mut monitor = SystemMonitor::new(&topology, &config);
+        monitor.start(at(0));
+        let before = monitor.snapshot(at(0));
+        assert_eq!(before.diagnoses[0].last, None);
+        assert!(before.devices.iter().all(|d| d.state.is_none()));
+        let mut events = Vec::new();
+        run_from(&mut monitor, 10, 1010, &[2, 3], &mut events);
+        run_from(&mut monitor, 1110, 2000, &[2], &mut events);
+        let snapshot = monitor.snapshot(at(2000));
+        assert_eq!(snapshot.time, 2.0);
+        let states: Vec<(&str, Option<DeviceState>, bool)> = snapshot
+            .devices
+            .iter()
+            .map(|d| (d.node.as_str(), d.state, d.is_monitor))
+            .collect();
+        assert_eq!(
+            states,
+            [
+                ("m", None, true),
+                ("a", Some(DeviceState::Operational), false),
+                ("b", Some(DeviceState::Silent), false)
+            ]
+        );
+        let last = snapshot.diagnoses[0].last.as_ref().expect("diagnosed");
+        assert_eq!(last.silent, ["b"]);
+        assert_eq!(last.explanations[0].candidates, ["W2"]);
+        // The snapshot says what the last diagnosis event said.
+        let reported = events.iter().rev().find(|e| e.contains("diagnosis")).unwrap();
+        assert!(
+            reported.contains(r#""time":1.31"#) && last.time == 1.31,
+            "{reported}"
         );
     }
 

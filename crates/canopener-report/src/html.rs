@@ -6,7 +6,9 @@ use std::fmt::Write as _;
 use canopener_check::Finding;
 use canopener_eds::Severity;
 
-use crate::text::{html_escape as esc, percent_encode, snippet};
+use canopener_eds::xml_text::escape_html as esc;
+
+use crate::text::{percent_encode, snippet};
 use crate::{FileReport, Report, Summary};
 
 const STYLE: &str = include_str!("html/report.css");

@@ -106,24 +106,6 @@ pub(crate) fn xml_escape(text: &str, attribute: bool) -> String {
     escape(text, place, XmlStyle::DECIMAL)
 }
 
-/// Escapes text for HTML content or attribute values; control characters (other than tab and
-/// newline) become U+FFFD, as they are parse errors in HTML.
-pub(crate) fn html_escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c if is_control(c) || matches!(c, '\u{FDD0}'..='\u{FDEF}') => out.push('\u{FFFD}'),
-            c => out.push(c),
-        }
-    }
-    out
-}
-
 /// Percent-encodes everything but RFC 3986 unreserved characters and the characters in `keep`.
 pub(crate) fn percent_encode(text: &str, keep: &str) -> String {
     let mut out = String::with_capacity(text.len());
@@ -228,14 +210,6 @@ mod tests {
         assert_eq!(xml_escape("x\u{1}\u{FFFE}y", false), "x\u{FFFD}\u{FFFD}y");
         assert_eq!(xml_escape("a\nb\tc", true), "a&#10;b&#9;c");
         assert_eq!(xml_escape("a\nb", false), "a\nb");
-    }
-
-    #[test]
-    fn html_escape_handles_markup_and_controls() {
-        assert_eq!(
-            html_escape("<script>&'\"\u{0}"),
-            "&lt;script&gt;&amp;&#39;&quot;\u{FFFD}"
-        );
     }
 
     #[test]

@@ -35,6 +35,43 @@ pub fn chromium() -> Option<&'static Path> {
     Some(path)
 }
 
+/// The flags every headless Chromium of the tests gets: no sandbox (root in CI), no GPU, and none of
+/// the background connections this machine's closed network refuses.
+pub const FLAGS: [&str; 8] = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+];
+
+/// Headless Chromium under the DevTools protocol (`headless_chrome`), with [`FLAGS`], a fresh
+/// profile in `profile` and a window of `width` × `height`; `None` when the browser tests are
+/// skipped on purpose ([`chromium`]).
+///
+/// # Panics
+/// When the browser is missing (see [`chromium`]) or does not start.
+#[cfg(feature = "cdp")]
+pub fn devtools(profile: &Path, width: u32, height: u32) -> Option<headless_chrome::Browser> {
+    let path = chromium()?;
+    let mut args: Vec<&std::ffi::OsStr> = FLAGS[1..].iter().map(std::ffi::OsStr::new).collect();
+    args.push(std::ffi::OsStr::new("--hide-scrollbars"));
+    let options = headless_chrome::LaunchOptions::default_builder()
+        .path(Some(path.to_owned()))
+        .headless(true)
+        .sandbox(false)
+        .window_size(Some((width, height)))
+        .user_data_dir(Some(profile.to_owned()))
+        .idle_browser_timeout(RUN_LIMIT * 5)
+        .args(args)
+        .build()
+        .expect("chromium launch options");
+    Some(headless_chrome::Browser::new(options).expect("start chromium under the DevTools protocol"))
+}
+
 /// Runs `browser` headless on `url` with a fresh profile in `profile` and the `extra` arguments
 /// (`--dump-dom`, `--screenshot=FILE`, `--window-size=W,H`), and returns what it printed.
 ///
@@ -42,17 +79,8 @@ pub fn chromium() -> Option<&'static Path> {
 /// When Chromium cannot start, fails, or runs longer than [`RUN_LIMIT`] (it is killed then).
 pub fn run(browser: &Path, profile: &Path, url: &str, extra: &[&str]) -> String {
     let mut child = Command::new(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--hide-scrollbars",
-        ])
+        .args(FLAGS)
+        .arg("--hide-scrollbars")
         .arg(format!("--user-data-dir={}", profile.display()))
         .arg("--virtual-time-budget=2000")
         .args(extra)

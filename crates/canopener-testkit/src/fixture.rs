@@ -9,6 +9,14 @@ use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
 
+/// The checker's base fixture (`crates/canopener-check/test_data/checks/base.eds`): a complete, clean
+/// CiA 301 device description (TPDO1 with a one-entry mapping) that the tests of many crates build
+/// devices from. Every crate names it through this one constant.
+pub const BASE_EDS: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../canopener-check/test_data/checks/base.eds"
+);
+
 /// `std::fs::read`: a fixture or corpus file's bytes.
 pub fn read(path: impl AsRef<Path>) -> io::Result<Vec<u8>> {
     fs::read(path)

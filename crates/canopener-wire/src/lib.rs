@@ -71,5 +71,6 @@ pub use sdo::{
     BlockSegment, InitiateData, Multiplexer, SdoEncodeError, SdoParseError, SdoRequest, SdoResponse, Segment,
 };
 pub use time_of_day::{
-    MILLIS_MASK, MILLIS_PER_DAY, TimeOfDay, TimeOfDayError, UNIX_MILLIS_AT_1984, since_1984_from_unix_millis,
+    MILLIS_MASK, MILLIS_PER_DAY, TimeOfDay, TimeOfDayError, UNIX_MILLIS_AT_1984, civil_from_days,
+    since_1984_from_unix_millis,
 };

@@ -80,33 +80,33 @@ impl TimeOfDay {
 
     /// The calendar date (year, month 1–12, day 1–31) of `days`, in the Gregorian calendar.
     pub fn date(&self) -> (u32, u8, u8) {
-        let mut year = 1984u32;
-        let mut days_left = u32::from(self.days);
-        loop {
-            let year_len = if is_leap_year(year) { 366 } else { 365 };
-            if days_left < year_len {
-                break;
-            }
-            days_left -= year_len;
-            year += 1;
-        }
-        let february = if is_leap_year(year) { 29 } else { 28 };
-        let month_lengths = [31, february, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
-        let mut month = 1u8;
-        for length in month_lengths {
-            if days_left < length {
-                break;
-            }
-            days_left -= length;
-            month += 1;
-        }
-        // `days_left` is below the month's length (at most 31) here.
-        (year, month, days_left as u8 + 1)
+        let (year, month, day) = civil_from_days(DAYS_1970_TO_1984 + i64::from(self.days));
+        // From 1984 on, 65 535 days later at most: the year fits a u32, month and day a u8.
+        (
+            u32::try_from(year).unwrap_or(u32::MAX),
+            u8::try_from(month).unwrap_or(u8::MAX),
+            u8::try_from(day).unwrap_or(u8::MAX),
+        )
     }
 }
 
-fn is_leap_year(year: u32) -> bool {
-    (year.is_multiple_of(4) && !year.is_multiple_of(100)) || year.is_multiple_of(400)
+/// Days from 1970-01-01 to 1984-01-01, the TIME_OF_DAY epoch (14 years, 3 of them leap years).
+const DAYS_1970_TO_1984: i64 = 14 * 365 + 3;
+
+/// The Gregorian date (year, month 1–12, day 1–31) of a day counted from 1970-01-01, after Howard
+/// Hinnant's `civil_from_days`: the one calendar of the workspace (TIME_OF_DAY, the dates reports and
+/// DCF headers state).
+pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    (year, month, day)
 }
 
 /// `2024-01-01 12:00:00.000`; milliseconds of a day or more print as hours above 23.
@@ -202,6 +202,35 @@ mod tests {
             let (_, month, day) = time.date();
             prop_assert!((1..=12).contains(&month) && (1..=31).contains(&day));
         }
+
+        /// The calendar against the Gregorian rules themselves: each day is the day after the one
+        /// before, months have their lengths and February 29 exists in leap years only.
+        #[test]
+        fn each_day_follows_the_one_before(days in -800_000i64..800_000) {
+            let leap = |y: i64| (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+            let (y, m, d) = civil_from_days(days);
+            let (ny, nm, nd) = civil_from_days(days + 1);
+            let length = match m {
+                2 if leap(y) => 29,
+                2 => 28,
+                4 | 6 | 9 | 11 => 30,
+                _ => 31,
+            };
+            prop_assert!(d >= 1 && d <= length, "{y}-{m}-{d}");
+            if d < length {
+                prop_assert_eq!((ny, nm, nd), (y, m, d + 1));
+            } else if m < 12 {
+                prop_assert_eq!((ny, nm, nd), (y, m + 1, 1));
+            } else {
+                prop_assert_eq!((ny, nm, nd), (y + 1, 1, 1));
+            }
+        }
+    }
+
+    #[test]
+    fn the_epochs_are_their_dates() {
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(TimeOfDay { millis: 0, days: 0 }.date(), (1984, 1, 1));
     }
 
     #[test]

@@ -5,7 +5,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use crate::args::{BusArg, OutputFormat, parse_duration, parse_u8, parse_u64};
+use crate::args::{BusArg, OutputFormat};
+use crate::grammar::{parse_duration, parse_u8, parse_u64};
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum BusCommand {

@@ -16,6 +16,18 @@ pub(crate) struct DemoArgs {
     /// decoded by the bus monitor.
     #[arg(long)]
     pub(crate) monitor: bool,
+    /// Instead of the tour's reports: serve the tour in a browser (`canopener serve` on a simulated
+    /// system, its runs in the history under --dir).
+    #[arg(long, conflicts_with = "monitor")]
+    pub(crate) serve: bool,
+    /// With --serve: the address to listen on.
+    #[arg(
+        long,
+        value_name = "ADDRESS",
+        default_value = "127.0.0.1:8080",
+        requires = "serve"
+    )]
+    pub(crate) listen: std::net::SocketAddr,
     /// Write the reports, the JSON reports and the bundled EDS into this directory (created if missing).
     #[arg(long, value_name = "DIR", default_value = DEFAULT_DIR, conflicts_with = "monitor")]
     pub(crate) dir: PathBuf,

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::{parse_cia_bitrate, parse_index, parse_node_id};
+use crate::grammar::{parse_cia_bitrate, parse_index, parse_node_id};
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum EdsCommand {

@@ -8,25 +8,33 @@ use std::time::Duration;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::{
-    BusArg, OutputFormat, parse_cia_bitrate, parse_duration, parse_in_range, parse_node_id, parse_u8,
-    parse_u16, parse_u64,
+use crate::args::{BusArg, OutputFormat};
+use crate::grammar::{
+    parse_cia_bitrate, parse_duration, parse_in_range, parse_node_id, parse_u8, parse_u16, parse_u64,
 };
 
 /// How long a device may take to answer one request unless `--timeout` says otherwise: CiA 301 leaves
 /// the SDO timeout to the implementation; 1 s covers slow devices and loaded hubs.
-pub(crate) const DEFAULT_TIMEOUT: &str = "1s";
+pub(crate) const DEFAULT_TIMEOUT: Duration = Duration::from_secs(1);
 
 /// Options every master command that waits for answers shares.
 #[derive(Debug, Args)]
 pub(crate) struct MasterArgs {
     #[command(flatten)]
     pub(crate) bus: BusArg,
-    /// How long to wait for each answer (e.g. 500ms, 2s).
-    #[arg(long, default_value = DEFAULT_TIMEOUT, value_parser = parse_duration, value_name = "DURATION")]
-    pub(crate) timeout: Duration,
+    /// How long to wait for each answer (e.g. 500ms, 2s) [default: 1s; LSS commands: 100ms].
+    #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
+    pub(crate) timeout: Option<Duration>,
     #[arg(long, value_enum, default_value_t = OutputFormat::Text)]
     pub(crate) format: OutputFormat,
+}
+
+impl MasterArgs {
+    /// `--timeout`, or [`DEFAULT_TIMEOUT`]; the LSS commands have their own default and read the
+    /// option itself.
+    pub(crate) fn timeout(&self) -> Duration {
+        self.timeout.unwrap_or(DEFAULT_TIMEOUT)
+    }
 }
 
 /// Options of the commands that send or listen and wait for no answer (`sync`, `heartbeat watch`): no

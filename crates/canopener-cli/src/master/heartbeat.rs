@@ -15,8 +15,8 @@ use canopener_wire::NodeId;
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::args::parse_node_list;
 use crate::error::{CliError, CliResult};
+use crate::grammar::parse_node_list;
 use crate::master::args::HeartbeatWatchArgs;
 use crate::master::link::open_link;
 use crate::master::output::{millis, spread_json, state_key};

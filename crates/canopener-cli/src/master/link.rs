@@ -19,11 +19,11 @@ pub(crate) fn open_link(spec: Option<&str>, command: &str) -> CliResult<BusLink>
 
 /// Checks `--timeout` and the node-ID, then opens `--bus` for `command` and the SDO session of `node`.
 pub(crate) fn open_session(master: &MasterArgs, node: u8, command: &str) -> CliResult<SdoSession<BusLink>> {
-    checked_timeout(master.timeout)?;
+    checked_timeout(master.timeout())?;
     canopener_master::sdo_client::SdoClient::new(node)
         .map_err(|err| CliError::Usage(format!("{err}; give --node 1..127, e.g. --node 5")))?;
     let link = open_link(master.bus.spec.as_deref(), command)?;
-    SdoSession::new(link, node, master.timeout).map_err(|err| match err {
+    SdoSession::new(link, node, master.timeout()).map_err(|err| match err {
         SessionError::ZeroTimeout => zero_timeout(),
         SessionError::Client(err) => CliError::Usage(format!("{err}; give --node 1..127, e.g. --node 5")),
     })

@@ -22,8 +22,8 @@ use canopener_wire::{LssAddress, LssAddressPart, NodeId};
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::args::parse_node_list;
 use crate::error::{CliError, CliResult, exit_code};
+use crate::grammar::parse_node_list;
 use crate::master::args::{LssAddressArgs, LssConfigureArgs, LssInquireArgs, LssScanArgs, MasterArgs};
 use crate::master::link::open_link;
 use crate::master::output::{millis, spinner};
@@ -297,7 +297,7 @@ pub(crate) fn inquire(args: LssInquireArgs) -> CliResult {
 
 /// Opens `--bus` for `command` and an LSS session with the timing of the options.
 fn open_session(master_args: &MasterArgs, command: &str) -> CliResult<LssSession<BusLink>> {
-    let config = lss_config(master_args.timeout, timeout_given())?;
+    let config = lss_config(master_args.timeout)?;
     let link = open_link(master_args.bus.spec.as_deref(), command)?;
     Ok(LssSession::new(link, config))
 }
@@ -334,10 +334,10 @@ impl From<LssError> for CliError {
 }
 
 /// The LSS timing: [`LssConfig::DEFAULT`] unless the user gave `--timeout` (see the module docs).
-fn lss_config(timeout: Duration, given: bool) -> CliResult<LssConfig> {
-    if !given {
+fn lss_config(timeout: Option<Duration>) -> CliResult<LssConfig> {
+    let Some(timeout) = timeout else {
         return Ok(LssConfig::DEFAULT);
-    }
+    };
     if timeout.is_zero() {
         return Err(CliError::Usage(
             "--timeout 0 leaves no time for an LSS answer; give e.g. `canopener lss scan --timeout 20ms`"
@@ -348,14 +348,6 @@ fn lss_config(timeout: Duration, given: bool) -> CliResult<LssConfig> {
         timeout,
         settle: LssConfig::DEFAULT.settle.min(timeout),
     })
-}
-
-/// Whether `--timeout` is on the command line: clap fills in the SDO default otherwise, which is
-/// not the LSS default.
-fn timeout_given() -> bool {
-    std::env::args_os()
-        .skip(1)
-        .any(|arg| arg == "--timeout" || arg.to_string_lossy().starts_with("--timeout="))
 }
 
 /// Prints each device as it is found (text), so that a long scan shows its progress on stdout too.
@@ -424,21 +416,10 @@ fn parse_address(args: &LssAddressArgs, example: &str) -> CliResult<Option<LssAd
     }))
 }
 
-/// A 32-bit number, decimal or 0x-hex (or hex with a trailing h, as CANopen documents write it).
+/// A 32-bit number of the one grammar, with the option and an example in the message.
 fn parse_u32(text: &str, option: &str, example: &str) -> CliResult<u32> {
-    let trimmed = text.trim();
-    let parsed = if let Some(hex) = trimmed.strip_prefix("0x").or_else(|| trimmed.strip_prefix("0X")) {
-        u32::from_str_radix(hex, 16).ok()
-    } else if let Some(hex) = trimmed.strip_suffix(['h', 'H']) {
-        u32::from_str_radix(hex, 16).ok()
-    } else {
-        trimmed.parse().ok()
-    };
-    parsed.ok_or_else(|| {
-        CliError::Usage(format!(
-            "{option} {text:?} is not a 32-bit number: write it decimal or 0x hex, e.g. `{example}`"
-        ))
-    })
+    crate::grammar::parse_u32(text)
+        .map_err(|why| CliError::Usage(format!("{option}: {why}, as in `{example}`")))
 }
 
 /// The CiA 305 bit timing table index (table selector 0) of a bit rate in kbit/s.
@@ -506,8 +487,7 @@ mod tests {
         )
         .unwrap_err();
         assert!(
-            err.to_string()
-                .contains("--serial \"0xZZ\" is not a 32-bit number"),
+            err.to_string().contains("--serial: '0xZZ' is not a whole number"),
             "{err}"
         );
     }
@@ -526,19 +506,18 @@ mod tests {
 
     #[test]
     fn lss_timing_is_the_lss_default_unless_the_user_gave_a_timeout() {
-        let sdo_default = Duration::from_secs(1);
-        assert_eq!(lss_config(sdo_default, false).unwrap(), LssConfig::DEFAULT);
-        let fast = lss_config(Duration::from_millis(10), true).unwrap();
+        assert_eq!(lss_config(None).unwrap(), LssConfig::DEFAULT);
+        let fast = lss_config(Some(Duration::from_millis(10))).unwrap();
         assert_eq!(fast.timeout, Duration::from_millis(10));
         assert_eq!(
             fast.settle,
             Duration::from_millis(10),
             "settle never exceeds the timeout"
         );
-        let slow = lss_config(Duration::from_millis(500), true).unwrap();
+        let slow = lss_config(Some(Duration::from_millis(500))).unwrap();
         assert_eq!(slow.settle, LssConfig::DEFAULT.settle);
         assert!(matches!(
-            lss_config(Duration::ZERO, true),
+            lss_config(Some(Duration::ZERO)),
             Err(CliError::Usage(_))
         ));
     }

@@ -27,21 +27,27 @@ pub(crate) fn run(args: NmtArgs) -> CliResult {
         send(&mut link, command, target)?;
         return print_stdout(&unconfirmed_report(format, command, target));
     }
-    let outcomes = send_confirmed(&mut link, command, target, args.master.timeout, |confirmation| {
-        eprintln!(
-            "{}: waiting for the next heartbeat (at most {} s; Ctrl-C to stop), since some devices report \
+    let outcomes = send_confirmed(
+        &mut link,
+        command,
+        target,
+        args.master.timeout(),
+        |confirmation| {
+            eprintln!(
+                "{}: waiting for the next heartbeat (at most {} s; Ctrl-C to stop), since some devices report \
              a new state only with their periodic heartbeat",
-            confirmation.extension_note(),
-            NEXT_HEARTBEAT_WAIT.as_secs()
-        );
-    })?;
+                confirmation.extension_note(),
+                NEXT_HEARTBEAT_WAIT.as_secs()
+            );
+        },
+    )?;
     print_stdout(&confirmed_report(format, command, target, &outcomes))?;
     let failed: Vec<&Outcome> = outcomes.iter().filter(|outcome| !outcome.confirmed()).collect();
     if outcomes.is_empty() {
         return Err(CliError::Device(format!(
             "no node answered {} to all nodes within {} ms: no boot-up or heartbeat was heard{}",
             command_name(command),
-            args.master.timeout.as_millis(),
+            args.master.timeout().as_millis(),
             hint(command, None)
         )));
     }
@@ -89,7 +95,7 @@ fn nmt_command(verb: NmtVerb) -> NmtCommand {
 fn parse_target(text: &str) -> CliResult<NmtTarget> {
     NmtTarget::from_str(text).map_err(|_| {
         CliError::Usage(format!(
-            "{text:?} is not an NMT target: give a node-ID 1 to 127 (decimal or 0x hex) or `all`, \
+            "{text:?} is not an NMT target: give a node-ID 1 to 127 (decimal or hex) or `all`, \
              e.g. `canopener nmt start 5` or `canopener nmt preop all`"
         ))
     })

@@ -17,8 +17,8 @@ use canopener_wire::error_register_text;
 use serde_json::json;
 
 use crate::args::OutputFormat;
-use crate::args::parse_node_list;
 use crate::error::{CliError, CliResult, exit_code};
+use crate::grammar::parse_node_list;
 use crate::master::args::{NodeInfoArgs, NodeScanArgs};
 use crate::master::link::{checked_timeout, open_link, open_session};
 use crate::master::output::{millis, print_json, session_error};
@@ -51,7 +51,7 @@ pub(crate) fn scan(args: NodeScanArgs) -> CliResult {
             .collect();
     nodes.sort_unstable();
     nodes.dedup();
-    let timeout = checked_timeout(args.master.timeout)?;
+    let timeout = checked_timeout(args.master.timeout())?;
     let mut link = open_link(args.master.bus.spec.as_deref(), "node scan")?;
     let scanned =
         scan_nodes(&mut link, &nodes, usize::from(args.parallel), timeout).map_err(|err| match err {

@@ -4,22 +4,17 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::{BusArg, parse_device_fault, parse_duration, parse_node_id};
+use crate::args::{BusArg, parse_device_fault};
+use crate::grammar::{parse_duration, parse_node_id, parse_u8, parse_u64, parse_usize};
 
 /// FFh, the node-ID of a device that has none yet (CiA 305: LSS non-configured).
 pub(crate) const NON_CONFIGURED: u8 = 0xFF;
 
 /// A node-ID as `--node` takes it everywhere, or FFh: a model may test a non-configured device.
 fn parse_model_node(text: &str) -> Result<u8, String> {
-    parse_node_id(text).or_else(|e| {
-        let value = match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
-            Some(hex) => u8::from_str_radix(hex, 16).ok(),
-            None => text.parse::<u8>().ok(),
-        };
-        match value {
-            Some(NON_CONFIGURED) => Ok(NON_CONFIGURED),
-            _ => Err(format!("{e}, or 0xFF for a device without a node-ID")),
-        }
+    parse_node_id(text).or_else(|e| match parse_u8(text) {
+        Ok(NON_CONFIGURED) => Ok(NON_CONFIGURED),
+        _ => Err(format!("{e}, or 0xFF for a device without a node-ID")),
     })
 }
 
@@ -124,7 +119,7 @@ pub(crate) struct ExploreArgs {
     #[arg(long, value_name = "OUT")]
     pub(crate) dot: Option<PathBuf>,
     /// Stop exploring after this many states.
-    #[arg(long, default_value_t = 100_000, value_name = "N")]
+    #[arg(long, default_value = "100000", value_parser = parse_usize, value_name = "N")]
     pub(crate) max_states: usize,
 }
 
@@ -166,7 +161,7 @@ pub(crate) struct DeviceArgs {
     /// emulated EnergyBus devices boot until every device is Operating, then the controller leaves
     /// --node to the tester. With 0 devices the models test the controller itself (they play the
     /// devices); see docs/energybus.md.
-    #[arg(long, value_name = "N", conflicts_with = "spec")]
+    #[arg(long, value_name = "N", value_parser = parse_usize, conflicts_with = "spec")]
     pub(crate) energybus: Option<usize>,
     /// With --energybus: no controller; the devices wait without a node-ID for an LSS master (the
     /// tester, --node 0xFF).
@@ -189,10 +184,10 @@ pub(crate) struct RunArgs {
     #[command(flatten)]
     pub(crate) device: DeviceArgs,
     /// Steps (inputs, outputs, quiescence observations) before the verdict pass.
-    #[arg(long, default_value_t = 500, value_name = "K")]
+    #[arg(long, default_value = "500", value_parser = parse_usize, value_name = "K")]
     pub(crate) steps: usize,
     /// The master seed: the same seed, models and device give the same run.
-    #[arg(long, default_value_t = 1, value_name = "S")]
+    #[arg(long, default_value = "1", value_parser = parse_u64, value_name = "S")]
     pub(crate) seed: u64,
     /// Tolerance added to every time window (bus latency, timer jitter).
     #[arg(long, default_value = "2ms", value_parser = parse_duration, value_name = "DURATION")]

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::parse_duration;
+use crate::grammar::{parse_duration, parse_in_range};
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum NetCommand {
@@ -120,7 +120,7 @@ pub(crate) struct NetMonitorArgs {
     #[arg(long, value_name = "VERTEX")]
     pub(crate) at: Option<String>,
     /// The heartbeat period of devices whose DCF gives no producer heartbeat time (1017h), in ms.
-    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=65535))]
+    #[arg(long, value_name = "MS", value_parser = |t: &str| parse_in_range(t, 1, 65535, "--heartbeat-ms"))]
     pub(crate) heartbeat_ms: Option<u64>,
     /// Stop after this long (e.g. 30s); without it, run until Ctrl-C.
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]

@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::{parse_device_fault, parse_duration, parse_node_id, parse_u32_number};
+use crate::args::parse_device_fault;
+use crate::grammar::{parse_duration, parse_node_id, parse_u32, parse_usize};
 
 #[derive(Debug, Args)]
 pub(crate) struct SimArgs {
@@ -19,7 +20,7 @@ pub(crate) struct SimArgs {
     /// devices that start without a node-ID. On a virtual bus (the default) the boot is shown
     /// telegram by telegram until every device is Operating; with --bus the system runs on that bus
     /// in real time. docs/energybus.md.
-    #[arg(long, value_name = "N", conflicts_with = "nodelist")]
+    #[arg(long, value_name = "N", value_parser = parse_usize, conflicts_with = "nodelist")]
     pub(crate) energybus: Option<usize>,
     #[command(flatten)]
     pub(crate) energybus_options: EnergyBusOptions,
@@ -54,7 +55,7 @@ pub(crate) struct SimArgs {
     pub(crate) node_id: Option<u8>,
     /// Serial number 1018h:04 of the devices (several files: S, S+1, ... in order), so that devices from
     /// one EDS have distinct LSS addresses. Decimal or 0x-hex.
-    #[arg(long, value_parser = parse_u32_number, value_name = "S")]
+    #[arg(long, value_parser = parse_u32, value_name = "S")]
     pub(crate) serial: Option<u32>,
     /// Keep what devices store in this directory, so it survives restarts: saved parameters (1010h
     /// "save", 1011h "load") and the LSS configuration (store configuration: the node-ID to start with).

@@ -190,8 +190,7 @@ mod tests {
 
     #[test]
     fn setup_errors_keep_their_exit_codes() {
-        let base =
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../canopener-check/test_data/checks/base.eds");
+        let base = PathBuf::from(canopener_testkit::fixture::BASE_EDS);
         let setup = |simulation: Simulation| CliError::from(simulation.build().unwrap_err());
         let high = setup(
             Simulation::default()

@@ -5,7 +5,8 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::{BusArg, parse_duration, parse_in_range, parse_node_id};
+use crate::args::BusArg;
+use crate::grammar::{parse_duration, parse_in_range, parse_node_id};
 
 /// How long the device may take to answer one SDO request unless `--timeout` says otherwise (CiA 301
 /// leaves it to the implementation).

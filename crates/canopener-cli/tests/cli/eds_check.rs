@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use super::{run, stderr, stdout, temp_dir};
 
 fn base() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../canopener-check/test_data/checks/base.eds")
+    PathBuf::from(canopener_testkit::fixture::BASE_EDS)
 }
 
 fn seed_pack() -> PathBuf {

@@ -66,6 +66,10 @@ fn integers_and_node_ids_take_decimal_and_0x_in_every_command() {
     accepted("sync --period 10ms --count 0x10 --counter 0x10");
     accepted("lss configure --vendor 1 --product 2 --revision 3 --serial 4 --node-id 0x05");
     refused("sdo read --node 0x80 1018 1", "1..127");
+    // Issue 25 item 3: one number grammar; `h` hex and `d:` decimal indices work in every command.
+    accepted("sdo read --node 05h d:4120 1");
+    accepted("lss inquire --vendor 2F7h --product 1 --revision 0x10 --serial 0b101");
+    accepted("sync --period 10ms --count 10h");
     refused("sync --period 10ms --counter 0x01", "--counter must be 2..240");
 }
 

@@ -11,7 +11,7 @@ use canopener_can::candump::parse_compact_frame;
 use canopener_transport::{BusSpec, CanBus, open};
 use serde_json::Value;
 
-use crate::support::{HubProc, canopener, workspace_root};
+use crate::support::{HubProc, canopener};
 use crate::{run, stderr, stdout};
 
 /// Generous: the machine running the tests may be loaded.
@@ -22,7 +22,7 @@ pub(crate) const NO_BUS: &str = "socketcand://127.0.0.1:9/can0";
 
 /// The checker's base device: CiA 401, vendor ABCh, product 401h, revision 10002h.
 pub(crate) fn base_eds() -> PathBuf {
-    workspace_root().join("crates/canopener-check/test_data/checks/base.eds")
+    PathBuf::from(canopener_testkit::fixture::BASE_EDS)
 }
 
 /// `canopener ARGS --bus BUS`.

@@ -28,6 +28,8 @@ mod sim;
 mod test_criteria;
 mod test_html;
 mod test_stimulus;
+mod web;
+mod web_harness;
 
 use std::process::Output;
 use std::time::Duration;
@@ -69,6 +71,19 @@ fn help_lists_commands_examples_and_exit_codes() {
     assert!(serve.contains("Examples:") && serve.contains("python"), "{serve}");
     let dump = stdout(&run(&["bus", "dump", "--help"]));
     assert!(dump.contains("--bus socketcand://127.0.0.1:29536/can0"), "{dump}");
+}
+
+/// Issue 25 item 8: the exit-code rules are stated once; the README quotes `--help` word for word.
+#[test]
+fn the_readme_states_the_exit_codes_of_the_help() {
+    let help = stdout(&run(&["--help"]));
+    let table = &help[help.find("Exit codes:").expect("--help has its exit codes")..];
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md"))
+        .expect("the README is readable");
+    assert!(
+        readme.contains(table.trim_end()),
+        "README.md's exit codes differ from `canopener --help`; paste this into its Exit codes block:\n{table}"
+    );
 }
 
 #[test]

@@ -13,9 +13,7 @@ pub(crate) fn canopener() -> Command {
     Command::new(env!("CARGO_BIN_EXE_canopener"))
 }
 
-pub(crate) fn workspace_root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+pub(crate) use canopener_testkit::corpus::workspace_root;
 
 pub(crate) fn script(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -101,6 +99,15 @@ impl Proc {
             lines,
             stderr,
         }
+    }
+
+    /// The process id (for its CPU time in /proc).
+    #[allow(
+        dead_code,
+        reason = "only the web tests of the cli suite read a process's CPU time"
+    )]
+    pub(crate) fn id(&self) -> u32 {
+        self.child.id()
     }
 
     pub(crate) fn stderr(&self) -> String {

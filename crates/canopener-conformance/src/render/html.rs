@@ -5,7 +5,7 @@
 
 use std::fmt::Write as _;
 
-use canopener_eds::xml_text::{self, XmlPlace, XmlStyle};
+use canopener_eds::xml_text;
 
 use crate::catalogue::GROUPS;
 use crate::model::{Direction, Limits, Measurement, Report, TestReport, Verdict};
@@ -53,21 +53,10 @@ pub fn render(report: &Report) -> String {
     out
 }
 
-/// `text` escaped for HTML content and attribute values alike (and for XML: the page is well-formed).
-///
-/// Control characters, which HTML and XML reject, are shown as their Unicode control pictures (`␀`)
-/// rather than dropped, so that a device's odd bytes stay visible in the report.
+/// `text` escaped for HTML content and attribute values alike (and for XML: the page is well-formed),
+/// control characters shown as symbols: [`xml_text::escape_html`], the escaper of every HTML page.
 pub fn esc(text: &str) -> String {
-    let visible: String = text
-        .chars()
-        .map(|c| match c {
-            '\n' | '\t' => c,
-            '\u{0}'..='\u{1F}' => char::from_u32(0x2400 + c as u32).unwrap_or('\u{FFFD}'),
-            '\u{7F}' => '\u{2421}',
-            _ => c,
-        })
-        .collect();
-    xml_text::escape(&visible, XmlPlace::Attribute, XmlStyle::DECIMAL)
+    xml_text::escape_html(text)
 }
 
 /// The element id of a test's `<details>`: `test-` and its id with every character outside
@@ -341,6 +330,20 @@ fn write_log(out: &mut String, test: &TestReport) {
         );
     }
     out.push_str("</tbody></table></div>\n</details>\n");
+}
+
+/// The stylesheet the report's page carries, for another page that shows parts of a report (a run
+/// comparison) and must look the same.
+pub fn stylesheet() -> &'static str {
+    STYLE
+}
+
+/// One measurement as the report draws it: a `<figure class="measurement">` with its histogram and
+/// time series (inline SVG, limits drawn), its statistics and its raw samples.
+pub fn measurement(name: &str, measurement: &Measurement) -> String {
+    let mut out = String::new();
+    write_measurement(&mut out, name, measurement);
+    out
 }
 
 fn write_measurement(out: &mut String, name: &str, measurement: &Measurement) {

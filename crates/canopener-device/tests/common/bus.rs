@@ -10,10 +10,7 @@ use canopener_od::ObjectKey;
 use canopener_testkit::trace::Trace;
 pub(crate) use canopener_testkit::trace::ms;
 
-pub(crate) const BASE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../canopener-check/test_data/checks/base.eds"
-);
+pub(crate) const BASE: &str = canopener_testkit::fixture::BASE_EDS;
 pub(crate) static DS301: LazyLock<String> = LazyLock::new(|| {
     canopener_testkit::corpus::eds("CANopenNode__CANopenNode__example__DS301_profile.eds")
         .display()

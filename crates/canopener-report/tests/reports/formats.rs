@@ -273,7 +273,7 @@ fn html_is_self_contained_and_escaped() {
         assert!(!page.contains(forbidden), "the page contains {forbidden}");
     }
     assert!(!page.contains("<rpm>"), "file content must be escaped");
-    assert!(page.contains("Speed &lt;rpm&gt; &amp; &#39;max&#39;"));
+    assert!(page.contains("Speed &lt;rpm&gt; &amp; &apos;max&apos;"));
     assert!(page.contains("A&amp;B"));
     assert!(!page.contains('\u{1}'));
     // Every link to an explanation has its target.

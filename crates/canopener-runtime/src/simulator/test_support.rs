@@ -17,7 +17,7 @@ pub(crate) const TIME_1012: &str = "\n[1012]\nParameterName=COB-ID TIME\nObjectT
 
 /// The checker's clean base EDS (CiA 301 communication objects, 6000h/6200h, no 1012h or 1016h).
 pub(crate) fn base_eds() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../canopener-check/test_data/checks/base.eds")
+    PathBuf::from(canopener_testkit::fixture::BASE_EDS)
 }
 
 /// An empty directory of its own for test `name`, removed when the test ends.

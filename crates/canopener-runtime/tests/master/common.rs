@@ -14,10 +14,7 @@ use canopener_testkit::corpus;
 pub(crate) const IO_EDS: &str = "CANopenNode__CANopenNode__example__IO.eds";
 
 /// The checker's base EDS: TPDO1 only, with a one-entry mapping.
-pub(crate) const BASE_EDS: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../canopener-check/test_data/checks/base.eds"
-);
+pub(crate) const BASE_EDS: &str = canopener_testkit::fixture::BASE_EDS;
 
 /// The EDS `name` of the corpus, or a path.
 pub(crate) fn eds(name: &str) -> canopener_eds::Eds {
