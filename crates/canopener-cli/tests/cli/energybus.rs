@@ -2,7 +2,8 @@
 //! EnergyBus system boots on a virtual bus with its telegrams shown, one of its devices (or its
 //! controller) is tested on the fly, and the paper's deviations fail with the documented exit code.
 
-use super::{run, stderr, stdout};
+use crate::support::HubProc;
+use crate::{run, stderr, stdout};
 
 #[test]
 fn sim_energybus_shows_the_boot_until_every_device_is_operating() {
@@ -184,4 +185,18 @@ fn the_papers_deviations_fail_mbt_runs_with_exit_6() {
             stdout(&output)
         );
     }
+}
+
+/// With a bus the system runs in real time (on a hub here): the controller finds the device and
+/// walks it to Operating, its events printed as they happen, and stops after --for.
+#[test]
+fn sim_energybus_runs_on_a_bus_in_real_time() {
+    let hub = HubProc::start();
+    let spec = hub.spec("can0");
+    let output = run(&["sim", "--energybus", "1", "--bus", &spec, "--for", "6s"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let log = stderr(&output);
+    assert!(log.contains(&format!("EnergyBus system on {spec}")), "{log}");
+    assert!(log.contains("controller: node 2: found by fastscan"), "{log}");
+    assert!(log.contains("controller: node 2: EMS Operating"), "{log}");
 }
