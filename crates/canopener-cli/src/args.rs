@@ -29,6 +29,15 @@ pub(crate) fn parse_fault(text: &str) -> Result<canopener_device::faults::Fault,
         .map_err(|e: canopener_device::faults::UnknownFault| e.to_string())
 }
 
+/// Reads a fault name of the device fault catalogue or an EnergyBus fault (`mbt --energybus`, `sim
+/// --energybus`); the error lists every name.
+pub(crate) fn parse_device_fault(
+    text: &str,
+) -> Result<canopener_device::energybus::station::DeviceFault, String> {
+    text.parse()
+        .map_err(|e: canopener_device::energybus::station::UnknownDeviceFault| e.to_string())
+}
+
 /// `--bus` values: `N=SPEC` for network N, a plain `SPEC` for the monitor's network (`None`).
 pub(crate) fn split_bus(value: &str) -> Result<(Option<u32>, &str), String> {
     match value.split_once('=') {

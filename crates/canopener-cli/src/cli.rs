@@ -99,8 +99,11 @@ or decoded as an anomaly), 6 otherwise, 5 a file could not be written, 130 inter
   canopener sim --nodelist Nodelist.graphml --bus 1=socketcand://127.0.0.1:29536/can0 --cut W3
       # a whole system, wiring-aware; type cut CABLE, repair CABLE, kill DEVICE, revive DEVICE,
       # power-off DOMAIN, power-on DOMAIN or repair-all on stdin (docs/networks.md)
+  canopener sim --energybus 3                             # EnergyBus: controller + 3 devices, the boot decoded
+  canopener sim --energybus 3 --bus socketcan:can0 --hand-over 3   # on a real bus; node 3 left to a tester
 Logs boot-up, NMT state changes, SDO writes and aborts, EMCY and LSS (stderr, or JSON lines on stdout).
-Exit status: 0 stopped by Ctrl-C or SIGTERM, 2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error.")]
+Exit status: 0 stopped by Ctrl-C or SIGTERM (--energybus on the virtual bus: every device reached Operating),
+2 bad arguments, 3 a file is not a usable EDS/DCF, 4 bus error, 7 --energybus: a device never reached Operating.")]
     Sim(SimArgs),
     /// Test a device's conformance (CiA 301 device test with CCT coverage, CiA 401, LSS, CiA 313 performance, EDS check): verdicts with evidence.
     #[command(after_help = "Examples:

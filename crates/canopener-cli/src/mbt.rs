@@ -2,6 +2,7 @@
 //! state spaces, and on-the-fly runs against a device on a bus or a simulated one.
 
 pub(crate) mod args;
+pub(crate) mod energybus;
 pub(crate) mod inspect;
 pub(crate) mod load;
 pub(crate) mod run;

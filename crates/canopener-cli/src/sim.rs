@@ -3,4 +3,5 @@
 
 pub(crate) mod args;
 pub(crate) mod command;
+pub(crate) mod energybus;
 pub(crate) mod nodelist;

@@ -3,6 +3,7 @@
 
 use canopener_can::Instant;
 use canopener_od::{DynamicOd, ObjectKey};
+use canopener_wire::NodeId;
 
 /// What an application did to the object dictionary, for the device to act on: mapped entries that
 /// changed (TPDOs with event-driven transmission types send them) and TPDOs to send at once (CiA 401
@@ -42,6 +43,25 @@ pub trait Application {
 
     /// When the application next wants [`Application::handle_timeout`], if ever.
     fn poll_timeout(&self) -> Option<Instant>;
+
+    /// An SDO download of `data` to `key` passed the dictionary's own checks and is about to be
+    /// stored: `Err` refuses it with that SDO abort code (an application whose objects take only
+    /// some values in some states). By default every download is taken.
+    fn check_write(&self, _key: ObjectKey, _data: &[u8], _od: &DynamicOd) -> Result<(), u32> {
+        Ok(())
+    }
+
+    /// The device reset its communication (after power-on and reset node too, and when LSS made a
+    /// new node-ID active): it now runs with `node_id`, `None` while it has none (LSS
+    /// unconfigured). By default nothing happens.
+    fn reset_communication(
+        &mut self,
+        _now: Instant,
+        _node_id: Option<NodeId>,
+        _od: &mut DynamicOd,
+    ) -> AppChanges {
+        AppChanges::none()
+    }
 }
 
 /// An application that does nothing: a device that only holds its object dictionary.

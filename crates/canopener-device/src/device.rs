@@ -29,7 +29,9 @@
 //!   and the application is told ([`Application::on_write`]); RPDO writes tell the application
 //!   of every mapped entry as well.
 //! - Application changes ([`AppChanges`], [`Device::app_changed`]) become PDO application events
-//!   and TPDO triggers.
+//!   and TPDO triggers. The application may refuse a download first
+//!   ([`Application::check_write`]) and hears of every reset communication with the node-ID it
+//!   brings ([`Application::reset_communication`]).
 //! - EMCY: a lost consumed heartbeat or lost life guarding raises 8130h, RPDO length errors
 //!   8210h/8220h, the RPDO deadline 8250h, a SYNC of the wrong length 8240h, each with error
 //!   register bit 4 (communication error); they clear when the cause goes away. 1001h and 1003h
@@ -881,6 +883,9 @@ impl Device {
             let changes = self.app.reset(now, &mut self.od);
             self.apply_changes(now, &changes);
         }
+        let node = self.configured.then_some(self.node);
+        let changes = self.app.reset_communication(now, node, &mut self.od);
+        self.apply_changes(now, &changes);
         self.faults.reset_guard_toggle();
         self.nmt.set_node_id(self.node);
         if self.configured {
@@ -1068,6 +1073,7 @@ impl Core for Device {
         }
         if state.is_active(CommService::Sdo) || self.faults.routes(CommService::Sdo, state) {
             let mut hooks = Hooks {
+                app: &*self.app,
                 pdo: &self.pdo,
                 sync: &self.sync,
                 time: &self.time,
@@ -1184,6 +1190,7 @@ fn dummy_usage(eds: &Eds) -> DummyUsage {
 
 /// The device's checks on SDO transfers, over the cores that own the rules.
 struct Hooks<'a> {
+    app: &'a dyn Application,
     pdo: &'a PdoEngine,
     sync: &'a SyncService,
     time: &'a TimeService,
@@ -1209,6 +1216,7 @@ impl SdoHooks for Hooks<'_> {
         {
             return Err(abort::GENERAL_ERROR);
         }
+        self.app.check_write(key, data, od)?;
         let procedure_unchecked = self.faults.contains(Fault::MappingProcedureUnchecked);
         let checked = match self.pdo.check_write(key, data, od) {
             Err(PdoConfigError::MappingWhileValid { .. } | PdoConfigError::MappingWhileEnabled { .. })

@@ -12,6 +12,7 @@ pub mod can_id;
 pub mod cia401;
 pub mod device;
 pub mod emcy;
+pub mod energybus;
 pub mod faults;
 pub mod heartbeat;
 pub mod lss_slave;

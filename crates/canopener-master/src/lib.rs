@@ -11,6 +11,7 @@
 
 pub mod dcf_dump;
 pub mod emcy_consumer;
+pub mod energybus_controller;
 pub mod error_control;
 pub mod heartbeat_core;
 pub mod lss_master;

@@ -91,6 +91,12 @@ pub fn compile(
         files.push((source, file));
     }
     let mut compiler = Compiler::new(options);
+    // Definitions first, each file's after those of the files it uses, so that a parameter may be
+    // computed from a used model's (the files are loaded users first).
+    for index in definition_order(&files) {
+        compiler.file = index;
+        compiler.declare_definitions(&files[index].1);
+    }
     for (index, (source, file)) in files.iter().enumerate() {
         compiler.file = index;
         compiler.declare(source, file);
@@ -121,6 +127,28 @@ pub fn compile(
     let mut model = compiler.model;
     model.hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
     (Some(model), report)
+}
+
+/// The files in an order where each comes after the files it `use`s (depth first, in load order
+/// otherwise).
+fn definition_order(files: &[(Source, File)]) -> Vec<usize> {
+    fn visit(index: usize, files: &[(Source, File)], done: &mut Vec<bool>, order: &mut Vec<usize>) {
+        if std::mem::replace(&mut done[index], true) {
+            return;
+        }
+        for used in &files[index].1.uses {
+            if let Some(u) = files.iter().position(|(s, _)| s.origin == used.text) {
+                visit(u, files, done, order);
+            }
+        }
+        order.push(index);
+    }
+    let mut done = vec![false; files.len()];
+    let mut order = Vec::with_capacity(files.len());
+    for index in 0..files.len() {
+        visit(index, files, &mut done, &mut order);
+    }
+    order
 }
 
 /// A name an expression can see.
@@ -188,15 +216,9 @@ impl<'a> Compiler<'a> {
         self.report(diag(code, span, message));
     }
 
-    /// First pass: definitions, gates, clocks and process skeletons (so processes can refer to
-    /// each other whatever the order).
-    fn declare(&mut self, source: &Source, file: &File) {
-        self.model.files.push(ModelFile {
-            name: file.name.as_ref().map_or_else(String::new, |n| n.text.clone()),
-            title: file.title.clone().unwrap_or_default(),
-            cites: file.cites.clone(),
-            origin: source.origin.clone(),
-        });
+    /// First pass, before [`Compiler::declare`]: the `param`, `const` and `let` definitions of
+    /// `file`.
+    fn declare_definitions(&mut self, file: &File) {
         let global = Scope {
             process: None,
             fields: None,
@@ -252,6 +274,22 @@ impl<'a> Compiler<'a> {
             };
             self.globals.insert(def.name.text.clone(), binding);
         }
+    }
+
+    /// First pass, after every file's definitions: gates, clocks and process skeletons (so
+    /// processes can refer to each other whatever the order).
+    fn declare(&mut self, source: &Source, file: &File) {
+        self.model.files.push(ModelFile {
+            name: file.name.as_ref().map_or_else(String::new, |n| n.text.clone()),
+            title: file.title.clone().unwrap_or_default(),
+            cites: file.cites.clone(),
+            origin: source.origin.clone(),
+        });
+        let global = Scope {
+            process: None,
+            fields: None,
+            depth: 0,
+        };
         if let Some(q) = &file.quiescence
             && let Some(v) = self.constant(q, global, None)
         {

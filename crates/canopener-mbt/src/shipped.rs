@@ -49,9 +49,24 @@ pub const MODELS: &[Shipped] = &[
         text: include_str!("../models/heartbeat.mbt"),
     },
     Shipped {
+        name: "energybus-objects",
+        covers: "EnergyBus: the assumed CiA 454 object indices and encodings the energybus-* models use (no behaviour; docs/energybus.md)",
+        text: include_str!("../models/energybus-objects.mbt"),
+    },
+    Shipped {
         name: "energybus-ems",
-        covers: "DRAFT: EnergyBus EMS virtual device FSA (CiA 454) from public material only: control word 6001h transitions, status word 6002h state, automatic steps; no device to test it on here",
+        covers: "EnergyBus EMS, device side (CiA 454, objects assumed): control word transitions and refusals, status word, automatic steps, static and dynamic TPDOs; purposes walk_to_operating, boot_with_pdos",
         text: include_str!("../models/energybus-ems.mbt"),
+    },
+    Shipped {
+        name: "energybus-lss",
+        covers: "EnergyBus: initialisation of an unconfigured device by combinations of LSS services (fastscan, switch global and selective, identify, inquire, configure node-ID, store refused, activation with boot-up; reset node forgets the node-ID); purposes initialise_by_fastscan, initialise",
+        text: include_str!("../models/energybus-lss.mbt"),
+    },
+    Shipped {
+        name: "energybus-controller",
+        covers: "EnergyBus controller side (node 1 is tested, the tester plays an unconfigured device): fastscan request by request, node-ID and activation, 1017h and 1016h:01, NMT start, the EMS walk by control words, its heartbeat, NMT reset node when the device's heartbeat stops; purposes integrate_device, lost_heartbeat",
+        text: include_str!("../models/energybus-controller.mbt"),
     },
 ];
 

@@ -29,6 +29,8 @@
 //!   [`pdo_watch`], [`sync_producer`] and [`heartbeat_watch`]. Their pure parts (plans, reports,
 //!   statistics) are `canopener-master`'s.
 //! - [`mbt_run`]: model-based tests (`canopener-mbt`'s on-the-fly executor) on any link.
+//! - [`energybus`]: the emulated EnergyBus system (controller and devices) on a virtual bus or a real
+//!   one, its boot and its telegrams.
 //! - [`description`]: reading device descriptions (any format) and rule packs from files.
 //! - [`batch`]: checking many description files: expanding directories and glob patterns, and
 //!   checking the files in parallel.
@@ -39,6 +41,7 @@ pub mod batch;
 pub mod cancel;
 pub mod clock;
 pub mod description;
+pub mod energybus;
 pub mod files;
 pub mod heartbeat_watch;
 pub mod link;

@@ -39,6 +39,7 @@ mod crc;
 mod decoded;
 mod decoder;
 mod emcy;
+pub mod energybus;
 pub mod lss;
 mod nmt;
 mod node;

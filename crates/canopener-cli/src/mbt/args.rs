@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use crate::args::{BusArg, parse_fault};
+use crate::args::{BusArg, parse_device_fault};
 use crate::grammar::{parse_duration, parse_node_id, parse_u8, parse_u64, parse_usize};
 
 /// FFh, the node-ID of a device that has none yet (CiA 305: LSS non-configured).
@@ -57,6 +57,10 @@ Exit status: 0 synthesised, 6 the purpose cannot be reached, 3 a model or .aut t
   canopener mbt run nmt --sim device.eds --node 5 --purpose stop_and_start
   canopener mbt run lss --sim device.eds --node 0xFF --purpose fastscan_select  # no node-ID yet
   canopener mbt run guarding --sim device.eds --node 5 --coverage-svg coverage.svg
+  canopener mbt run energybus-ems --energybus 3 --node 3 --purpose walk_to_operating  # an EnergyBus system
+  canopener mbt run sync --energybus 2 --node 2 --fault sync-counter-missing
+  canopener mbt run energybus-lss --energybus 1 --no-controller --node 0xFF --purpose initialise_by_fastscan
+  canopener mbt run energybus-controller --energybus 0 --node 2 --purpose integrate_device  # the controller
 Exit status: 0 pass, 6 fail or inconclusive, 7 the device did not answer at all, 3 a model that does
 not check, 2 bad arguments, 4 bus error.")]
     Run(RunArgs),
@@ -146,15 +150,28 @@ pub(crate) struct SynthArgs {
 
 /// Where the device under test is.
 #[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("simulated").args(["sim", "energybus"])))]
 pub(crate) struct DeviceArgs {
     #[command(flatten)]
     pub(crate) bus: BusArg,
     /// Test a simulated device built from this EDS/DCF instead, on virtual time (deterministic).
-    #[arg(long, value_name = "FILE", conflicts_with = "spec")]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["spec", "energybus"])]
     pub(crate) sim: Option<PathBuf>,
-    /// Give the simulated device this defect (repeatable; `canopener sim --list-faults`).
-    #[arg(long = "fault", value_name = "NAME", requires = "sim", value_parser = parse_fault)]
-    pub(crate) faults: Vec<canopener_device::faults::Fault>,
+    /// Test one device of an emulated EnergyBus system on virtual time: the controller (node 1) and N
+    /// emulated EnergyBus devices boot until every device is Operating, then the controller leaves
+    /// --node to the tester. With 0 devices the models test the controller itself (they play the
+    /// devices); see docs/energybus.md.
+    #[arg(long, value_name = "N", value_parser = parse_usize, conflicts_with = "spec")]
+    pub(crate) energybus: Option<usize>,
+    /// With --energybus: no controller; the devices wait without a node-ID for an LSS master (the
+    /// tester, --node 0xFF).
+    #[arg(long, requires = "energybus")]
+    pub(crate) no_controller: bool,
+    /// Give the simulated device this defect (repeatable; `canopener sim --list-faults`). With
+    /// --energybus the device under test gets it (every device without a controller), and the
+    /// EnergyBus fault fastscan-wrong-answer exists too.
+    #[arg(long = "fault", value_name = "NAME", requires = "simulated", value_parser = parse_device_fault)]
+    pub(crate) faults: Vec<canopener_device::energybus::station::DeviceFault>,
     /// Stop after this long (of the bus's time) with the verdict so far.
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) time_limit: Option<std::time::Duration>,

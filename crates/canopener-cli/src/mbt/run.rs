@@ -14,6 +14,7 @@ use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult, exit_code};
 use crate::mbt::args::NON_CONFIGURED;
 use crate::mbt::args::{DeviceArgs, Format, ReplayArgs, RunArgs, ShrinkArgs, Strategy};
+use crate::mbt::energybus;
 use crate::mbt::load::{description, load, write};
 use crate::output::print_stdout;
 use crate::stop::StopFlag;
@@ -22,7 +23,7 @@ use crate::stop::StopFlag;
 const SIM_SETTLE: Instant = Instant::from_millis(100);
 
 pub(crate) fn run(args: RunArgs) -> CliResult {
-    let eds = description(args.model.eds.as_ref().or(args.device.sim.as_ref()))?;
+    let eds = models_description(args.model.eds.as_ref(), &args.device)?;
     let loaded = load(&args.model.models, args.model.node, eds.as_ref(), &args.model.set)?;
     eprint!("{}", loaded.warnings);
     let config = RunConfig {
@@ -57,7 +58,7 @@ pub(crate) fn run(args: RunArgs) -> CliResult {
 
 pub(crate) fn replay(args: ReplayArgs) -> CliResult {
     let log = read_log(&args.log)?;
-    let eds = description(args.eds.as_ref().or(args.device.sim.as_ref()))?;
+    let eds = models_description(args.eds.as_ref(), &args.device)?;
     let loaded = load(&log.header.models, log.header.node, eds.as_ref(), &[])?;
     warn_hash(&log.header, &loaded.model);
     let mut config = log.header.config(Some(log.script.clone()));
@@ -68,22 +69,29 @@ pub(crate) fn replay(args: ReplayArgs) -> CliResult {
 
 pub(crate) fn shrink(args: ShrinkArgs) -> CliResult {
     let log = read_log(&args.log)?;
-    let eds = description(args.eds.as_ref().or(args.device.sim.as_ref()))?;
+    let eds = models_description(args.eds.as_ref(), &args.device)?;
     let loaded = load(&log.header.models, log.header.node, eds.as_ref(), &[])?;
     warn_hash(&log.header, &loaded.model);
     let mut config = log.header.config(None);
     config.purpose = find_purpose(&loaded.model, log.header.purpose.as_deref())?;
     let node = log.header.node;
     let limit = args.device.time_limit;
-    let shrunk = match &args.device.sim {
-        Some(file) => mbt_run::shrink(
+    let shrunk = match (&args.device.sim, args.device.energybus) {
+        (_, Some(count)) => mbt_run::shrink(
+            &mut || energybus::link(&args.device, count, node),
+            &loaded.model,
+            &config,
+            &log.script,
+            limit,
+        )?,
+        (Some(file), None) => mbt_run::shrink(
             &mut || simulated(file, &args.device, node),
             &loaded.model,
             &config,
             &log.script,
             limit,
         )?,
-        None => mbt_run::shrink(
+        (None, None) => mbt_run::shrink(
             &mut || bus_link(&args.device),
             &loaded.model,
             &config,
@@ -116,6 +124,18 @@ pub(crate) fn shrink(args: ShrinkArgs) -> CliResult {
         text.push_str(&format!("  {at}{}\n", input.label));
     }
     print_stdout(&text)
+}
+
+/// The description the models' parameters read: `--eds`, else the simulated device's, else the
+/// EnergyBus one of `--energybus`.
+fn models_description(
+    eds: Option<&std::path::PathBuf>,
+    device: &DeviceArgs,
+) -> CliResult<Option<canopener_eds::Eds>> {
+    match (eds.or(device.sim.as_ref()), device.energybus) {
+        (None, Some(_)) => Ok(Some(energybus::description())),
+        (path, _) => description(path),
+    }
 }
 
 /// The purpose called `name` in the models.
@@ -158,7 +178,7 @@ fn simulated(file: &std::path::Path, device: &DeviceArgs, node: u8) -> CliResult
         .file(file)
         // Without a node-ID of its own the device starts LSS non-configured.
         .first_node_id((node != NON_CONFIGURED).then_some(node))
-        .faults(device.faults.iter().copied())
+        .faults(energybus::catalogue_faults(&device.faults)?)
         .start()?;
     bus.run_until(SIM_SETTLE)?;
     Ok(bus)
@@ -171,9 +191,10 @@ fn bus_link(device: &DeviceArgs) -> CliResult<BusLink> {
 
 fn execute(device: &DeviceArgs, node: u8, model: &Model, config: RunConfig) -> CliResult<Outcome> {
     let limit: Option<Duration> = device.time_limit;
-    Ok(match &device.sim {
-        Some(file) => mbt_run::run(&mut simulated(file, device, node)?, model, config, limit)?,
-        None => mbt_run::run(&mut bus_link(device)?, model, config, limit)?,
+    Ok(match (&device.sim, device.energybus) {
+        (_, Some(count)) => mbt_run::run(&mut energybus::link(device, count, node)?, model, config, limit)?,
+        (Some(file), None) => mbt_run::run(&mut simulated(file, device, node)?, model, config, limit)?,
+        (None, None) => mbt_run::run(&mut bus_link(device)?, model, config, limit)?,
     })
 }
 

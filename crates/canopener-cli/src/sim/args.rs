@@ -4,14 +4,26 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use crate::args::parse_fault;
-use crate::grammar::{parse_node_id, parse_u32};
+use crate::args::parse_device_fault;
+use crate::grammar::{parse_duration, parse_node_id, parse_u32, parse_usize};
 
 #[derive(Debug, Args)]
 pub(crate) struct SimArgs {
     /// EDS or DCF files: one simulated device each.
-    #[arg(required_unless_present_any = ["list_faults", "nodelist"], conflicts_with = "nodelist", value_name = "FILE")]
+    #[arg(
+        required_unless_present_any = ["list_faults", "nodelist", "energybus"],
+        conflicts_with_all = ["nodelist", "energybus"],
+        value_name = "FILE"
+    )]
     pub(crate) files: Vec<PathBuf>,
+    /// Simulate an EnergyBus system: the EnergyBus controller at node-ID 1 and N emulated EnergyBus
+    /// devices that start without a node-ID. On a virtual bus (the default) the boot is shown
+    /// telegram by telegram until every device is Operating; with --bus the system runs on that bus
+    /// in real time. docs/energybus.md.
+    #[arg(long, value_name = "N", value_parser = parse_usize, conflicts_with = "nodelist")]
+    pub(crate) energybus: Option<usize>,
+    #[command(flatten)]
+    pub(crate) energybus_options: EnergyBusOptions,
     /// Simulate a whole system: every device of a nodelist.cpj or Nodelist.graphml from its DCF, one bus
     /// per network (`--bus N=SPEC`), wired as the file says.
     #[arg(long, value_name = "FILE")]
@@ -27,8 +39,8 @@ pub(crate) struct SimArgs {
     #[arg(long, value_name = "VERTEX", requires = "nodelist")]
     pub(crate) at: Option<String>,
     /// Give every simulated device this defect (repeatable); `--list-faults` names them.
-    #[arg(long = "fault", value_name = "NAME", value_parser = parse_fault)]
-    pub(crate) faults: Vec<canopener_device::faults::Fault>,
+    #[arg(long = "fault", value_name = "NAME", value_parser = parse_device_fault)]
+    pub(crate) faults: Vec<canopener_device::energybus::station::DeviceFault>,
     /// Describe every fault `--fault` accepts and exit.
     #[arg(long)]
     pub(crate) list_faults: bool,
@@ -80,4 +92,32 @@ pub(crate) enum SimFormat {
     Human,
     /// One JSON object per event on stdout.
     Json,
+}
+
+/// The options of `sim --energybus`.
+#[derive(Debug, Args)]
+pub(crate) struct EnergyBusOptions {
+    /// With --energybus: the devices from this EnergyBus description (an EDS with the
+    /// [EnergyBusAssumptions] section) instead of the shipped one.
+    #[arg(long, value_name = "FILE", requires = "energybus")]
+    pub(crate) energybus_eds: Option<PathBuf>,
+    /// With --energybus and --bus: no controller; the devices wait for an LSS master on the bus.
+    #[arg(long, requires = "energybus")]
+    pub(crate) no_controller: bool,
+    /// With --energybus: give the --fault defects only to the device that gets this node-ID (the
+    /// devices get 2, 3, ... in the order of their serial numbers 1, 2, ...).
+    #[arg(long, value_parser = parse_node_id, value_name = "N", requires = "energybus")]
+    pub(crate) fault_node: Option<u8>,
+    /// With --energybus: once every device is Operating, the controller leaves this node to someone
+    /// else on the bus (a tester: `mbt run ... --bus SPEC --node N`).
+    #[arg(long, value_parser = parse_node_id, value_name = "N", requires = "energybus")]
+    pub(crate) hand_over: Option<u8>,
+    /// With --energybus: run this long (virtual bus: of virtual time, default until every device is
+    /// Operating and one second more; real bus: default until Ctrl-C).
+    #[arg(long = "for", value_parser = parse_duration, value_name = "DURATION", requires = "energybus")]
+    pub(crate) run_for: Option<std::time::Duration>,
+    /// With --energybus on the virtual bus: print the controller's events and the summary, not every
+    /// telegram.
+    #[arg(long, requires = "energybus")]
+    pub(crate) summary: bool,
 }

@@ -7,6 +7,7 @@
 
 use std::time::Duration;
 
+use canopener_device::energybus::station::{DeviceFault, EnergyBusFault};
 use canopener_device::faults::Fault;
 use canopener_runtime::simulator::device::ApplicationKind;
 use canopener_runtime::simulator::event_log::{FieldValue, LogEntry};
@@ -27,6 +28,9 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
     if let Some(nodelist) = &args.nodelist {
         return crate::sim::nodelist::run(nodelist, &args);
     }
+    if let Some(devices) = args.energybus {
+        return crate::sim::energybus::run(devices, &args);
+    }
     if args.buses.len() > 1 {
         return Err(CliError::Usage(
             "several --bus are for --nodelist systems; simulated devices from files share one bus".to_owned(),
@@ -43,7 +47,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
             SimApp::Cia401 => ApplicationKind::Cia401,
         })
         .downloads_refused_in_operational(args.writes_only_pre_operational)
-        .faults(args.faults.iter().copied())
+        .faults(catalogue_faults(&args.faults)?)
         .state_dir(args.state_dir.clone())
         .build()?;
     let bus = open_bus(args.buses.first().map(String::as_str), "sim")?;
@@ -63,6 +67,19 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
     })
 }
 
+/// The faults of the catalogue; an EnergyBus fault is for `--energybus` devices only.
+fn catalogue_faults(faults: &[DeviceFault]) -> CliResult<Vec<Fault>> {
+    faults
+        .iter()
+        .map(|fault| match fault {
+            DeviceFault::Catalogue(fault) => Ok(*fault),
+            DeviceFault::EnergyBus(fault) => Err(CliError::Usage(format!(
+                "{fault} is a fault of emulated EnergyBus devices; use it with --energybus N"
+            ))),
+        })
+        .collect()
+}
+
 /// `--list-faults`: every fault of the catalogue with what it does, for choosing `--fault NAME`.
 fn fault_list() -> String {
     let mut text = String::new();
@@ -71,6 +88,10 @@ fn fault_list() -> String {
         for line in fault.description().lines() {
             text.push_str(&format!("    {line}\n"));
         }
+    }
+    for fault in EnergyBusFault::ALL {
+        text.push_str(&format!("{} (EnergyBus devices, --energybus)\n", fault.name()));
+        text.push_str(&format!("    {}\n", fault.description()));
     }
     text.push_str(&format!(
         "{} faults; give one or more with `canopener sim FILE --fault NAME`\n",

@@ -14,6 +14,7 @@ mod support;
 mod demo;
 mod eds;
 mod eds_check;
+mod energybus;
 mod grammar;
 mod harness;
 mod hostile;
