@@ -17,7 +17,7 @@ use canopener_runtime::simulator::simulation::Simulation;
 
 use crate::catalogue::{Selection, catalogue};
 use crate::device_model::DeviceModel;
-use crate::runner::{self, Outcome, Progress, RunSpec};
+use crate::runner::{self, FinishedRun, Progress, RunSpec};
 
 /// The bundled EDS: the CANopenNode demo device (CiA 401) with every optional CiA 401 object, so that
 /// each CiA 401 test applies.
@@ -83,7 +83,7 @@ pub fn run(
     started: &str,
     cancel: Option<Cancel>,
     on_progress: impl FnMut(Progress<'_>),
-) -> Result<Outcome, DemoError> {
+) -> Result<FinishedRun, DemoError> {
     let loaded = canopener_eds::load(EDS);
     let eds_errors = Some(crate::cia301::eds::errors(&loaded, Some(EDS_NAME)));
     let model = DeviceModel::new(&loaded.eds, NODE);

@@ -191,7 +191,7 @@ pub struct TestReport {
     /// Every frame sent and received while the test ran, decoded.
     pub telegrams: Vec<Telegram>,
     /// A `pass` whose measurement no criterion judged ("measured, no criterion"): not a conformance
-    /// pass, counted apart in [`Summary::measured_no_criterion`].
+    /// pass, counted apart in [`VerdictCounts::measured_no_criterion`].
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub no_criterion: bool,
 }
@@ -240,7 +240,7 @@ pub struct BusInfo {
 
 /// How many tests ended with each verdict.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct Summary {
+pub struct VerdictCounts {
     /// Passed.
     pub pass: usize,
     /// Failed.
@@ -254,10 +254,10 @@ pub struct Summary {
     pub measured_no_criterion: usize,
 }
 
-impl Summary {
+impl VerdictCounts {
     /// The counts of `tests`.
-    pub fn of<'a>(tests: impl IntoIterator<Item = &'a TestReport>) -> Summary {
-        tests.into_iter().fold(Summary::default(), |mut s, t| {
+    pub fn of<'a>(tests: impl IntoIterator<Item = &'a TestReport>) -> VerdictCounts {
+        tests.into_iter().fold(VerdictCounts::default(), |mut s, t| {
             s.measured_no_criterion += usize::from(t.measured_no_criterion());
             match t.verdict {
                 Verdict::Pass => s.pass += 1,
@@ -274,7 +274,7 @@ impl Summary {
         self.fail == 0 && self.inconclusive == 0
     }
 
-    /// The passes a criterion or a CiA requirement decided: [`Summary::pass`] without the
+    /// The passes a criterion or a CiA requirement decided: [`VerdictCounts::pass`] without the
     /// measurements no criterion judged.
     pub fn conformance_passes(&self) -> usize {
         self.pass - self.measured_no_criterion
@@ -305,7 +305,7 @@ pub struct Report {
     /// Every test run, in catalogue order.
     pub tests: Vec<TestReport>,
     /// The counts.
-    pub summary: Summary,
+    pub summary: VerdictCounts,
 }
 
 impl Report {

@@ -12,7 +12,9 @@ use canopener_wire::{Decoder, NmtCommand};
 use crate::context::{Ctx, Reply};
 use crate::device_model::DeviceModel;
 use crate::finding::{Finding, Stop};
-use crate::model::{BusInfo, DeviceInfo, Identity, REPORT_VERSION, Report, Summary, Telegram, TestReport};
+use crate::model::{
+    BusInfo, DeviceInfo, Identity, REPORT_VERSION, Report, Telegram, TestReport, VerdictCounts,
+};
 use crate::performance::Performance;
 use crate::recorder::{Logged, Recorder};
 use crate::stimulus::Hook;
@@ -67,7 +69,7 @@ pub enum RunError {
 
 /// The result of [`run`]: the report and whether the device answered at all.
 #[derive(Debug, Clone)]
-pub struct Outcome {
+pub struct FinishedRun {
     /// The report (tests missing when interrupted).
     pub report: Report,
     /// The device did not answer the preparation's SDO read of 1000h: nothing was tested.
@@ -81,7 +83,7 @@ pub fn run(
     spec: &RunSpec<'_>,
     tests: &[TestDef],
     on_progress: impl FnMut(Progress<'_>),
-) -> Result<Outcome, RunError> {
+) -> Result<FinishedRun, RunError> {
     run_with(link, spec, &Performance::DEFAULT, tests, on_progress)
 }
 
@@ -92,7 +94,7 @@ pub fn run_with(
     performance: &Performance,
     tests: &[TestDef],
     on_progress: impl FnMut(Progress<'_>),
-) -> Result<Outcome, RunError> {
+) -> Result<FinishedRun, RunError> {
     run_stimulated(link, spec, performance, None, tests, on_progress)
 }
 
@@ -105,7 +107,7 @@ pub fn run_stimulated(
     mut stimulus: Option<Hook<'_>>,
     tests: &[TestDef],
     mut on_progress: impl FnMut(Progress<'_>),
-) -> Result<Outcome, RunError> {
+) -> Result<FinishedRun, RunError> {
     let timestamps = link.timestamps();
     let mut recorder = Recorder::new(link);
     let start = recorder.now();
@@ -127,7 +129,7 @@ pub fn run_stimulated(
         preparation: Vec::new(),
         left_modified: Vec::new(),
         tests: Vec::new(),
-        summary: Summary::default(),
+        summary: VerdictCounts::default(),
     };
     // The EDS check alone needs no device: nothing to reset, nobody to ask.
     let prepared = if tests.iter().all(|t| !t.needs_device()) {
@@ -187,8 +189,8 @@ pub fn run_stimulated(
         });
     }
     report.duration_s = recorder.now().saturating_duration_since(start).as_secs_f64();
-    report.summary = Summary::of(&report.tests);
-    Ok(Outcome { report, silent })
+    report.summary = VerdictCounts::of(&report.tests);
+    Ok(FinishedRun { report, silent })
 }
 
 /// How often the preparation reads 1000h when the answers break the SDO protocol.
@@ -390,7 +392,7 @@ pub fn id_text(id: canopener_can::CanId) -> String {
     }
 }
 
-impl Outcome {
+impl FinishedRun {
     /// Whether every applicable test passed.
     pub fn passed(&self) -> bool {
         !self.silent && self.report.summary.all_passed() && !self.report.interrupted

@@ -16,7 +16,7 @@ use canopener_conformance::finding::{Finding, Outcome as TestOutcome};
 use canopener_conformance::junk;
 use canopener_conformance::model::{Report, Verdict};
 use canopener_conformance::performance::Performance;
-use canopener_conformance::runner::{self, Outcome, RunSpec};
+use canopener_conformance::runner::{self, FinishedRun, RunSpec};
 use canopener_eds::model::Eds;
 use canopener_runtime::link::{Link, LinkError, Stamped, Timestamps};
 use canopener_runtime::simulator::device::SimulatedDevice;
@@ -108,7 +108,7 @@ impl<L: Link> Link for Bounded<L> {
 }
 
 /// Runs `tests` against whatever is on `link`, as `canopener test` does.
-fn run_on(link: &mut dyn Link, eds: &Eds, tests: &[TestDef], sdo_timeout: Duration) -> Outcome {
+fn run_on(link: &mut dyn Link, eds: &Eds, tests: &[TestDef], sdo_timeout: Duration) -> FinishedRun {
     let model = DeviceModel::new(eds, NODE);
     let spec = RunSpec {
         node: NODE,
@@ -128,7 +128,7 @@ fn run_on(link: &mut dyn Link, eds: &Eds, tests: &[TestDef], sdo_timeout: Durati
 }
 
 /// The whole catalogue against `core` alone on a simulated bus.
-fn run_all<C: Core>(core: C) -> Outcome {
+fn run_all<C: Core>(core: C) -> FinishedRun {
     let eds = demo_eds();
     let mut bus = VirtualLink::new(canopener_bus_engine::network::Timing::Ideal);
     bus.attach(core);
@@ -141,7 +141,7 @@ fn run_all<C: Core>(core: C) -> Outcome {
 }
 
 /// The exit code `canopener test` gives for `outcome` (crates/canopener-cli/src/test/command.rs).
-fn exit_code(outcome: &Outcome) -> u8 {
+fn exit_code(outcome: &FinishedRun) -> u8 {
     if outcome.report.interrupted {
         130
     } else if outcome.silent {
@@ -155,7 +155,7 @@ fn exit_code(outcome: &Outcome) -> u8 {
 
 /// What every run against a hostile device must show (see the module docs); returns a line for
 /// the test's output.
-fn check(outcome: &Outcome, what: &str) -> String {
+fn check(outcome: &FinishedRun, what: &str) -> String {
     let report = &outcome.report;
     // Junk and silence are never a reason for "not applicable": every test that is, is so on the
     // clean device too, for the same reason.

@@ -5,7 +5,7 @@
 //! `CARGO_TARGET_TMPDIR` for people to look at.
 
 use canopener_conformance::demo;
-use canopener_conformance::model::{Report, Summary, Verdict};
+use canopener_conformance::model::{Report, Verdict, VerdictCounts};
 use canopener_conformance::render::html;
 use canopener_device::faults::Fault;
 use canopener_testkit::browser::{self, png_size, tags};
@@ -137,7 +137,7 @@ fn reports_of_a_clean_and_a_faulty_device_render_in_chromium() {
     // a fragment far down a long page, so the failing test gets a page of its own.)
     let mut alone = faulty.clone();
     alone.tests.retain(|t| t.id == drawn.id);
-    alone.summary = Summary::of(&alone.tests);
+    alone.summary = VerdictCounts::of(&alone.tests);
     let page = dir.write("failure.html", html::render(&alone));
     let url = format!("file://{}", page.display());
     shoot(chromium, &dir, &url, "conformance-failure.png", (1280, 1600));

@@ -68,7 +68,7 @@ pub struct Dcf {
     /// DOMAIN values too long for a line, to be written beside the DCF (`UploadFile`).
     pub sidecars: Vec<(PathBuf, Vec<u8>)>,
     /// Counts and reasons.
-    pub summary: Summary,
+    pub summary: DumpTally,
 }
 
 /// The DCF text could not be encoded (a value the EDS's encoding cannot hold).
@@ -94,7 +94,7 @@ pub fn build_dcf(
     let mut dcf = eds.clone();
     clear_values(&mut dcf);
     let mut comments: Vec<(SectionKind, String)> = Vec::new();
-    let mut summary = Summary::default();
+    let mut summary = DumpTally::default();
     for (entry, reading) in plan.iter().zip(readings) {
         match reading {
             Reading::Skipped => {
@@ -623,7 +623,7 @@ fn sidecar_path(out: &Path, index: u16, sub: u8) -> PathBuf {
 
 /// What became of the entries of a dump.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Summary {
+pub struct DumpTally {
     /// Entries read and written.
     pub read: usize,
     /// Entry, abort code, message.

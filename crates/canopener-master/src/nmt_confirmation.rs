@@ -68,7 +68,7 @@ pub struct Confirmation {
 
 /// How one node ended.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Outcome {
+pub struct NodeConfirmation {
     /// The node.
     pub node: NodeId,
     /// The state the node reported last (pre-operational after a boot-up).
@@ -81,7 +81,7 @@ pub struct Outcome {
     pub unconfirmed: Option<Unconfirmed>,
 }
 
-impl Outcome {
+impl NodeConfirmation {
     /// Whether the node confirmed the command.
     pub fn confirmed(&self) -> bool {
         self.unconfirmed.is_none()
@@ -240,21 +240,21 @@ impl Confirmation {
 
     /// How every node heard (and a target node not heard) ended; `interrupted` when the wait was
     /// cancelled.
-    pub fn outcomes(&self, interrupted: bool) -> Vec<Outcome> {
-        let mut outcomes: Vec<Outcome> = self
+    pub fn outcomes(&self, interrupted: bool) -> Vec<NodeConfirmation> {
+        let mut outcomes: Vec<NodeConfirmation> = self
             .nodes
             .iter()
             .map(|(node, progress)| {
                 let node = *node;
                 match *progress {
-                    Progress::Confirmed { state, boot_up, at } => Outcome {
+                    Progress::Confirmed { state, boot_up, at } => NodeConfirmation {
                         node,
                         state: Some(state),
                         boot_up,
                         after: Some(at - self.sent_at),
                         unconfirmed: None,
                     },
-                    Progress::Refused { state } => Outcome {
+                    Progress::Refused { state } => NodeConfirmation {
                         node,
                         state: Some(state),
                         boot_up: false,
@@ -276,7 +276,7 @@ impl Confirmation {
                                 within: self.deadline() - last_heard,
                             }
                         };
-                        Outcome {
+                        NodeConfirmation {
                             node,
                             state,
                             boot_up: false,
@@ -298,7 +298,7 @@ impl Confirmation {
                     within: self.timeout,
                 }
             };
-            outcomes.push(Outcome {
+            outcomes.push(NodeConfirmation {
                 node,
                 state: None,
                 boot_up: false,

@@ -9,7 +9,7 @@ use canopener_eds::Severity;
 use canopener_eds::xml_text::escape_html as esc;
 
 use crate::text::{percent_encode, snippet};
-use crate::{FileReport, Report, Summary};
+use crate::{FileReport, Report, ReportTotals};
 
 const STYLE: &str = include_str!("html/report.css");
 const SCRIPT: &str = include_str!("html/report.js");
@@ -72,7 +72,7 @@ fn plural(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
-fn write_summary(out: &mut String, report: &Report, summary: &Summary) {
+fn write_summary(out: &mut String, report: &Report, summary: &ReportTotals) {
     out.push_str("<section class=\"summary\" aria-label=\"Summary\">\n<div class=\"cards\">\n");
     for (id, class, count, label) in [
         (
@@ -165,7 +165,7 @@ fn write_summary(out: &mut String, report: &Report, summary: &Summary) {
     out.push_str("</section>\n");
 }
 
-fn write_filters(out: &mut String, summary: &Summary, total: usize) {
+fn write_filters(out: &mut String, summary: &ReportTotals, total: usize) {
     // Hidden until the script runs: without JavaScript the filters could not work.
     out.push_str("<form class=\"filters\" id=\"filters\" role=\"search\" aria-label=\"Filters\" hidden>\n");
     out.push_str("<fieldset><legend>Severity</legend>\n");

@@ -3,7 +3,7 @@
 use canopener_eds::Severity;
 use serde::Serialize;
 
-use crate::{Report, Summary};
+use crate::{Report, ReportTotals};
 
 /// The version of the JSON document; bumped only when a member changes meaning or disappears.
 pub(crate) const JSON_VERSION: u32 = 1;
@@ -13,7 +13,7 @@ struct Document<'a> {
     version: u32,
     tool: Tool<'a>,
     files: Vec<File<'a>>,
-    summary: Summary,
+    summary: ReportTotals,
 }
 
 #[derive(Serialize)]

@@ -31,7 +31,7 @@ pub use human::{HumanOptions, human};
 pub use json::json;
 pub use junit::junit;
 pub use sarif::sarif;
-pub use summary::{CodeCount, Summary};
+pub use summary::{CodeCount, ReportTotals};
 
 /// Everything a report shows: the tool version, the selected checks and the results per file.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -118,7 +118,7 @@ impl FileReport {
 
 impl Report {
     /// Counts by severity and by code.
-    pub fn summary(&self) -> Summary {
+    pub fn summary(&self) -> ReportTotals {
         summary::summarize(self)
     }
 

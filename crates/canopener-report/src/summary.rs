@@ -9,7 +9,7 @@ use crate::Report;
 
 /// The totals of a report.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
-pub struct Summary {
+pub struct ReportTotals {
     /// Files in the report, including the ones that could not be read.
     pub files: usize,
     /// Files with at least one finding of severity error (unreadable files are counted in `problems`).
@@ -41,7 +41,7 @@ pub struct CodeCount {
     pub files: usize,
 }
 
-impl Summary {
+impl ReportTotals {
     /// The number of findings of a severity.
     pub fn count(&self, severity: Severity) -> usize {
         match severity {
@@ -71,10 +71,10 @@ fn plural(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
-pub(crate) fn summarize(report: &Report) -> Summary {
-    let mut summary = Summary {
+pub(crate) fn summarize(report: &Report) -> ReportTotals {
+    let mut summary = ReportTotals {
         files: report.files.len(),
-        ..Summary::default()
+        ..ReportTotals::default()
     };
     // code -> (severity, count, files)
     let mut codes: BTreeMap<&str, (Severity, usize, usize)> = BTreeMap::new();
@@ -130,24 +130,24 @@ mod tests {
 
     #[test]
     fn total_line_uses_singular_and_plural() {
-        let summary = Summary {
+        let summary = ReportTotals {
             files: 2,
             errors: 3,
             warnings: 12,
             infos: 1,
             problems: 1,
-            ..Summary::default()
+            ..ReportTotals::default()
         };
         assert_eq!(
             summary.total_line(),
             "3 errors, 12 warnings, 1 info in 2 files (1 could not be read)"
         );
-        let one = Summary {
+        let one = ReportTotals {
             files: 1,
             errors: 1,
             warnings: 1,
             infos: 2,
-            ..Summary::default()
+            ..ReportTotals::default()
         };
         assert_eq!(one.total_line(), "1 error, 1 warning, 2 infos in 1 file");
     }

@@ -7,7 +7,7 @@ use std::time::Duration;
 use canopener_can::Instant;
 use canopener_master::error_control::{ConsumerTime, NodeMonitor};
 use canopener_master::heartbeat_core::HeartbeatCore;
-use canopener_master::nmt_confirmation::{Confirmation, Outcome};
+use canopener_master::nmt_confirmation::{Confirmation, NodeConfirmation};
 use canopener_master::nmt_master::{NmtMaster, NmtTarget};
 use canopener_wire::NmtCommand;
 
@@ -39,7 +39,7 @@ pub fn send_confirmed<L: Link + ?Sized>(
     target: NmtTarget,
     timeout: Duration,
     mut on_extension: impl FnMut(&Confirmation),
-) -> Result<Vec<Outcome>, LinkError> {
+) -> Result<Vec<NodeConfirmation>, LinkError> {
     // The monitor is ready before the command goes out, so that no answer is missed.
     let mut core = HeartbeatCore::new(NodeMonitor::new(ConsumerTime::Off));
     let sent_at = send(link, command, target)?;

@@ -11,7 +11,7 @@ use std::sync::mpsc::Receiver;
 
 use canopener_conformance::catalogue::TestDef;
 use canopener_conformance::device_model::DeviceModel;
-use canopener_conformance::runner::{self, Outcome, Progress, RunSpec};
+use canopener_conformance::runner::{self, FinishedRun, Progress, RunSpec};
 use canopener_device::faults::Fault;
 use canopener_eds::Eds;
 use canopener_network::Topology;
@@ -175,7 +175,7 @@ pub fn run_tests(
     target: &Target,
     request: &RunRequest<'_>,
     on_progress: impl FnMut(Progress<'_>),
-) -> Result<Outcome, BackendError> {
+) -> Result<FinishedRun, BackendError> {
     let model = DeviceModel::new(request.eds, request.node);
     let (mut link, bus): (Box<dyn Link>, String) = match target {
         Target::Bus(spec) => (Box::new(open_link(spec, &request.cancel)?), spec.clone()),

@@ -338,7 +338,7 @@ impl Runs {
         &self,
         id: i64,
         device: &str,
-        outcome: Result<canopener_conformance::runner::Outcome, backend::BackendError>,
+        outcome: Result<canopener_conformance::runner::FinishedRun, backend::BackendError>,
     ) {
         let (status, message, report) = match outcome {
             Ok(outcome) if outcome.silent => (

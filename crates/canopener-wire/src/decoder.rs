@@ -315,7 +315,7 @@ impl Decoder {
                 }
                 Err(err) => {
                     anomalies.push(format!("{err} (the server answers with abort 0504 0001h)"));
-                    (SdoFrame::Invalid { command: bytes[0] }, Outcome::default())
+                    (SdoFrame::Invalid { command: bytes[0] }, FrameEffect::default())
                 }
             }
         } else {
@@ -327,11 +327,11 @@ impl Decoder {
                 }
                 Err(err) => {
                     anomalies.push(err.to_string());
-                    (SdoFrame::Invalid { command: bytes[0] }, Outcome::default())
+                    (SdoFrame::Invalid { command: bytes[0] }, FrameEffect::default())
                 }
             }
         };
-        let (frame, Outcome { progress, crc }) = outcome;
+        let (frame, FrameEffect { progress, crc }) = outcome;
         Payload::Sdo(SdoPayload {
             frame,
             transfer: progress,
@@ -618,14 +618,14 @@ impl Block {
 
 /// What a frame tells about its transfer.
 #[derive(Debug, Default)]
-struct Outcome {
+struct FrameEffect {
     progress: Option<TransferProgress>,
     crc: Option<CrcCheck>,
 }
 
-impl Outcome {
-    fn of(transfer: &Transfer) -> Outcome {
-        Outcome {
+impl FrameEffect {
+    fn of(transfer: &Transfer) -> FrameEffect {
+        FrameEffect {
             progress: Some(transfer.progress()),
             crc: None,
         }
@@ -667,7 +667,11 @@ fn check_mux(expected: Multiplexer, got: Multiplexer, anomalies: &mut Vec<String
     }
 }
 
-fn apply_request(slot: &mut Option<Transfer>, request: &SdoRequest, anomalies: &mut Vec<String>) -> Outcome {
+fn apply_request(
+    slot: &mut Option<Transfer>,
+    request: &SdoRequest,
+    anomalies: &mut Vec<String>,
+) -> FrameEffect {
     match request {
         SdoRequest::InitiateDownload { mux, data } => {
             let transfer = match data {
@@ -681,7 +685,7 @@ fn apply_request(slot: &mut Option<Transfer>, request: &SdoRequest, anomalies: &
                 }
             };
             start(slot, transfer, anomalies);
-            Outcome::default()
+            FrameEffect::default()
         }
         SdoRequest::DownloadSegment(segment) => match slot {
             Some(
@@ -712,11 +716,11 @@ fn apply_request(slot: &mut Option<Transfer>, request: &SdoRequest, anomalies: &
                     toggle: segment.toggle,
                     last: segment.last,
                 };
-                Outcome::of(transfer)
+                FrameEffect::of(transfer)
             }
             _ => {
                 unexpected("a download segment", slot, anomalies);
-                Outcome::default()
+                FrameEffect::default()
             }
         },
         SdoRequest::InitiateUpload { mux } => {
@@ -726,7 +730,7 @@ fn apply_request(slot: &mut Option<Transfer>, request: &SdoRequest, anomalies: &
                 Transfer::new(*mux, TransferKind::SegmentedUpload, None, Phase::Initiated),
                 anomalies,
             );
-            Outcome::default()
+            FrameEffect::default()
         }
         SdoRequest::UploadSegment { toggle } => match slot {
             Some(
@@ -749,14 +753,14 @@ fn apply_request(slot: &mut Option<Transfer>, request: &SdoRequest, anomalies: &
                     toggle: *toggle,
                     last: false,
                 };
-                Outcome::of(transfer)
+                FrameEffect::of(transfer)
             }
             _ => {
                 unexpected("an upload segment request", slot, anomalies);
-                Outcome::default()
+                FrameEffect::default()
             }
         },
-        SdoRequest::Abort { .. } => Outcome {
+        SdoRequest::Abort { .. } => FrameEffect {
             progress: slot.take().map(|t| t.progress()),
             crc: None,
         },
@@ -771,7 +775,7 @@ fn apply_request(slot: &mut Option<Transfer>, request: &SdoRequest, anomalies: &
                 Transfer::new(*mux, TransferKind::BlockDownload, *size, Phase::Block(block)),
                 anomalies,
             );
-            Outcome::default()
+            FrameEffect::default()
         }
         SdoRequest::BlockDownloadEnd { unused, crc } => block_end(
             slot,
@@ -794,18 +798,18 @@ fn apply_request(slot: &mut Option<Transfer>, request: &SdoRequest, anomalies: &
                 Transfer::new(*mux, TransferKind::BlockUpload, None, Phase::Block(block)),
                 anomalies,
             );
-            Outcome::default()
+            FrameEffect::default()
         }
         SdoRequest::BlockUploadStart => {
             match block_in_step(slot, TransferKind::BlockUpload, BlockStep::AwaitStart) {
                 Some((transfer, mut block)) => {
                     block.step = BlockStep::SubBlock;
                     transfer.phase = Phase::Block(block);
-                    Outcome::of(transfer)
+                    FrameEffect::of(transfer)
                 }
                 None => {
                     unexpected("a start block upload", slot, anomalies);
-                    Outcome::default()
+                    FrameEffect::default()
                 }
             }
         }
@@ -830,7 +834,7 @@ fn apply_response(
     slot: &mut Option<Transfer>,
     response: &SdoResponse,
     anomalies: &mut Vec<String>,
-) -> Outcome {
+) -> FrameEffect {
     match response {
         SdoResponse::InitiateUpload { mux, data } => {
             let awaiting = match slot {
@@ -850,7 +854,7 @@ fn apply_response(
             };
             let Some(transfer) = slot.as_mut().filter(|_| awaiting) else {
                 unexpected("an initiate upload response", slot, anomalies);
-                return Outcome::default();
+                return FrameEffect::default();
             };
             check_mux(transfer.mux, *mux, anomalies);
             match data {
@@ -858,7 +862,7 @@ fn apply_response(
                     transfer.kind = TransferKind::ExpeditedUpload;
                     transfer.bytes = data.len() as u64;
                     transfer.size = size_indicated.then_some(data.len() as u32);
-                    Outcome {
+                    FrameEffect {
                         progress: slot.take().map(|t| t.progress()),
                         crc: None,
                     }
@@ -867,7 +871,7 @@ fn apply_response(
                     transfer.kind = TransferKind::SegmentedUpload;
                     transfer.size = *size;
                     transfer.phase = Phase::SegmentRequestDue { toggle: false };
-                    Outcome::of(transfer)
+                    FrameEffect::of(transfer)
                 }
             }
         }
@@ -892,7 +896,7 @@ fn apply_response(
                 }
                 transfer.bytes = transfer.bytes.saturating_add(segment.data.len() as u64);
                 transfer.check_not_beyond_size(anomalies);
-                let outcome = Outcome::of(transfer);
+                let outcome = FrameEffect::of(transfer);
                 if segment.last {
                     transfer.check_complete(anomalies);
                     *slot = None;
@@ -905,7 +909,7 @@ fn apply_response(
             }
             _ => {
                 unexpected("an upload segment", slot, anomalies);
-                Outcome::default()
+                FrameEffect::default()
             }
         },
         SdoResponse::InitiateDownload { mux } => match slot {
@@ -922,18 +926,18 @@ fn apply_response(
                 check_mux(transfer.mux, *mux, anomalies);
                 if transfer.kind == TransferKind::ExpeditedDownload {
                     transfer.bytes = transfer.size.map_or(4, u64::from);
-                    Outcome {
+                    FrameEffect {
                         progress: slot.take().map(|t| t.progress()),
                         crc: None,
                     }
                 } else {
                     transfer.phase = Phase::SegmentRequestDue { toggle: false };
-                    Outcome::of(transfer)
+                    FrameEffect::of(transfer)
                 }
             }
             _ => {
                 unexpected("an initiate download response", slot, anomalies);
-                Outcome::default()
+                FrameEffect::default()
             }
         },
         SdoResponse::DownloadSegment { toggle } => match slot {
@@ -945,7 +949,7 @@ fn apply_response(
             ) if matches!(transfer.phase, Phase::SegmentResponseDue { .. }) => {
                 let Phase::SegmentResponseDue { toggle: sent, last } = transfer.phase else {
                     // Unreachable: the guard above matched this phase.
-                    return Outcome::default();
+                    return FrameEffect::default();
                 };
                 if *toggle != sent {
                     anomalies.push(format!(
@@ -954,7 +958,7 @@ fn apply_response(
                         u8::from(sent)
                     ));
                 }
-                let outcome = Outcome::of(transfer);
+                let outcome = FrameEffect::of(transfer);
                 if last {
                     *slot = None;
                 } else {
@@ -964,10 +968,10 @@ fn apply_response(
             }
             _ => {
                 unexpected("a download segment response", slot, anomalies);
-                Outcome::default()
+                FrameEffect::default()
             }
         },
-        SdoResponse::Abort { .. } => Outcome {
+        SdoResponse::Abort { .. } => FrameEffect {
             progress: slot.take().map(|t| t.progress()),
             crc: None,
         },
@@ -988,11 +992,11 @@ fn apply_response(
                     block.blksize = *blksize;
                     block.step = BlockStep::SubBlock;
                     transfer.phase = Phase::Block(block);
-                    Outcome::of(transfer)
+                    FrameEffect::of(transfer)
                 }
                 None => {
                     unexpected("an initiate block download response", slot, anomalies);
-                    Outcome::default()
+                    FrameEffect::default()
                 }
             }
         }
@@ -1021,11 +1025,11 @@ fn apply_response(
                 block.step = BlockStep::AwaitStart;
                 transfer.size = *size;
                 transfer.phase = Phase::Block(block);
-                Outcome::of(transfer)
+                FrameEffect::of(transfer)
             }
             None => {
                 unexpected("an initiate block upload response", slot, anomalies);
-                Outcome::default()
+                FrameEffect::default()
             }
         },
         SdoResponse::BlockUploadEnd { unused, crc } => block_end(
@@ -1117,10 +1121,10 @@ fn block_ack(
     ackseq: u8,
     blksize: u8,
     anomalies: &mut Vec<String>,
-) -> Outcome {
+) -> FrameEffect {
     let Some((transfer, mut block)) = block_in_step(slot, kind, BlockStep::SubBlock) else {
         unexpected(what, slot, anomalies);
-        return Outcome::default();
+        return FrameEffect::default();
     };
     if ackseq > block.seq {
         anomalies.push(format!(
@@ -1145,7 +1149,7 @@ fn block_ack(
         block.sub_block_start = transfer.bytes;
     }
     transfer.phase = Phase::Block(block);
-    Outcome::of(transfer)
+    FrameEffect::of(transfer)
 }
 
 fn block_end(
@@ -1155,10 +1159,10 @@ fn block_end(
     unused: u8,
     crc: u16,
     anomalies: &mut Vec<String>,
-) -> Outcome {
+) -> FrameEffect {
     let Some((transfer, mut block)) = block_in_step(slot, kind, BlockStep::AwaitEnd) else {
         unexpected(what, slot, anomalies);
-        return Outcome::default();
+        return FrameEffect::default();
     };
     if usize::from(unused) >= SEGMENT_DATA_LEN {
         anomalies.push(format!(
@@ -1186,7 +1190,7 @@ fn block_end(
     };
     block.step = BlockStep::AwaitEndResponse;
     transfer.phase = Phase::Block(block);
-    Outcome {
+    FrameEffect {
         progress: Some(transfer.progress()),
         crc: Some(check),
     }
@@ -1197,12 +1201,12 @@ fn block_end_response(
     kind: TransferKind,
     what: &str,
     anomalies: &mut Vec<String>,
-) -> Outcome {
+) -> FrameEffect {
     if block_in_step(slot, kind, BlockStep::AwaitEndResponse).is_none() {
         unexpected(what, slot, anomalies);
-        return Outcome::default();
+        return FrameEffect::default();
     }
-    Outcome {
+    FrameEffect {
         progress: slot.take().map(|t| t.progress()),
         crc: None,
     }

@@ -5,7 +5,7 @@
 
 use std::str::FromStr;
 
-use canopener_master::nmt_confirmation::{NEXT_HEARTBEAT_WAIT, Outcome, Unconfirmed, is_reset};
+use canopener_master::nmt_confirmation::{NEXT_HEARTBEAT_WAIT, NodeConfirmation, Unconfirmed, is_reset};
 use canopener_master::nmt_master::{NmtTarget, command_name};
 use canopener_runtime::nmt_command::{send, send_confirmed};
 use canopener_wire::{NmtCommand, NodeId};
@@ -42,7 +42,7 @@ pub(crate) fn run(args: NmtArgs) -> CliResult {
         },
     )?;
     print_stdout(&confirmed_report(format, command, target, &outcomes))?;
-    let failed: Vec<&Outcome> = outcomes.iter().filter(|outcome| !outcome.confirmed()).collect();
+    let failed: Vec<&NodeConfirmation> = outcomes.iter().filter(|outcome| !outcome.confirmed()).collect();
     if outcomes.is_empty() {
         return Err(CliError::Device(format!(
             "no node answered {} to all nodes within {} ms: no boot-up or heartbeat was heard{}",
@@ -69,7 +69,7 @@ pub(crate) fn run(args: NmtArgs) -> CliResult {
 
 /// Why a node did not confirm, as the error says it: `node 9 did not confirm start: ...`, with
 /// advice when the node was not heard at all.
-fn reason(command: NmtCommand, outcome: &Outcome) -> Option<String> {
+fn reason(command: NmtCommand, outcome: &NodeConfirmation) -> Option<String> {
     let why = outcome.unconfirmed?;
     let advice = match why {
         Unconfirmed::NotHeard { .. } => hint(command, Some(outcome.node)),
@@ -138,7 +138,7 @@ fn unconfirmed_report(format: OutputFormat, command: NmtCommand, target: NmtTarg
     }
 }
 
-fn outcome_json(command: NmtCommand, outcome: &Outcome) -> serde_json::Value {
+fn outcome_json(command: NmtCommand, outcome: &NodeConfirmation) -> serde_json::Value {
     let mut value = json!({
         "confirmed": outcome.confirmed(),
         "state": outcome.state.map(state_key),
@@ -151,7 +151,7 @@ fn outcome_json(command: NmtCommand, outcome: &Outcome) -> serde_json::Value {
     value
 }
 
-fn outcome_line(command: NmtCommand, outcome: &Outcome) -> String {
+fn outcome_line(command: NmtCommand, outcome: &NodeConfirmation) -> String {
     match (outcome.confirmed(), outcome.after) {
         (true, Some(after)) if outcome.boot_up => format!(
             "node {}: boot-up after {:.1} ms ({} confirmed), now PRE-OPERATIONAL",
@@ -174,9 +174,9 @@ fn confirmed_report(
     format: OutputFormat,
     command: NmtCommand,
     target: NmtTarget,
-    outcomes: &[Outcome],
+    outcomes: &[NodeConfirmation],
 ) -> String {
-    let all_confirmed = !outcomes.is_empty() && outcomes.iter().all(Outcome::confirmed);
+    let all_confirmed = !outcomes.is_empty() && outcomes.iter().all(NodeConfirmation::confirmed);
     match (format, target) {
         (OutputFormat::Json, NmtTarget::Node(_)) => {
             let mut value = outcomes
@@ -240,7 +240,7 @@ mod tests {
         }
     }
 
-    fn outcomes(command: NmtCommand, target: NmtTarget, heard: &[Heard]) -> Vec<Outcome> {
+    fn outcomes(command: NmtCommand, target: NmtTarget, heard: &[Heard]) -> Vec<NodeConfirmation> {
         let mut conf = Confirmation::new(command, target, Instant::ZERO, Duration::from_millis(1000));
         for one in heard {
             conf.on(one);

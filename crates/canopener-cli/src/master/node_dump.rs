@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use canopener_master::dcf_dump::{DcfOptions, Summary, build_dcf, plan};
+use canopener_master::dcf_dump::{DcfOptions, DumpTally, build_dcf, plan};
 use canopener_runtime::files::same_file;
 use canopener_runtime::link::Link;
 use canopener_runtime::node_dump::{DumpError, dcf_time, read_entries, write_dcf};
@@ -94,7 +94,7 @@ pub(crate) fn run(args: NodeDumpArgs) -> CliResult {
     }
 }
 
-fn summary_text(summary: &Summary, node: u8, to: &str, elapsed: Duration) -> String {
+fn summary_text(summary: &DumpTally, node: u8, to: &str, elapsed: Duration) -> String {
     let mut out = format!(
         "node {node}: {} entries read into {to} in {:.1} s",
         summary.read,
@@ -121,7 +121,7 @@ fn summary_text(summary: &Summary, node: u8, to: &str, elapsed: Duration) -> Str
 }
 
 fn summary_json(
-    summary: &Summary,
+    summary: &DumpTally,
     node: u8,
     out: &Path,
     elapsed: Duration,

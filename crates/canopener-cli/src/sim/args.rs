@@ -98,7 +98,7 @@ pub(crate) enum SimFormat {
 #[derive(Debug, Args)]
 pub(crate) struct EnergyBusOptions {
     /// With --energybus: the devices from this EnergyBus description (an EDS with the
-    /// [EnergyBusAssumptions] section) instead of the shipped one.
+    /// EnergyBusAssumptions section) instead of the shipped one.
     #[arg(long, value_name = "FILE", requires = "energybus")]
     pub(crate) energybus_eds: Option<PathBuf>,
     /// With --energybus and --bus: no controller; the devices wait for an LSS master on the bus.

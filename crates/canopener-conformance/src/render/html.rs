@@ -95,7 +95,7 @@ fn suites(report: &Report) -> Vec<String> {
 
 fn write_summary(out: &mut String, report: &Report) {
     let s = report.summary;
-    out.push_str("<section class=\"summary\" id=\"summary\">\n<h2>Summary</h2>\n");
+    out.push_str("<section class=\"summary\" id=\"summary\">\n<h2>VerdictCounts</h2>\n");
     let (class, text) = if report.tests.is_empty() {
         ("inconclusive", "No test ran.")
     } else if s.fail > 0 {
@@ -209,7 +209,7 @@ fn suite_heading(suite: &str) -> String {
 
 fn write_suite(out: &mut String, report: &Report, suite: &str) {
     let tests: Vec<&TestReport> = report.tests.iter().filter(|t| t.suite == suite).collect();
-    let summary = crate::model::Summary::of(tests.iter().copied());
+    let summary = crate::model::VerdictCounts::of(tests.iter().copied());
     let _ = writeln!(
         out,
         "<section class=\"suite\" id=\"suite-{}\" data-suite=\"{}\">",
@@ -798,7 +798,7 @@ mod tests {
     use canopener_can::{CanFrame, CanId, Instant, StandardId};
 
     use super::*;
-    use crate::model::{BusInfo, DeviceInfo, Identity, Summary, Telegram};
+    use crate::model::{BusInfo, DeviceInfo, Identity, Telegram, VerdictCounts};
 
     fn telegram(t: f64, dir: Direction, meaning: &str) -> Telegram {
         let id = CanId::Standard(StandardId::new(0x605).unwrap());
@@ -895,7 +895,7 @@ mod tests {
             interrupted: false,
             preparation: vec!["NMT reset node".to_owned()],
             left_modified: vec![],
-            summary: Summary::of(&tests),
+            summary: VerdictCounts::of(&tests),
             tests,
         }
     }
