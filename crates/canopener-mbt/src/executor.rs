@@ -333,6 +333,15 @@ impl<'m> Executor<'m> {
     /// drops the source then). A hidden event happens only with every component that declares it.
     fn closure(&mut self, confs: Vec<Conf>, now: i64) -> Vec<Conf> {
         self.closed_at = self.closed_at.max(now);
+        let mut taken = BTreeSet::new();
+        let out = self.closed(confs, now, &mut taken);
+        self.taken.extend(taken);
+        out
+    }
+
+    /// [`Executor::closure`] without recording anything: the configurations and, in `taken`, the
+    /// internal transitions on the way.
+    fn closed(&self, confs: Vec<Conf>, now: i64, taken: &mut BTreeSet<usize>) -> Vec<Conf> {
         let mut out: Vec<Conf> = Vec::new();
         let mut work = confs;
         let mut guard = 0;
@@ -364,7 +373,7 @@ impl<'m> Executor<'m> {
                     if !out.contains(&n) && !work.contains(&n) {
                         work.push(n);
                     }
-                    self.taken.extend(j.transitions);
+                    taken.extend(j.transitions);
                 }
             }
             if !urgent && !out.contains(&c) {
@@ -410,7 +419,8 @@ impl<'m> Executor<'m> {
     fn deadline(&self, c: &Conf) -> Option<i64> {
         let mut per_process: Vec<Option<i64>> = vec![None; self.model.processes.len()];
         for t in &self.model.transitions {
-            let must = t.kind == Kind::Output || (matches!(t.kind, Kind::Internal | Kind::Signal) && t.window.is_some());
+            let must = t.kind == Kind::Output
+                || (matches!(t.kind, Kind::Internal | Kind::Signal) && t.window.is_some());
             if !must
                 || !self.model.located(t, &c.state)
                 || !self.model.guard_holds(t, &c.state, &[]).unwrap_or(false)
@@ -631,7 +641,10 @@ impl<'m> Executor<'m> {
                                 }
                             }
                             self.taken.extend(j.transitions.iter().copied());
-                            next.push(Conf { state: j.state, clocks });
+                            next.push(Conf {
+                                state: j.state,
+                                clocks,
+                            });
                         }
                     }
                     Err(Blocked::Refused(component)) => {
@@ -713,8 +726,16 @@ impl<'m> Executor<'m> {
         }
         candidates.retain(|(label, _)| {
             self.confs.iter().all(|c| {
-                let next = self.input_successors(c, label, now);
-                !next.is_empty() && next.iter().all(|(_, n)| self.unanswerable(n, Some(now)).is_none())
+                let next: Vec<Conf> = self
+                    .input_successors(c, label, now)
+                    .into_iter()
+                    .map(|(_, n)| n)
+                    .collect();
+                if next.is_empty() {
+                    return false;
+                }
+                let after = self.closed(next, now, &mut BTreeSet::new());
+                after.iter().all(|n| self.unanswerable(n, Some(now)).is_none())
             })
         });
         candidates
@@ -736,7 +757,13 @@ impl<'m> Executor<'m> {
                         clocks[*r] = now;
                     }
                 }
-                (j.transitions, Conf { state: j.state, clocks })
+                (
+                    j.transitions,
+                    Conf {
+                        state: j.state,
+                        clocks,
+                    },
+                )
             })
             .collect()
     }
@@ -1016,7 +1043,27 @@ impl<'m> Executor<'m> {
             } else {
                 fresh
             };
-            let label = pool[self.rand(pool.len())].0.clone();
+            // Each component of a composition gets its share of the stimuli: one whose inputs are
+            // in the pool is chosen first, then one of its inputs, so that a model with one
+            // procedure step is not drowned by another's dozen commands.
+            let mut owners: Vec<usize> = pool
+                .iter()
+                .flat_map(|(_, ts)| {
+                    ts.iter()
+                        .map(|t| self.model.component_of(&self.model.transitions[*t]))
+                })
+                .collect();
+            owners.sort_unstable();
+            owners.dedup();
+            let owner = owners[self.rand(owners.len())];
+            let own: Vec<&&(Label, Vec<usize>)> = pool
+                .iter()
+                .filter(|(_, ts)| {
+                    ts.iter()
+                        .any(|t| self.model.component_of(&self.model.transitions[*t]) == owner)
+                })
+                .collect();
+            let label = own[self.rand(own.len())].0.clone();
             self.send(now, &label);
         } else {
             self.observe_from(now);
@@ -1082,7 +1129,10 @@ impl<'m> Executor<'m> {
             Phase::Observing(until, _) => {
                 let deadline = self.confs.iter().filter_map(|c| self.deadline(c)).min();
                 let due = deadline.map_or(until, |d| until.min(d + 1));
-                Some(self.next_opening(self.closed_at).map_or(due, |open| due.min(open)))
+                Some(
+                    self.next_opening(self.closed_at)
+                        .map_or(due, |open| due.min(open)),
+                )
             }
             Phase::Finished => None,
         }

@@ -95,15 +95,18 @@ fn clean_devices_pass_every_shipped_model() {
         &["heartbeat"][..],
     ] {
         let model = model(names, &eds);
+        // The service models compose nmt (they `use` it), which gets its share of the stimuli;
+        // sync's two parts need the longest.
+        let steps = if names == ["sync"] { 800 } else { 300 };
         for seed in 1..=3 {
-            let outcome = test(&model, &eds, &[], seed, 150);
+            let outcome = test(&model, &eds, &[], seed, steps);
             assert_eq!(
                 outcome.verdict,
                 Verdict::Pass,
                 "{names:?} seed {seed}: {}",
                 show(&outcome)
             );
-            assert_eq!(outcome.steps, 150);
+            assert_eq!(outcome.steps, steps);
             assert!(outcome.coverage.transitions[0] > 5, "{:?}", outcome.coverage);
             eprintln!(
                 "{names:?} seed {seed}: {:?} {:?}",
@@ -146,14 +149,26 @@ fn clean_devices_pass_every_shipped_model() {
                         .filter(|s| s.label.starts_with(prefix))
                         .count()
                 };
-                // TPDOs after the first SYNC the tester sent (before it, TPDO1 ran with the type it
-                // starts with).
-                let tpdos = outcome
-                    .trace
-                    .iter()
-                    .skip_while(|s| !s.label.starts_with("?SYNC_IN"))
-                    .filter(|s| s.label.starts_with("!TPDO"))
-                    .count();
+                // The consumer part: in each stretch after TPDO1 was made valid with type 3 and
+                // before the next NMT command (which may stop the PDOs or reset the node), TPDO1
+                // comes after every third SYNC the tester sends and never between (the stretch may
+                // end between a third SYNC and its TPDO).
+                let mut stretches: Vec<(usize, usize)> = Vec::new();
+                let mut open = false;
+                for step in &outcome.trace {
+                    if step.label.starts_with("?SDO_RX !0x23 !0x1800 !0x01")
+                        && !step.label.ends_with("!0x80000185")
+                    {
+                        open = true;
+                        stretches.push((0, 0));
+                    } else if step.label.starts_with("?NMT") && !step.label.starts_with("?NMT !0x01") {
+                        open = false;
+                    } else if open && step.label.starts_with("?SYNC_IN") {
+                        stretches.last_mut().expect("open").0 += 1;
+                    } else if open && step.label.starts_with("!TPDO") {
+                        stretches.last_mut().expect("open").1 += 1;
+                    }
+                }
                 let syncs_in = count("?SYNC_IN");
                 // The producer part: the counter ran up to 5 and wrapped to 1.
                 assert!(
@@ -161,14 +176,14 @@ fn clean_devices_pass_every_shipped_model() {
                     "{}",
                     show(&outcome)
                 );
-                // The consumer part: TPDO1 of type 3 after every third SYNC the tester sent (the
-                // run may end between the third SYNC and its TPDO).
                 assert!(syncs_in > 9, "{}", show(&outcome));
-                assert!(
-                    (syncs_in / 3 - 1..=syncs_in / 3).contains(&tpdos),
-                    "{syncs_in} SYNCs, {tpdos} TPDOs: {}",
-                    show(&outcome)
-                );
+                for (syncs, tpdos) in stretches {
+                    assert!(
+                        tpdos <= syncs / 3 && tpdos + 1 >= syncs / 3,
+                        "{syncs} SYNCs, {tpdos} TPDOs: {}",
+                        show(&outcome)
+                    );
+                }
             }
         }
     }
@@ -188,7 +203,6 @@ fn protocol_faults_are_caught() {
         (&["nmt"], Fault::GuardingAndHeartbeat),
         (&["sdo"], Fault::SdoSlow),
         (&["sdo"], Fault::SdoExpeditedSizeWrong),
-        (&["sdo"], Fault::WrongAbortCode),
         (&["sdo"], Fault::SdoBadCommandSilent),
         (&["sdo"], Fault::SdoToggleIgnored),
         (&["sync"], Fault::SyncCounterMissing),
@@ -202,7 +216,7 @@ fn protocol_faults_are_caught() {
     ];
     for (names, fault) in cases {
         let model = model(names, &eds);
-        let outcome = test(&model, &eds, &[*fault], 1, 400);
+        let outcome = test(&model, &eds, &[*fault], 1, 600);
         assert_eq!(
             outcome.verdict,
             Verdict::Fail,
@@ -212,6 +226,25 @@ fn protocol_faults_are_caught() {
         assert!(
             !outcome.allowed.is_empty() || outcome.reason.contains("unexpected"),
             "{}",
+            show(&outcome)
+        );
+    }
+}
+
+/// A device that aborts everything with the general error 0800 0000h passes the sdo model: the
+/// model judges aborts through the table the conformance suites use (`canopener_wire::accepted`),
+/// and CiA 301 allows the general error for any refusal. The suites' `cia301.sdo.31` holds a device
+/// to the specific codes; a model judges one answer at a time and cannot.
+#[test]
+fn the_general_error_is_an_accepted_abort_as_in_the_conformance_suites() {
+    let eds = eds();
+    let model = model(&["sdo"], &eds);
+    for seed in 1..=2 {
+        let outcome = test(&model, &eds, &[Fault::WrongAbortCode], seed, 400);
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+        assert!(
+            outcome.trace.iter().any(|s| s.label.ends_with("!0x08000000")),
+            "no abort was provoked: {}",
             show(&outcome)
         );
     }
@@ -307,10 +340,11 @@ fn heartbeat_event_without_1029h_moves_an_operational_device_to_pre_operational(
         let mut beat_since_peer: Option<&str> = None;
         for step in &outcome.trace {
             let label = step.label.as_str();
-            if label.starts_with("?NMT !0x01") {
-                started = true;
-            } else if label.starts_with("?NMT !0x81") {
-                (started, after_event) = (false, false);
+            if label.starts_with("?NMT") {
+                // A start of this node (or all) makes it Operational; any other command leaves
+                // the state the next heartbeat reports to the nmt model.
+                started = label.starts_with("?NMT !0x01 !0x00") || label.starts_with("?NMT !0x01 !0x05");
+                after_event = false;
             } else if label.starts_with("?PEER") {
                 beat_since_peer = None;
             } else if label.starts_with("!EMCY !0x8130") && started {
@@ -338,7 +372,7 @@ fn failing_runs_shrink_to_one_minimal_scripts() {
     let eds = eds();
     for (names, fault) in [
         (&["nmt"][..], Fault::IgnoresNmtStop),
-        (&["sdo"][..], Fault::WrongAbortCode),
+        (&["sdo"][..], Fault::SdoBadCommandSilent),
         (&["lss"][..], Fault::LssStateNotChanged),
     ] {
         let model = model(names, &eds);

@@ -131,6 +131,12 @@ pub const TOGGLE: Accepted = Accepted {
     codes: &[abort::TOGGLE_BIT_NOT_ALTERNATED, abort::GENERAL_ERROR],
     source: CIA_TABLE,
 };
+/// A server that gives up on a transfer its client stopped serving (CiA 301 sets no time for it).
+pub const TIMED_OUT: Accepted = Accepted {
+    name: "timed_out",
+    codes: &[abort::PROTOCOL_TIMED_OUT, abort::GENERAL_ERROR],
+    source: CIA_TABLE,
+};
 /// A block upload with a block size outside 1..127 (CCT SDO 26).
 pub const BLOCK_SIZE: Accepted = Accepted {
     name: "block_size",
@@ -244,6 +250,7 @@ pub const ABORT_SETS: &[Accepted] = &[
     TOO_HIGH,
     TOO_LOW,
     TOGGLE,
+    TIMED_OUT,
     BLOCK_SIZE,
     SEQUENCE_NUMBER,
     NO_BLOCK_TRANSFER,
