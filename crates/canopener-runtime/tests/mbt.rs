@@ -475,3 +475,130 @@ fn a_purpose_guides_the_run_and_ends_it_when_reached() {
     assert_eq!(outcome.verdict, Verdict::Fail, "{}", show(&outcome));
     assert_eq!(outcome.purpose, Some(("stop_and_start".to_owned(), false)));
 }
+
+/// The compositions issue 23 found failing on clean devices, on the devices and seeds it named:
+/// `nmt heartbeat` on a plain CiA 301 I/O device, CANopenNode's demoDevice and maxon's EPOS4 (a
+/// heartbeat taken by one model while the other's stayed due; the 1016h write in Stopped), and
+/// `nmt heartbeat sdo` on the demoDevice (two SDO transfers interleaved).
+#[test]
+fn the_compositions_issue_23_found_failing_pass_on_its_devices() {
+    let devices = [
+        IO,
+        "CANopenNode__CANopenDemo__demo__demoDevice.eds",
+        "YamamotoSoya__maxon_epos4compact50-5can_ros2__maxon_epos4_ros2__config__bus_config_cia402_epos4_pos__maxon_epos4_0x1018.eds",
+    ];
+    for (i, file) in devices.iter().enumerate() {
+        let eds = canopener_eds::load(&std::fs::read(corpus::eds(file)).expect("EDS file")).eds;
+        let mut runs = vec![(&["nmt", "heartbeat"][..], 1..=3)];
+        if i == 1 {
+            runs.push((&["nmt", "heartbeat", "sdo"][..], 1..=3));
+        }
+        for (names, seeds) in runs {
+            let model = model(names, &eds);
+            for seed in seeds {
+                let outcome = test(&model, &eds, &[], seed, 2000);
+                assert_eq!(
+                    outcome.verdict,
+                    Verdict::Pass,
+                    "{names:?} on {file} seed {seed}: {}",
+                    show(&outcome)
+                );
+            }
+        }
+    }
+}
+
+/// Cause (b) of issue 23, kept as a fixture: a heartbeat consumer model that writes 1016h in any
+/// NMT state. Composed with nmt (no SDO answer in Stopped), the tester never sends the write while
+/// the device is stopped, and the runs pass; the heartbeat event is still provoked.
+#[test]
+fn an_input_whose_answer_another_model_forbids_is_never_sent() {
+    let eds = eds();
+    let fixture = canopener_testkit::fixture::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../canopener-mbt/test_data/heartbeat-any-state.mbt"),
+    )
+    .expect("fixture");
+    let sources = [
+        Source {
+            origin: "nmt".into(),
+            text: shipped::text("nmt").expect("shipped").into(),
+        },
+        Source {
+            origin: "heartbeat-any-state.mbt".into(),
+            text: fixture,
+        },
+    ];
+    let options = Options {
+        node_id: NODE,
+        eds: Some(&eds),
+        set: Vec::new(),
+    };
+    let (model, report) = compile(&sources, &options, &|n| shipped::text(n).map(str::to_owned));
+    let model = model.unwrap_or_else(|| panic!("{report:#?}"));
+    let mut events = 0;
+    for seed in 1..=3 {
+        let outcome = test(&model, &eds, &[], seed, 1500);
+        assert_eq!(outcome.verdict, Verdict::Pass, "seed {seed}: {}", show(&outcome));
+        // Stopped lasts from a stop command for this node (or all) to its next command.
+        let mut stopped = false;
+        for step in &outcome.trace {
+            let label = step.label.as_str();
+            let words: Vec<&str> = label.split(' ').collect();
+            if let ["?NMT", cs, node] = words[..]
+                && (node == "!0x00" || node == "!0x05")
+            {
+                stopped = cs == "!0x02";
+            }
+            assert!(
+                !(stopped && label.starts_with("?SDO_RX !0x23 !0x1016")),
+                "seed {seed}: the write was sent in Stopped at {:.3}s",
+                step.t
+            );
+        }
+        events += outcome
+            .trace
+            .iter()
+            .filter(|s| s.label.starts_with("!EMCY !0x8130"))
+            .count();
+    }
+    assert!(events > 0, "the consumer was never tested");
+}
+
+/// The composition matrix's CI sample (`examples/mbt_compose.rs --subsets sample` is the full
+/// version): every shipped CANopen model alone and with nmt, the issue's composition and all of
+/// them together, on two devices; and the whole set still catches a fault of each model.
+#[test]
+fn a_sample_of_the_composition_matrix_passes_and_catches() {
+    let names: Vec<&str> = shipped::canopen_models().map(|m| m.name).collect();
+    let mut subsets: Vec<Vec<&str>> = names.iter().map(|n| vec![*n]).collect();
+    subsets.extend(names.iter().filter(|n| **n != "nmt").map(|n| vec!["nmt", *n]));
+    subsets.push(vec!["nmt", "heartbeat", "sdo"]);
+    subsets.push(names.clone());
+    for file in [IO, "christiansandberg__canopen__test__sample.eds"] {
+        let eds = canopener_eds::load(&std::fs::read(corpus::eds(file)).expect("EDS file")).eds;
+        for subset in &subsets {
+            let outcome = test(&model(subset, &eds), &eds, &[], 1, 400);
+            assert_eq!(
+                outcome.verdict,
+                Verdict::Pass,
+                "{subset:?} on {file}: {}",
+                show(&outcome)
+            );
+        }
+    }
+    let eds = eds();
+    let all = model(&names, &eds);
+    for fault in [
+        Fault::HeartbeatStateWrong,
+        Fault::IgnoresNmtStop,
+        Fault::SdoBadCommandSilent,
+        Fault::SyncCounterMissing,
+        Fault::NoEmcy,
+        Fault::EmcyNoErrorReset,
+        Fault::LssStateNotChanged,
+    ] {
+        let caught = (1..=3).any(|seed| test(&all, &eds, &[fault], seed, 1000).verdict == Verdict::Fail);
+        assert!(caught, "{fault} is not caught by all the models together");
+    }
+}
