@@ -53,6 +53,9 @@ Exit status: 0 explored, 3 the model has errors, 5 an output file could not be w
   canopener mbt synth nmt --purpose-aut my-purpose.aut
 The graph keeps the specification's labels (?GATE tester sends, !GATE device sends, QUIESCENCE);
 states with a PASS or INCONCLUSIVE loop are verdicts; outputs missing from the graph are fail.
+The graph is untimed: the models' clocks and windows are dropped, so it cannot judge an output that
+comes too late or too early, nor how long QUIESCENCE must last; `mbt run --purpose P` follows the same
+purpose with the clocks (a late output is fail there).
 Exit status: 0 synthesised, 6 the purpose cannot be reached, 3 a model or .aut that does not read.")]
     Synth(SynthArgs),
     /// Test a device against models on the fly: ioco with timed quiescence.

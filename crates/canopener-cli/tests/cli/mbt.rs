@@ -164,6 +164,14 @@ fn synth_writes_the_test_graph_of_a_purpose() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.starts_with("des (0, ") && text.contains("PASS"), "{text}");
+    // The graph is untimed, and the command says what that leaves unjudged (issue 23, item 3).
+    let said = stdout(&output);
+    assert!(
+        said.contains("untimed: the graph drops the windows of")
+            && said.contains("cannot judge an output that comes too late")
+            && said.contains("--purpose stop_and_start"),
+        "{said}"
+    );
     // The same kind of purpose from an .aut file in TGV's convention.
     let purpose = dir.join("stop.aut");
     std::fs::write(
@@ -182,6 +190,11 @@ fn synth_writes_the_test_graph_of_a_purpose() {
     ]);
     assert_eq!(from_aut.status.code(), Some(0), "{}", stderr(&from_aut));
     assert!(stdout(&from_aut).contains("PASS"), "{}", stdout(&from_aut));
+    assert!(
+        stdout(&from_aut).starts_with("des (0, ") && stderr(&from_aut).contains("untimed:"),
+        "{}",
+        stderr(&from_aut)
+    );
     std::fs::write(&purpose, "des (0, 1, 2)\n(0, ACCEPT, 1)\n").unwrap();
     let bad = run(&["mbt", "synth", "nmt", "--purpose-aut", purpose.to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(3), "{}", stderr(&bad));
