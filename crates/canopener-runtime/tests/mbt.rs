@@ -11,7 +11,7 @@ use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_run::{run, shrink};
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
 use canopener_testkit::corpus;
 
 /// CANopenNode's example I/O device: heartbeat every 1000 ms (1017h), the CiA 301 objects.
@@ -48,14 +48,20 @@ fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> 
     test_node(model, eds, NODE, faults, seed, steps)
 }
 
-fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+/// A simulated device 100 ms after power-on: its boot-up is history when the tester starts with
+/// its own reset.
+fn booted(eds: &Eds, node_id: u8, faults: &[Fault]) -> SimulatedBus {
     let mut bus = Simulation::ideal()
         .device(eds, node_id)
         .faults(faults.iter().copied())
         .start()
         .expect("simulation");
-    // The device's power-on boot-up is history when the tester starts with its own reset.
     bus.run_until(Instant::from_millis(100)).expect("virtual time");
+    bus
+}
+
+fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+    let mut bus = booted(eds, node_id, faults);
     let config = RunConfig {
         seed,
         steps,
@@ -443,11 +449,7 @@ fn a_purpose_guides_the_run_and_ends_it_when_reached() {
         .expect("shipped purpose")
         .clone();
     for seed in 1..=5 {
-        let mut bus = Simulation::ideal()
-            .device(&eds, NODE)
-            .start()
-            .expect("simulation");
-        bus.run_until(Instant::from_millis(100)).expect("virtual time");
+        let mut bus = booted(&eds, NODE, &[]);
         let config = RunConfig {
             seed,
             steps: 400,
@@ -567,7 +569,8 @@ fn an_input_whose_answer_another_model_forbids_is_never_sent() {
 
 /// The composition matrix's CI sample (`examples/mbt_compose.rs --subsets sample` is the full
 /// version): every shipped CANopen model alone and with nmt, the issue's composition and all of
-/// them together, on two devices; and the whole set still catches a fault of each model.
+/// them together, on three devices (the demoDevice is the one issue 23 saw `nmt heartbeat sdo`
+/// fail on); and the whole set still catches a fault of each model.
 #[test]
 fn a_sample_of_the_composition_matrix_passes_and_catches() {
     let names: Vec<&str> = shipped::canopen_models().map(|m| m.name).collect();
@@ -575,10 +578,14 @@ fn a_sample_of_the_composition_matrix_passes_and_catches() {
     subsets.extend(names.iter().filter(|n| **n != "nmt").map(|n| vec!["nmt", *n]));
     subsets.push(vec!["nmt", "heartbeat", "sdo"]);
     subsets.push(names.clone());
-    for file in [IO, "christiansandberg__canopen__test__sample.eds"] {
+    for file in [
+        IO,
+        "CANopenNode__CANopenDemo__demo__demoDevice.eds",
+        "christiansandberg__canopen__test__sample.eds",
+    ] {
         let eds = canopener_eds::load(&std::fs::read(corpus::eds(file)).expect("EDS file")).eds;
         for subset in &subsets {
-            let outcome = test(&model(subset, &eds), &eds, &[], 1, 400);
+            let outcome = test(&model(subset, &eds), &eds, &[], 1, 600);
             assert_eq!(
                 outcome.verdict,
                 Verdict::Pass,
@@ -601,4 +608,33 @@ fn a_sample_of_the_composition_matrix_passes_and_catches() {
         let caught = (1..=3).any(|seed| test(&all, &eds, &[fault], seed, 1000).verdict == Verdict::Fail);
         assert!(caught, "{fault} is not caught by all the models together");
     }
+}
+
+/// What a progress bar on a real bus is told: the step count as it grows, one by one up to the
+/// steps of the outcome, and the same outcome as an unwatched run of the same seed.
+#[test]
+fn a_watched_run_reports_every_step_and_judges_the_same() {
+    let eds = eds();
+    let model = model(&["nmt", "heartbeat"], &eds);
+    let mut bus = booted(&eds, NODE, &[]);
+    let config = RunConfig {
+        seed: 2,
+        steps: 150,
+        ..RunConfig::default()
+    };
+    let mut told = Vec::new();
+    let watched = canopener_runtime::mbt_run::run_watched(
+        &mut bus,
+        &model,
+        config,
+        Some(Duration::from_secs(3600)),
+        &mut |steps| told.push(steps),
+    )
+    .expect("link");
+    assert_eq!(told, (1..=watched.steps).collect::<Vec<_>>());
+    let plain = test(&model, &eds, &[], 2, 150);
+    assert_eq!(
+        (watched.verdict, watched.steps, watched.trace.len()),
+        (plain.verdict, plain.steps, plain.trace.len())
+    );
 }
