@@ -3,13 +3,14 @@
 
 use std::time::Duration;
 
-use canopener_can::Instant;
+use canopener_can::{CanFrame, Instant};
 use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
 use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
+use canopener_runtime::link::{Link, LinkError};
 use canopener_runtime::mbt_run::{run, shrink};
 use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
 use canopener_testkit::corpus;
@@ -396,7 +397,7 @@ fn failing_runs_shrink_to_one_minimal_scripts() {
                 .start()
                 .expect("simulation");
             bus.run_until(Instant::from_millis(100))?;
-            Ok::<_, canopener_runtime::link::LinkError>(bus)
+            Ok::<_, LinkError>(bus)
         };
         let shrunk = shrink(&mut new_bus, &model, &config, &failing.script(), None)
             .unwrap()
@@ -636,5 +637,108 @@ fn a_watched_run_reports_every_step_and_judges_the_same() {
     assert_eq!(
         (watched.verdict, watched.steps, watched.trace.len()),
         (plain.verdict, plain.steps, plain.trace.len())
+    );
+}
+
+/// The device's SDO answers rewritten on their way to the tester: a device that answers with
+/// another alternative than the simulator's.
+struct Rewritten {
+    inner: SimulatedBus,
+    rewrite: Rewrite,
+}
+
+/// How a device's SDO answer (its 8 data bytes) is changed.
+type Rewrite = fn(&[u8]) -> Vec<u8>;
+
+impl Link for Rewritten {
+    fn now(&self) -> Instant {
+        self.inner.now()
+    }
+
+    fn send(&mut self, frame: &CanFrame) -> Result<(), LinkError> {
+        self.inner.send(frame)
+    }
+
+    fn recv_until(&mut self, deadline: Instant) -> Result<Option<(Instant, CanFrame)>, LinkError> {
+        Ok(self.inner.recv_until(deadline)?.map(|(at, frame)| {
+            if frame.id().as_raw() == 0x580 + u32::from(NODE) && !frame.is_remote() {
+                let data = (self.rewrite)(frame.data());
+                (at, CanFrame::new(frame.id(), &data).expect("8 bytes"))
+            } else {
+                (at, frame)
+            }
+        }))
+    }
+
+    fn is_cancelled(&self) -> bool {
+        self.inner.is_cancelled()
+    }
+
+    fn describe(&self) -> String {
+        self.inner.describe()
+    }
+}
+
+/// The `sdo` model on a device whose SDO answers `rewrite` changes, seeds 1..=4.
+fn rewritten_runs(model: &Model, eds: &Eds, rewrite: Rewrite) -> Vec<Outcome> {
+    (1..=4)
+        .map(|seed| {
+            let mut link = Rewritten {
+                inner: booted(eds, NODE, &[]),
+                rewrite,
+            };
+            let config = RunConfig {
+                seed,
+                steps: 400,
+                ..RunConfig::default()
+            };
+            run(&mut link, model, config, Some(Duration::from_secs(3600))).expect("link")
+        })
+        .collect()
+}
+
+/// An abort of a write to a read-only object (0601 0002h) carrying `code` instead.
+fn read_only_abort_as(d: &[u8], code: u32) -> Vec<u8> {
+    let mut d = d.to_vec();
+    if d.len() == 8 && d[0] == 0x80 && d[4..] == 0x0601_0002u32.to_le_bytes() {
+        d[4..].copy_from_slice(&code.to_le_bytes());
+    }
+    d
+}
+
+/// Issue 23: a run judges SDO answers through the table the conformance suites use. An expedited
+/// upload answered without the size (42h) and a write to a read-only object aborted with 0601 0000h
+/// or 0800 0000h instead of 0601 0002h pass; an answer outside the table (0609 0011h for the
+/// read-only write) fails.
+#[test]
+fn sdo_answers_are_judged_through_the_accepted_table() {
+    let eds = eds();
+    let model = model(&["sdo"], &eds);
+    let alternatives: [(&str, Rewrite); 3] = [
+        ("!SDO_TX !0x42", |d| {
+            let mut d = d.to_vec();
+            // 43h/47h/4Bh/4Fh: expedited with the size; 42h: without it.
+            if d.first().is_some_and(|c| c & 0xF3 == 0x43) {
+                d[0] = 0x42;
+            }
+            d
+        }),
+        ("!0x06010000", |d| read_only_abort_as(d, 0x0601_0000)),
+        ("!0x08000000", |d| read_only_abort_as(d, 0x0800_0000)),
+    ];
+    for (seen, rewrite) in alternatives {
+        let runs = rewritten_runs(&model, &eds, rewrite);
+        for o in &runs {
+            assert_eq!(o.verdict, Verdict::Pass, "{seen}: {}", show(o));
+        }
+        assert!(
+            runs.iter().flat_map(|o| &o.trace).any(|s| s.label.contains(seen)),
+            "no answer was rewritten to {seen} in four seeds"
+        );
+    }
+    let outside = rewritten_runs(&model, &eds, |d| read_only_abort_as(d, 0x0609_0011));
+    assert!(
+        outside.iter().any(|o| o.verdict == Verdict::Fail),
+        "0609 0011h for a read-only write was not a failure"
     );
 }
