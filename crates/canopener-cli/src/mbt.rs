@@ -6,3 +6,4 @@ pub(crate) mod energybus;
 pub(crate) mod inspect;
 pub(crate) mod load;
 pub(crate) mod run;
+pub(crate) mod seeds;

@@ -1,7 +1,8 @@
 //! The untimed semantics of a model and the exploration of its state space.
 //!
-//! Processes interleave: in a state, every enabled transition of every process is a step. A step's
-//! guard and updates read the state before it; updates must stay in their variable's domain.
+//! The composed semantics of [`crate::compose`]: internal steps interleave per process; inputs,
+//! outputs and hidden events synchronise the components that hold them. A step's guards and
+//! updates read the state before it; updates must stay in their variable's domain.
 //! Exploration enumerates the concrete labels of inputs (their patterns are bounded: the static
 //! checks see to that) and of outputs with values or sets; an output field the model leaves open
 //! (`_`, or a range wider than [`MAX_INPUT_CHOICES`]) stays open in the label (`!_`). Clocks are
@@ -30,6 +31,10 @@ pub struct Lts {
 /// One step of the untimed semantics: the transition, its label (none for internal steps) and
 /// the state it leads to.
 pub type Step = (usize, Option<Label>, Vec<i64>);
+
+/// One step of the composed untimed semantics with every transition taking part (the initiator
+/// first), its label and the state it leads to.
+pub type JointStep = (Vec<usize>, Option<Label>, Vec<i64>);
 
 /// The explored state space of a model.
 #[derive(Debug, Clone)]
@@ -118,16 +123,7 @@ impl Model {
                     }
                 }
             };
-            labels = labels
-                .into_iter()
-                .flat_map(|prefix| {
-                    choices.iter().map(move |c| {
-                        let mut l = prefix.clone();
-                        l.push(*c);
-                        l
-                    })
-                })
-                .collect();
+            labels = extend_each(labels, &choices);
         }
         let mut kept = Vec::new();
         for l in labels {
@@ -155,36 +151,206 @@ impl Model {
         }
     }
 
-    /// Every step from `state`: transition, label (none for internal), target.
+    /// Every step from `state` in the composed semantics ([`crate::compose`]): transition (the one
+    /// that starts the step), label (none for internal steps and hidden events), target.
+    /// Internal steps are per process; inputs, outputs and hidden events synchronise every
+    /// component that holds them. Duplicate steps (the same label to the same state) are listed
+    /// once.
     pub fn steps(&self, state: &[i64]) -> Result<Vec<Step>, (usize, String)> {
-        let mut out = Vec::new();
+        Ok(self
+            .joint_steps(state)?
+            .into_iter()
+            .map(|(ts, label, next)| (ts[0], label, next))
+            .collect())
+    }
+
+    /// [`Model::steps`] with every transition that takes part in each step (one per component
+    /// holding its frame or event; the initiator first).
+    pub fn joint_steps(&self, state: &[i64]) -> Result<Vec<JointStep>, (usize, String)> {
+        use crate::compose::Blocked;
+        let mut out: Vec<JointStep> = Vec::new();
+        let push = |out: &mut Vec<JointStep>, step: JointStep| {
+            if !out.iter().any(|(_, l, s)| *l == step.1 && *s == step.2) {
+                out.push(step);
+            }
+        };
+        let error = |b: Blocked| match b {
+            Blocked::Error(t, e) => Err((t, e)),
+            Blocked::Refused(_) => Ok(()),
+        };
+        let mut inputs: Vec<Label> = Vec::new();
         for t in &self.transitions {
             if !self.located(t, state) {
                 continue;
             }
             let fail = |e: String| (t.id, e);
-            match t.gate {
-                None => {
-                    if self.guard_holds(t, state, &[]).map_err(|e| fail(e.to_string()))? {
-                        out.push((t.id, None, self.apply(t, state, &[]).map_err(fail)?));
+            match t.kind {
+                Kind::Internal | Kind::Signal => {
+                    if !self.guard_holds(t, state, &[]).map_err(|e| fail(e.to_string()))? {
+                        continue;
+                    }
+                    match self.signal_joint(state, t.id) {
+                        Ok(joint) => {
+                            for j in joint {
+                                push(&mut out, (j.transitions, None, j.state));
+                            }
+                        }
+                        Err(b) => error(b)?,
                     }
                 }
-                Some(gate) => {
+                Kind::On => {}
+                Kind::Input => {
+                    if t.passive {
+                        continue;
+                    }
+                    let Some(gate) = t.gate else { continue };
                     for values in self.offers(t, state).map_err(|e| fail(e.to_string()))? {
-                        let known: Vec<i64> = values.iter().map(|v| v.unwrap_or(0)).collect();
-                        let next = self.apply(t, state, &known).map_err(fail)?;
-                        out.push((t.id, Some(Label { gate, values }), next));
+                        let label = Label {
+                            gate,
+                            values: values.iter().map(|v| Some(v.unwrap_or(0))).collect(),
+                        };
+                        if !inputs.contains(&label) {
+                            inputs.push(label);
+                        }
+                    }
+                }
+                Kind::Output | Kind::MaybeOutput => {
+                    let Some(gate) = t.gate else { continue };
+                    let own = self.component_of(t);
+                    let offers = self.offers(t, state).map_err(|e| fail(e.to_string()))?;
+                    for values in offers.into_iter().flat_map(|v| self.refine(state, gate, v)) {
+                        // The initiator takes part with this transition; every other holder with
+                        // one of its own.
+                        let mut admit = |u: &Transition| self.component_of(u) != own || u.id == t.id;
+                        match self.output_joint(state, gate, &values, &mut admit) {
+                            Ok(joint) => {
+                                for j in joint {
+                                    push(
+                                        &mut out,
+                                        (
+                                            j.transitions,
+                                            Some(Label {
+                                                gate,
+                                                values: values.clone(),
+                                            }),
+                                            j.state,
+                                        ),
+                                    );
+                                }
+                            }
+                            Err(b) => error(b)?,
+                        }
                     }
                 }
             }
         }
+        // Maximal progress: an internal step without a window happens at once, so a state that has
+        // one is left before anything else can happen (the executor's closure does the same).
+        let urgent: Vec<JointStep> = out
+            .iter()
+            .filter(|(ts, label, _)| label.is_none() && self.transitions[ts[0]].window.is_none())
+            .cloned()
+            .collect();
+        if !urgent.is_empty() {
+            return Ok(urgent);
+        }
+        for label in inputs {
+            let values: Vec<i64> = label.values.iter().map(|v| v.unwrap_or(0)).collect();
+            match self.input_joint(state, label.gate, &values) {
+                Ok(joint) => {
+                    for j in joint {
+                        push(&mut out, (j.transitions, Some(label.clone()), j.state));
+                    }
+                }
+                Err(b) => error(b)?,
+            }
+        }
         Ok(out)
+    }
+
+    /// An output label whose fields the initiator leaves open, made concrete wherever a holder of
+    /// the frame cares: each open field takes every value some holder's pattern names there, and
+    /// one value none names (still open if no holder names any). Without this, two holders could
+    /// each read the same open label as a different frame (a confirmation and an abort).
+    fn refine(&self, state: &[i64], gate: usize, values: Vec<Option<i64>>) -> Vec<Vec<Option<i64>>> {
+        const MAX_LABELS: usize = 64;
+        let key = self.gates[gate].frame_key();
+        let mut choices: Vec<Vec<Option<i64>>> = Vec::new();
+        for (field, value) in values.iter().enumerate() {
+            if value.is_some() {
+                choices.push(vec![*value]);
+                continue;
+            }
+            let mut named: Vec<i64> = Vec::new();
+            for t in &self.transitions {
+                // Only holders' transitions that could take this label (its known fields) name
+                // values that matter.
+                if !t.kind.is_output()
+                    || !self.on_frames(t, key)
+                    || !self.located(t, state)
+                    || !self.matches_open(t, state, &values)
+                {
+                    continue;
+                }
+                match t.patterns.get(field) {
+                    Some(CPattern::Value(e)) => named.extend(e.eval(state, &[]).ok()),
+                    Some(CPattern::Set(items)) => {
+                        named.extend(items.iter().filter_map(|i| i.eval(state, &[]).ok()))
+                    }
+                    _ => {}
+                }
+            }
+            named.sort_unstable();
+            named.dedup();
+            if named.is_empty() {
+                choices.push(vec![None]);
+                continue;
+            }
+            // A value no holder names: one past the largest, or below the smallest at the top of
+            // the field's range.
+            let size = self.gates[gate].fields[field].size;
+            let max = if size >= 8 {
+                i64::MAX
+            } else {
+                (1i64 << (8 * size)) - 1
+            };
+            let fresh = named
+                .last()
+                .map(|v| v + 1)
+                .filter(|v| *v <= max)
+                .or_else(|| (0..=max).find(|v| !named.contains(v)));
+            let mut options: Vec<Option<i64>> = named.into_iter().map(Some).collect();
+            options.extend(fresh.map(Some));
+            choices.push(options);
+        }
+        let mut labels: Vec<Vec<Option<i64>>> = vec![Vec::new()];
+        for options in choices {
+            labels = extend_each(labels, &options);
+            if labels.len() > MAX_LABELS {
+                return vec![values];
+            }
+        }
+        labels
     }
 
     /// The direction of a transition's label, if it has one.
     pub fn direction(&self, t: &Transition) -> Option<Direction> {
         t.gate.map(|g| self.gates[g].direction)
     }
+}
+
+/// Every label of `labels` extended by every value of `choices` (a cartesian product, field by field).
+fn extend_each(labels: Vec<Vec<Option<i64>>>, choices: &[Option<i64>]) -> Vec<Vec<Option<i64>>> {
+    labels
+        .into_iter()
+        .flat_map(|prefix| {
+            choices.iter().map(move |c| {
+                let mut l = prefix.clone();
+                l.push(*c);
+                l
+            })
+        })
+        .collect()
 }
 
 /// Explores the state space breadth first, up to `max_states` states.

@@ -9,8 +9,10 @@
 
 #![warn(missing_docs)]
 
+pub mod agreement;
 pub mod aut;
 pub mod compile;
+pub mod compose;
 pub(crate) mod device_facts;
 pub mod diagnostics;
 pub mod executor;

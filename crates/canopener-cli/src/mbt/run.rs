@@ -12,6 +12,7 @@ use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
 
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult, exit_code};
+use crate::master::output::count_bar;
 use crate::mbt::args::NON_CONFIGURED;
 use crate::mbt::args::{DeviceArgs, Format, ReplayArgs, RunArgs, ShrinkArgs, Strategy};
 use crate::mbt::energybus;
@@ -24,7 +25,13 @@ const SIM_SETTLE: Instant = Instant::from_millis(100);
 
 pub(crate) fn run(args: RunArgs) -> CliResult {
     let eds = models_description(args.model.eds.as_ref(), &args.device)?;
-    let loaded = load(&args.model.models, args.model.node, eds.as_ref(), &args.model.set)?;
+    let mut set = args.model.set.clone();
+    // An EnergyBus device gets its node-ID by LSS and does not store it (docs/energybus.md): after
+    // reset node it is non-configured, so the nmt model must not expect a boot-up there.
+    if args.device.energybus.is_some() && !set.iter().any(|(name, _)| name == "KEEPS_NODE_ID") {
+        set.push(("KEEPS_NODE_ID".to_owned(), 0));
+    }
+    let loaded = load(&args.model.models, args.model.node, eds.as_ref(), &set)?;
     eprint!("{}", loaded.warnings);
     let config = RunConfig {
         seed: args.seed,
@@ -37,6 +44,9 @@ pub(crate) fn run(args: RunArgs) -> CliResult {
         purpose: find_purpose(&loaded.model, args.purpose.as_deref())?,
         ..RunConfig::default()
     };
+    if let Some(seeds) = args.seeds {
+        return crate::mbt::seeds::run(&args, &loaded.model, config, seeds);
+    }
     let header = RunHeader::new(&args.model.models, &loaded.model.hash, args.model.node, &config);
     let outcome = execute(&args.device, args.model.node, &loaded.model, config)?;
     if let Some(path) = &args.log {
@@ -173,7 +183,7 @@ fn warn_hash(header: &RunHeader, model: &Model) {
 }
 
 /// A fresh simulated device (one per run, so that every run starts from power-on).
-fn simulated(file: &std::path::Path, device: &DeviceArgs, node: u8) -> CliResult<SimulatedBus> {
+pub(crate) fn simulated(file: &std::path::Path, device: &DeviceArgs, node: u8) -> CliResult<SimulatedBus> {
     let mut bus = Simulation::ideal()
         .file(file)
         // Without a node-ID of its own the device starts LSS non-configured.
@@ -194,14 +204,30 @@ fn execute(device: &DeviceArgs, node: u8, model: &Model, config: RunConfig) -> C
     Ok(match (&device.sim, device.energybus) {
         (_, Some(count)) => mbt_run::run(&mut energybus::link(device, count, node)?, model, config, limit)?,
         (Some(file), None) => mbt_run::run(&mut simulated(file, device, node)?, model, config, limit)?,
-        (None, None) => mbt_run::run(&mut bus_link(device)?, model, config, limit)?,
+        (None, None) => {
+            // On a real bus a long run takes the wall clock's time: show its steps on a terminal.
+            let bar = count_bar(
+                config.steps as u64,
+                "{bar:30} {pos}/{len} steps [{elapsed}<{eta}]",
+            );
+            let outcome = mbt_run::run_watched(&mut bus_link(device)?, model, config, limit, &mut |steps| {
+                bar.set_position(steps as u64);
+            });
+            bar.finish_and_clear();
+            outcome?
+        }
     })
 }
 
 /// Prints the outcome and maps the verdict to the exit code: 0 pass, 6 fail or inconclusive, 7 a
 /// device that sent nothing the models know.
 fn report(header: &RunHeader, model: &Model, outcome: &Outcome, format: Format) -> CliResult {
-    let (space, _) = canopener_mbt::explore::explore(model, 100_000);
+    // The size of the untimed state space, for the coverage line; a composition's can be large, so
+    // it is counted up to a bound (JSON `null`, "more than N" beyond it).
+    const COUNT_STATES: usize = 20_000;
+    let (space, _) = canopener_mbt::explore::explore(model, COUNT_STATES);
+    let total = (!space.truncated).then_some(space.lts.states);
+    let total_text = total.map_or_else(|| format!("more than {COUNT_STATES}"), |n| n.to_string());
     match format {
         Format::Json => {
             let trace: Vec<serde_json::Value> = outcome
@@ -223,7 +249,7 @@ fn report(header: &RunHeader, model: &Model, outcome: &Outcome, format: Format) 
                 "purpose": outcome.purpose.as_ref().map(|(name, reached)| serde_json::json!({"name": name, "reached": reached})),
                 "coverage": {
                     "purposes": outcome.purpose.as_ref().map(|(_, reached)| [usize::from(*reached), 1]),
-                    "states": [outcome.coverage.states_seen, space.lts.states],
+                    "states": [serde_json::json!(outcome.coverage.states_seen), serde_json::json!(total)],
                     "transitions": outcome.coverage.transitions,
                     "locations": outcome.coverage.locations,
                 },
@@ -272,7 +298,7 @@ fn report(header: &RunHeader, model: &Model, outcome: &Outcome, format: Format) 
                 outcome.coverage.locations[0],
                 outcome.coverage.locations[1],
                 outcome.coverage.states_seen,
-                space.lts.states
+                total_text
             ));
             print_stdout(&text)?;
         }

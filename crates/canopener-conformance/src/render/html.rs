@@ -95,7 +95,7 @@ fn suites(report: &Report) -> Vec<String> {
 
 fn write_summary(out: &mut String, report: &Report) {
     let s = report.summary;
-    out.push_str("<section class=\"summary\" id=\"summary\">\n<h2>VerdictCounts</h2>\n");
+    out.push_str("<section class=\"summary\" id=\"summary\">\n<h2>Summary</h2>\n");
     let (class, text) = if report.tests.is_empty() {
         ("inconclusive", "No test ran.")
     } else if s.fail > 0 {
