@@ -1,8 +1,11 @@
 //! From model files to a [`Model`]: names resolved, parameters evaluated, static checks run.
 //!
-//! Several files compose in parallel: their gates, clocks and parameters are shared by name (a gate
-//! declared twice must be declared the same way), their processes interleave and may read each
-//! other's variables and locations (`nmt@Stopped`, `hb.period`) but only write their own.
+//! Several files compose in parallel, each file one component (see [`crate::compose`] for the
+//! semantics): gates and hidden events are shared by name (a gate declared twice must be declared
+//! the same way); parameters, constants, `let`s and clocks belong to their file, which also sees
+//! the definitions of the files it `use`s (its own win); processes are global by name, so a
+//! component may read another's variables and locations (`nmt@Stopped`, `hb.period`) but only
+//! write its own.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -90,7 +93,25 @@ pub fn compile(
         });
         files.push((source, file));
     }
-    let mut compiler = Compiler::new(options);
+    // Which files each file sees the definitions of: itself, then what it uses, transitively.
+    let mut visible: Vec<Vec<usize>> = Vec::new();
+    for (i, (_, file)) in files.iter().enumerate() {
+        let mut seen = vec![i];
+        let mut work: Vec<usize> = vec![i];
+        while let Some(f) = work.pop() {
+            for used in &files[f].1.uses {
+                if let Some(j) = files.iter().position(|(s, _)| s.origin == used.text)
+                    && !seen.contains(&j)
+                {
+                    seen.push(j);
+                    work.push(j);
+                }
+            }
+        }
+        let _ = file;
+        visible.push(seen);
+    }
+    let mut compiler = Compiler::new(options, visible);
     for (index, (source, file)) in files.iter().enumerate() {
         compiler.file = index;
         compiler.declare(source, file);
@@ -119,6 +140,24 @@ pub fn compile(
         hasher.update(format!("{name}={value};").as_bytes());
     }
     let mut model = compiler.model;
+    model.components = (0..files.len())
+        .map(|file| {
+            let processes: Vec<usize> = (0..model.processes.len())
+                .filter(|p| model.processes[*p].file == file)
+                .collect();
+            let transitions = processes
+                .iter()
+                .flat_map(|p| model.processes[*p].transitions.iter().copied())
+                .collect();
+            crate::model::Component {
+                file,
+                gates: compiler.file_gates.get(file).cloned().unwrap_or_default(),
+                events: compiler.file_events.get(file).cloned().unwrap_or_default(),
+                processes,
+                transitions,
+            }
+        })
+        .collect();
     model.hash = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
     (Some(model), report)
 }
@@ -135,9 +174,16 @@ struct Compiler<'a> {
     model: Model,
     file: usize,
     diagnostics: Vec<Vec<MbtDiagnostic>>,
-    globals: BTreeMap<String, Binding>,
-    clock_index: BTreeMap<String, usize>,
-    gate_files: Vec<usize>,
+    /// Per file, its definitions by name (`NODEID` is in every file's).
+    globals: Vec<BTreeMap<String, Binding>>,
+    /// Per file, the files whose definitions it sees, its own first.
+    visible: Vec<Vec<usize>>,
+    /// Clocks by file and name.
+    clock_index: BTreeMap<(usize, String), usize>,
+    /// Per file, the gates it declares.
+    file_gates: Vec<Vec<usize>>,
+    /// Per file, the hidden events it declares.
+    file_events: Vec<Vec<usize>>,
     quiescence_declared: bool,
 }
 
@@ -150,9 +196,10 @@ struct Scope<'s> {
 }
 
 impl<'a> Compiler<'a> {
-    fn new(options: &'a Options<'a>) -> Self {
-        let mut globals = BTreeMap::new();
-        globals.insert("NODEID".to_owned(), Binding::Value(i64::from(options.node_id)));
+    fn new(options: &'a Options<'a>, visible: Vec<Vec<usize>>) -> Self {
+        let mut base = BTreeMap::new();
+        base.insert("NODEID".to_owned(), Binding::Value(i64::from(options.node_id)));
+        let globals = vec![base; visible.len()];
         Compiler {
             options,
             model: Model {
@@ -160,6 +207,8 @@ impl<'a> Compiler<'a> {
                 params: vec![("NODEID".to_owned(), i64::from(options.node_id))],
                 gates: Vec::new(),
                 clocks: Vec::new(),
+                events: Vec::new(),
+                components: Vec::new(),
                 processes: Vec::new(),
                 transitions: Vec::new(),
                 quiescence_us: 1_000_000,
@@ -171,10 +220,19 @@ impl<'a> Compiler<'a> {
             file: 0,
             diagnostics: Vec::new(),
             globals,
+            visible,
             clock_index: BTreeMap::new(),
-            gate_files: Vec::new(),
+            file_gates: Vec::new(),
+            file_events: Vec::new(),
             quiescence_declared: false,
         }
+    }
+
+    /// The clock called `name` that the current file sees: its own, else one of a file it uses.
+    fn clock(&self, name: &str) -> Option<usize> {
+        self.visible[self.file]
+            .iter()
+            .find_map(|f| self.clock_index.get(&(*f, name.to_owned())).copied())
     }
 
     fn report(&mut self, d: MbtDiagnostic) {
@@ -203,7 +261,7 @@ impl<'a> Compiler<'a> {
             depth: 0,
         };
         for def in &file.definitions {
-            if self.globals.contains_key(&def.name.text) && def.kind != DefKind::Param {
+            if self.globals[self.file].contains_key(&def.name.text) {
                 self.error(
                     MbtCode::Duplicate,
                     def.name.span,
@@ -226,31 +284,14 @@ impl<'a> Compiler<'a> {
                     };
                     let Some(value) = value else { continue };
                     if def.kind == DefKind::Param {
-                        let existing = self
-                            .model
-                            .params
-                            .iter()
-                            .find(|(n, _)| *n == def.name.text)
-                            .map(|(_, v)| *v);
-                        if let Some(existing) = existing {
-                            if existing != value {
-                                self.error(
-                                    MbtCode::Duplicate,
-                                    def.name.span,
-                                    format!(
-                                        "the parameter `{}` is {value} here and {existing} in another model",
-                                        def.name.text
-                                    ),
-                                );
-                            }
-                        } else {
-                            self.model.params.push((def.name.text.clone(), value));
-                        }
+                        // Parameters belong to their file: `nmt.TOL` and `sync.TOL` may differ.
+                        let file = &self.model.files[self.file].name;
+                        self.model.params.push((format!("{file}.{}", def.name.text), value));
                     }
                     Binding::Value(value)
                 }
             };
-            self.globals.insert(def.name.text.clone(), binding);
+            self.globals[self.file].insert(def.name.text.clone(), binding);
         }
         if let Some(q) = &file.quiescence
             && let Some(v) = self.constant(q, global, None)
@@ -264,14 +305,36 @@ impl<'a> Compiler<'a> {
             self.quiescence_declared = true;
         }
         for clock in &file.clocks {
-            if !self.clock_index.contains_key(&clock.text) {
-                self.clock_index
-                    .insert(clock.text.clone(), self.model.clocks.len());
+            let key = (self.file, clock.text.clone());
+            if !self.clock_index.contains_key(&key) {
+                self.clock_index.insert(key, self.model.clocks.len());
                 self.model.clocks.push(clock.text.clone());
             }
         }
+        while self.file_gates.len() <= self.file {
+            self.file_gates.push(Vec::new());
+            self.file_events.push(Vec::new());
+        }
         for decl in &file.gates {
             self.gate(decl, global);
+        }
+        for event in &file.events {
+            let e = match self.model.events.iter().position(|e| *e == event.text) {
+                Some(e) => e,
+                None => {
+                    self.model.events.push(event.text.clone());
+                    self.model.events.len() - 1
+                }
+            };
+            if self.file_events[self.file].contains(&e) {
+                self.error(
+                    MbtCode::Duplicate,
+                    event.span,
+                    format!("the event `{}` is declared twice", event.text),
+                );
+            } else {
+                self.file_events[self.file].push(e);
+            }
         }
         for decl in &file.processes {
             self.process_skeleton(decl, global);
@@ -336,6 +399,8 @@ impl<'a> Compiler<'a> {
                     gate.name
                 );
                 self.error(MbtCode::GateClash, decl.name.span, message);
+            } else if !self.file_gates[self.file].contains(&existing) {
+                self.file_gates[self.file].push(existing);
             }
             return;
         }
@@ -352,7 +417,7 @@ impl<'a> Compiler<'a> {
             );
             self.error(MbtCode::AmbiguousGates, decl.name.span, message);
         }
-        self.gate_files.push(self.file);
+        self.file_gates[self.file].push(self.model.gates.len());
         self.model.gates.push(gate);
     }
 
@@ -465,7 +530,11 @@ impl<'a> Compiler<'a> {
                     })
                     .collect::<Option<Vec<i64>>>()
             {
-                self.model.resets.push(Label::concrete(gate, &values));
+                // Each distinct stimulus once: composed models that reset alike reset once.
+                let label = Label::concrete(gate, &values);
+                if !self.model.resets.contains(&label) {
+                    self.model.resets.push(label);
+                }
             } else {
                 self.error(
                     MbtCode::Unbounded,
@@ -528,6 +597,29 @@ impl<'a> Compiler<'a> {
             ActionKind::Output => Kind::Output,
             ActionKind::MaybeOutput => Kind::MaybeOutput,
             ActionKind::Internal => Kind::Internal,
+            ActionKind::Signal => Kind::Signal,
+            ActionKind::On => Kind::On,
+        };
+        let event = match &t.event {
+            None => None,
+            Some(name) => {
+                let declared = self.file_events[self.file]
+                    .iter()
+                    .copied()
+                    .find(|e| self.model.events[*e] == name.text);
+                if declared.is_none() {
+                    self.error(
+                        MbtCode::UnknownName,
+                        name.span,
+                        format!(
+                            "`{}` is not an event of this model; declare it with `event {}`",
+                            name.text, name.text
+                        ),
+                    );
+                    return;
+                }
+                declared
+            }
         };
         let scope = Scope {
             process: Some(p),
@@ -542,7 +634,14 @@ impl<'a> Compiler<'a> {
                     Direction::Output
                 };
                 match self.action(action, direction, scope) {
-                    Some((g, patterns, fields)) => (Some(g), patterns, Some(fields)),
+                    Some((g, patterns, fields)) => {
+                        // A gate a transition uses is in its component's alphabet, even if only a
+                        // used model declares it.
+                        if !self.file_gates[self.file].contains(&g) {
+                            self.file_gates[self.file].push(g);
+                        }
+                        (Some(g), patterns, Some(fields))
+                    }
                     None => return,
                 }
             }
@@ -571,6 +670,7 @@ impl<'a> Compiler<'a> {
             });
         }
         if kind == Kind::Input
+            && !t.passive
             && let Some(fields) = &fields
         {
             let open: Vec<&str> = patterns
@@ -622,8 +722,8 @@ impl<'a> Compiler<'a> {
         }
         let mut resets = Vec::new();
         for clock in &t.resets {
-            match self.clock_index.get(&clock.text) {
-                Some(c) => resets.push(*c),
+            match self.clock(&clock.text) {
+                Some(c) => resets.push(c),
                 None => self.error(
                     MbtCode::UnknownName,
                     clock.span,
@@ -631,7 +731,7 @@ impl<'a> Compiler<'a> {
                 ),
             }
         }
-        if kind == Kind::Internal && !resets.is_empty() {
+        if kind.is_hidden() && !resets.is_empty() {
             self.error(
                 MbtCode::TauResetsClock,
                 t.span,
@@ -641,7 +741,7 @@ impl<'a> Compiler<'a> {
         let window = match &t.window {
             None => None,
             Some(w) => {
-                let clock = self.clock_index.get(&w.clock.text).copied();
+                let clock = self.clock(&w.clock.text);
                 if clock.is_none() {
                     self.error(
                         MbtCode::UnknownName,
@@ -655,6 +755,13 @@ impl<'a> Compiler<'a> {
                 }
             }
         };
+        if kind == Kind::On && window.is_some() {
+            self.error(
+                MbtCode::Syntax,
+                t.span,
+                "an `on` transition follows another model's `signal`: the window is the signal's",
+            );
+        }
         if kind == Kind::Output && window.is_none() {
             self.error(
                 MbtCode::NoTimeBound,
@@ -670,6 +777,9 @@ impl<'a> Compiler<'a> {
             to,
             kind,
             gate,
+            event,
+            passive: t.passive,
+            otherwise: t.otherwise,
             patterns,
             guard,
             updates,
@@ -744,11 +854,17 @@ impl<'a> Compiler<'a> {
             };
             patterns[index] = match &arg.pattern {
                 Pattern::Any(_) => CPattern::Any,
-                Pattern::Value(e) => CPattern::Value(self.field_value(e, scope, max)?),
+                Pattern::Value(e) => match self.named_set(e) {
+                    Some(set) => CPattern::Set(self.set_in_field(set?, e.span, max)?),
+                    None => CPattern::Value(self.field_value(e, scope, max)?),
+                },
                 Pattern::Set(items, _) => {
                     let mut values = Vec::new();
                     for item in items {
-                        values.push(self.field_value(item, scope, max)?);
+                        match self.named_set(item) {
+                            Some(set) => values.extend(self.set_in_field(set?, item.span, max)?),
+                            None => values.push(self.field_value(item, scope, max)?),
+                        }
                     }
                     CPattern::Set(values)
                 }
@@ -779,6 +895,59 @@ impl<'a> Compiler<'a> {
             }
         }
         Some((g, patterns, gate.fields))
+    }
+
+    /// `accepted(NAME)`: the values of a set of the shared oracle (`canopener_wire::accepted`);
+    /// `None` if `e` is not such a call, `Some(None)` if it names no set (reported).
+    fn named_set(&mut self, e: &Expr) -> Option<Option<Vec<i64>>> {
+        let ExprKind::Call(f, args) = &e.kind else {
+            return None;
+        };
+        if f != "accepted" {
+            return None;
+        }
+        let name = match args.as_slice() {
+            [Expr {
+                kind: ExprKind::Name(n),
+                ..
+            }] => n.clone(),
+            _ => {
+                self.error(
+                    MbtCode::BadCall,
+                    e.span,
+                    "`accepted` takes the name of a set, e.g. `accepted(no_object)`",
+                );
+                return Some(None);
+            }
+        };
+        match canopener_wire::accepted::named_set(&name) {
+            Some(set) => Some(Some(set.values.iter().map(|v| i64::from(*v)).collect())),
+            None => {
+                let names: Vec<&str> = canopener_wire::accepted::named_sets()
+                    .iter()
+                    .map(|s| s.name)
+                    .collect();
+                self.error(
+                    MbtCode::BadCall,
+                    e.span,
+                    format!("`{name}` is not a set of accepted answers; there are {}", names.join(", ")),
+                );
+                Some(None)
+            }
+        }
+    }
+
+    /// The values of a named set as constants that fit a field of at most `max`.
+    fn set_in_field(&mut self, values: Vec<i64>, span: Span, max: i64) -> Option<Vec<CExpr>> {
+        if let Some(v) = values.iter().find(|v| !(0..=max).contains(*v)) {
+            self.error(
+                MbtCode::OutOfDomain,
+                span,
+                format!("the set holds {v:#X}, which does not fit the field (0..={max:#X})"),
+            );
+            return None;
+        }
+        Some(values.into_iter().map(CExpr::Const).collect())
     }
 
     fn field_value(&mut self, e: &Expr, scope: Scope<'_>, max: i64) -> Option<CExpr> {
@@ -891,7 +1060,10 @@ impl<'a> Compiler<'a> {
                 let x = self.expr(x, scope)?;
                 let mut list = Vec::new();
                 for i in items {
-                    list.push(self.expr(i, scope)?);
+                    match self.named_set(i) {
+                        Some(set) => list.extend(set?.into_iter().map(CExpr::Const)),
+                        None => list.push(self.expr(i, scope)?),
+                    }
                 }
                 CExpr::In(Box::new(x), list)
             }
@@ -920,7 +1092,10 @@ impl<'a> Compiler<'a> {
         {
             return Some(CExpr::Slot(v.slot));
         }
-        match self.globals.get(name).cloned() {
+        let binding = self.visible[self.file]
+            .iter()
+            .find_map(|f| self.globals[*f].get(name).cloned());
+        match binding {
             Some(Binding::Value(v)) => Some(CExpr::Const(v)),
             Some(Binding::Let(e, file)) => {
                 let here = self.file;
@@ -948,6 +1123,14 @@ impl<'a> Compiler<'a> {
 
     fn call(&mut self, f: &str, args: &[Expr], span: Span, scope: Scope<'_>) -> Option<CExpr> {
         let arity = match f {
+            "accepted" => {
+                self.error(
+                    MbtCode::BadCall,
+                    span,
+                    "`accepted(NAME)` is a set: use it as a field pattern or after `in`",
+                );
+                return None;
+            }
             "od" | "exists" => 2,
             "pdo_bytes" => 1,
             "min" | "max" => 2,
@@ -955,7 +1138,7 @@ impl<'a> Compiler<'a> {
                 self.error(
                     MbtCode::BadCall,
                     span,
-                    format!("`{f}` is not a function; there are od, exists, pdo_bytes, min and max"),
+                    format!("`{f}` is not a function; there are od, exists, pdo_bytes, min, max and accepted"),
                 );
                 return None;
             }
@@ -1038,7 +1221,7 @@ impl<'a> Compiler<'a> {
         for &t in &process.transitions {
             let t = &self.model.transitions[t];
             for (f, to) in targets(t) {
-                if t.kind == Kind::Internal && t.window.is_none() {
+                if matches!(t.kind, Kind::Internal | Kind::Signal) && t.window.is_none() {
                     tau[f].push(to);
                 }
             }

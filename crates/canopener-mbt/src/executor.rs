@@ -19,6 +19,7 @@ use std::collections::{BTreeSet, VecDeque};
 use canopener_can::{CanFrame, Core, Instant, StandardId};
 use serde::Serialize;
 
+use crate::compose::Blocked;
 use crate::label::{Label, LabelText};
 use crate::model::{Kind, Model};
 use crate::purpose::{Purpose, Seen};
@@ -209,6 +210,14 @@ struct Conf {
     clocks: Vec<i64>,
 }
 
+/// An obligation no device can meet: the transition that requires it and the component that
+/// refuses it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Unmet {
+    required: usize,
+    refuser: usize,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
     /// Reset stimuli not sent yet.
@@ -245,6 +254,8 @@ pub struct Executor<'m> {
     purpose_state: usize,
     outcome: Option<Outcome>,
     reported: bool,
+    /// The last instant the internal steps were taken for: windows opening later are due then.
+    closed_at: i64,
 }
 
 impl<'m> Executor<'m> {
@@ -279,8 +290,9 @@ impl<'m> Executor<'m> {
             purpose_state: 0,
             outcome: None,
             reported: false,
+            closed_at: start,
         };
-        exec.confs = exec.closure(vec![initial]);
+        exec.confs = exec.closure(vec![initial], start);
         exec.visit();
         exec
     }
@@ -315,9 +327,12 @@ impl<'m> Executor<'m> {
         }
     }
 
-    /// Adds internal successors until nothing new: an internal step without a window happens at
-    /// once (its source is left), one with a window may still be pending (both are kept).
-    fn closure(&mut self, confs: Vec<Conf>) -> Vec<Conf> {
+    /// Adds internal successors until nothing new: an internal step (or hidden event) without a
+    /// window happens at once (its source is left); one with a window may happen once its window
+    /// has opened at `now` and may still be pending until it closes (both are kept: the deadline
+    /// drops the source then). A hidden event happens only with every component that declares it.
+    fn closure(&mut self, confs: Vec<Conf>, now: i64) -> Vec<Conf> {
+        self.closed_at = self.closed_at.max(now);
         let mut out: Vec<Conf> = Vec::new();
         let mut work = confs;
         let mut guard = 0;
@@ -328,22 +343,28 @@ impl<'m> Executor<'m> {
             }
             let mut urgent = false;
             for t in &self.model.transitions {
-                if t.kind != Kind::Internal || !self.model.located(t, &c.state) {
+                if !matches!(t.kind, Kind::Internal | Kind::Signal) || !self.model.located(t, &c.state) {
                     continue;
                 }
                 if !self.model.guard_holds(t, &c.state, &[]).unwrap_or(false) {
                     continue;
                 }
-                if let Ok(next) = self.model.apply(t, &c.state, &[]) {
+                if self.opens_at(t, &c).is_some_and(|at| at > now) {
+                    continue;
+                }
+                let Ok(joint) = self.model.signal_joint(&c.state, t.id) else {
+                    continue;
+                };
+                for j in joint {
                     urgent |= t.window.is_none();
                     let n = Conf {
-                        state: next,
+                        state: j.state,
                         clocks: c.clocks.clone(),
                     };
                     if !out.contains(&n) && !work.contains(&n) {
                         work.push(n);
                     }
-                    self.taken.insert(t.id);
+                    self.taken.extend(j.transitions);
                 }
             }
             if !urgent && !out.contains(&c) {
@@ -355,6 +376,33 @@ impl<'m> Executor<'m> {
         out
     }
 
+    /// When the window of a windowed internal step opens in configuration `c` (its `LO` less the
+    /// tolerance); `None` for a step without a window.
+    fn opens_at(&self, t: &crate::model::Transition, c: &Conf) -> Option<i64> {
+        let (lo, _, clock) = t.window.as_ref()?;
+        let lo = lo.eval(&c.state, &[]).ok()?;
+        Some(c.clocks[*clock] + lo - self.config.tolerance_us)
+    }
+
+    /// The next instant after `now` at which an internal step of some configuration becomes
+    /// possible: the closure must be taken again then.
+    fn next_opening(&self, now: i64) -> Option<i64> {
+        self.confs
+            .iter()
+            .flat_map(|c| {
+                self.model.transitions.iter().filter_map(move |t| {
+                    if !matches!(t.kind, Kind::Internal | Kind::Signal)
+                        || !self.model.located(t, &c.state)
+                        || !self.model.guard_holds(t, &c.state, &[]).unwrap_or(false)
+                    {
+                        return None;
+                    }
+                    self.opens_at(t, c).filter(|at| *at > now)
+                })
+            })
+            .min()
+    }
+
     /// The instant by which this configuration must have moved on: processes interleave, so each
     /// process with enabled must-outputs (or windowed internal steps) owes one of them by the latest
     /// end of their windows, and the configuration is due at the earliest of those; `None` if it
@@ -362,7 +410,7 @@ impl<'m> Executor<'m> {
     fn deadline(&self, c: &Conf) -> Option<i64> {
         let mut per_process: Vec<Option<i64>> = vec![None; self.model.processes.len()];
         for t in &self.model.transitions {
-            let must = t.kind == Kind::Output || (t.kind == Kind::Internal && t.window.is_some());
+            let must = t.kind == Kind::Output || (matches!(t.kind, Kind::Internal | Kind::Signal) && t.window.is_some());
             if !must
                 || !self.model.located(t, &c.state)
                 || !self.model.guard_holds(t, &c.state, &[]).unwrap_or(false)
@@ -447,11 +495,26 @@ impl<'m> Executor<'m> {
         outcome
     }
 
-    /// Drops configurations whose deadline passed before `now`; fails if none is left.
+    /// Takes the internal steps whose windows opened by `now`, then drops configurations whose
+    /// deadline passed before `now`; fails if none is left.
     fn expire(&mut self, now: i64) -> bool {
+        let confs = std::mem::take(&mut self.confs);
+        self.confs = self.closure(confs, now);
         let (alive, dead): (Vec<Conf>, Vec<Conf>) = std::mem::take(&mut self.confs)
             .into_iter()
             .partition(|c| self.deadline(c).is_none_or(|d| d >= now));
+        if alive.is_empty() {
+            // A deadline no device could meet (another component forbids what was due) is the
+            // models' fault, not the device's.
+            let before = std::mem::replace(&mut self.confs, dead.clone());
+            let disagreement = self.disagreement(None);
+            self.confs = before;
+            if let Some(reason) = disagreement {
+                let allowed = self.allowed(&dead);
+                let _ = self.conclude(Verdict::Inconclusive, reason, allowed);
+                return false;
+            }
+        }
         self.confs = alive;
         if self.confs.is_empty() {
             let allowed = self.allowed(&dead);
@@ -537,46 +600,63 @@ impl<'m> Executor<'m> {
         self.outputs_seen += 1;
         let mut next = Vec::new();
         let mut early = false;
-        for c in &self.confs {
-            for t in &self.model.transitions {
-                if !t.kind.is_output() || !self.model.located(t, &c.state) {
-                    continue;
-                }
-                for (g, values) in &decoded {
-                    if t.gate != Some(*g)
-                        || !self.model.patterns_match(t, &c.state, values).unwrap_or(false)
-                        || !self.model.guard_holds(t, &c.state, values).unwrap_or(false)
-                    {
-                        continue;
+        let mut refused: Option<(usize, Vec<i64>)> = None;
+        let tol = self.config.tolerance_us;
+        if let Some((g, values)) = decoded.first() {
+            let open: Vec<Option<i64>> = values.iter().copied().map(Some).collect();
+            for c in &self.confs {
+                // Every component holding the frame must take it within its own window: the
+                // windows of a synchronised output intersect.
+                let mut admit = |t: &crate::model::Transition| -> bool {
+                    let Some((lo, hi, clock)) = &t.window else {
+                        return true;
+                    };
+                    let since = now - c.clocks[*clock];
+                    let (Ok(lo), Ok(hi)) = (lo.eval(&c.state, values), hi.eval(&c.state, values)) else {
+                        return false;
+                    };
+                    if since < lo - tol {
+                        early = true;
+                        return false;
                     }
-                    if let Some((lo, hi, clock)) = &t.window {
-                        let since = now - c.clocks[*clock];
-                        let tol = self.config.tolerance_us;
-                        let (Ok(lo), Ok(hi)) = (lo.eval(&c.state, values), hi.eval(&c.state, values)) else {
-                            continue;
-                        };
-                        if since < lo - tol {
-                            early = true;
-                            continue;
-                        }
-                        if since > hi + tol {
-                            continue;
+                    since <= hi + tol
+                };
+                match self.model.output_joint(&c.state, *g, &open, &mut admit) {
+                    Ok(joint) => {
+                        for j in joint {
+                            let mut clocks = c.clocks.clone();
+                            for t in &j.transitions {
+                                for r in &self.model.transitions[*t].resets {
+                                    clocks[*r] = now;
+                                }
+                            }
+                            self.taken.extend(j.transitions.iter().copied());
+                            next.push(Conf { state: j.state, clocks });
                         }
                     }
-                    if let Ok(state) = self.model.apply(t, &c.state, values) {
-                        let mut clocks = c.clocks.clone();
-                        for r in &t.resets {
-                            clocks[*r] = now;
-                        }
-                        self.taken.insert(t.id);
-                        next.push(Conf { state, clocks });
+                    Err(Blocked::Refused(component)) => {
+                        refused.get_or_insert((component, c.state.clone()));
                     }
+                    Err(Blocked::Error(..)) => {}
                 }
             }
         }
         if next.is_empty() {
+            if let Some(reason) = self.disagreement(Some(now)) {
+                let allowed = self.allowed(&self.confs.clone());
+                let _ = self.conclude(Verdict::Inconclusive, reason, allowed);
+                return;
+            }
             let allowed = self.allowed(&self.confs.clone());
-            let what = if early { "too early" } else { "not allowed here" };
+            let what = match (&refused, early) {
+                (_, true) => "too early".to_owned(),
+                (Some((component, state)), false) if self.model.components.len() > 1 => format!(
+                    "not allowed here ({} refuses it in {})",
+                    self.model.files[*component].name,
+                    self.model.component_state(*component, state)
+                ),
+                _ => "not allowed here".to_owned(),
+            };
             let reason = format!(
                 "unexpected output {} at {:.3}s: {what}",
                 frame_text(frame),
@@ -585,7 +665,7 @@ impl<'m> Executor<'m> {
             let _ = self.conclude(Verdict::Fail, reason, allowed);
             return;
         }
-        self.confs = self.closure(next);
+        self.confs = self.closure(next, now);
         self.visit();
         if self.confs.len() > MAX_CONFIGURATIONS {
             let _ = self.conclude(
@@ -607,14 +687,16 @@ impl<'m> Executor<'m> {
         self.count_step(now);
     }
 
-    /// Input labels every configuration accepts, with the transitions behind them.
-    fn inputs(&self) -> Vec<(Label, Vec<usize>)> {
+    /// Input labels the composition accepts in every configuration (uioco) and after which every
+    /// obligation can still be met (no component then requires an output another forbids), with
+    /// the transitions behind them. Passive inputs follow other components and are not proposed.
+    fn inputs(&self, now: i64) -> Vec<(Label, Vec<usize>)> {
         let Some(first) = self.confs.first() else {
             return Vec::new();
         };
         let mut candidates: Vec<(Label, Vec<usize>)> = Vec::new();
         for t in &self.model.transitions {
-            if t.kind != Kind::Input || !self.model.located(t, &first.state) {
+            if t.kind != Kind::Input || t.passive || !self.model.located(t, &first.state) {
                 continue;
             }
             let Some(gate) = t.gate else { continue };
@@ -630,34 +712,142 @@ impl<'m> Executor<'m> {
             }
         }
         candidates.retain(|(label, _)| {
-            self.confs
-                .iter()
-                .all(|c| !self.input_successors(c, label, 0).is_empty())
+            self.confs.iter().all(|c| {
+                let next = self.input_successors(c, label, now);
+                !next.is_empty() && next.iter().all(|(_, n)| self.unanswerable(n, Some(now)).is_none())
+            })
         });
         candidates
     }
 
-    fn input_successors(&self, c: &Conf, label: &Label, now: i64) -> Vec<(usize, Conf)> {
+    /// The configurations after the input `label` from `c`, each with the transitions taken, and
+    /// their internal successors.
+    fn input_successors(&self, c: &Conf, label: &Label, now: i64) -> Vec<(Vec<usize>, Conf)> {
         let values: Vec<i64> = label.values.iter().map(|v| v.unwrap_or(0)).collect();
-        let mut out = Vec::new();
+        let Ok(joint) = self.model.input_joint(&c.state, label.gate, &values) else {
+            return Vec::new();
+        };
+        joint
+            .into_iter()
+            .map(|j| {
+                let mut clocks = c.clocks.clone();
+                for t in &j.transitions {
+                    for r in &self.model.transitions[*t].resets {
+                        clocks[*r] = now;
+                    }
+                }
+                (j.transitions, Conf { state: j.state, clocks })
+            })
+            .collect()
+    }
+
+    /// An obligation of `c` that cannot be met: a process owes an output (or a hidden event) by a
+    /// deadline, and for every way it has to meet it another component holding the frame refuses
+    /// it, or accepts it only outside the window. `None` if every obligation can be met. With
+    /// `now`, only what can still happen from then on counts; without it, the windows alone (for a
+    /// configuration whose deadline passed).
+    fn unanswerable(&self, c: &Conf, now: Option<i64>) -> Option<Unmet> {
+        let tol = self.config.tolerance_us;
+        let mut owed: Vec<(usize, Vec<usize>)> = Vec::new();
         for t in &self.model.transitions {
-            if t.kind != Kind::Input || t.gate != Some(label.gate) || !self.model.located(t, &c.state) {
-                continue;
-            }
-            if !self.model.patterns_match(t, &c.state, &values).unwrap_or(false)
-                || !self.model.guard_holds(t, &c.state, &values).unwrap_or(false)
+            let must = t.kind == Kind::Output || (t.kind == Kind::Signal && t.window.is_some());
+            if !must
+                || !self.model.located(t, &c.state)
+                || !self.model.guard_holds(t, &c.state, &[]).unwrap_or(false)
             {
                 continue;
             }
-            if let Ok(state) = self.model.apply(t, &c.state, &values) {
-                let mut clocks = c.clocks.clone();
-                for r in &t.resets {
-                    clocks[*r] = now;
-                }
-                out.push((t.id, Conf { state, clocks }));
+            match owed.iter_mut().find(|(p, _)| *p == t.process) {
+                Some((_, ts)) => ts.push(t.id),
+                None => owed.push((t.process, vec![t.id])),
             }
         }
-        out
+        for (_, ts) in owed {
+            let mut first_refusal = None;
+            let answerable = ts.iter().any(|&t| {
+                let t = &self.model.transitions[t];
+                if t.kind == Kind::Signal {
+                    return match self.model.signal_joint(&c.state, t.id) {
+                        Ok(j) => !j.is_empty(),
+                        Err(b) => {
+                            first_refusal.get_or_insert((t.id, b.component()));
+                            false
+                        }
+                    };
+                }
+                let Some(gate) = t.gate else { return true };
+                let window = |u: &crate::model::Transition| -> (i64, i64) {
+                    match &u.window {
+                        Some((lo, hi, clock)) => {
+                            let base = c.clocks[*clock];
+                            match (lo.eval(&c.state, &[]), hi.eval(&c.state, &[])) {
+                                (Ok(lo), Ok(hi)) => (base + lo - tol, base + hi + tol),
+                                _ => (i64::MIN, i64::MAX),
+                            }
+                        }
+                        None => (i64::MIN, i64::MAX),
+                    }
+                };
+                let (lo, hi) = window(t);
+                let offers = self.model.offers(t, &c.state).unwrap_or_default();
+                if now.is_some_and(|now| hi < now) || offers.is_empty() {
+                    // Already overdue or not offered: the deadline decides, not a disagreement.
+                    return true;
+                }
+                offers.iter().any(|values| {
+                    // The other holders must accept the output at a time inside t's window.
+                    let own = self.model.component_of(t);
+                    let mut admit = |u: &crate::model::Transition| {
+                        if self.model.component_of(u) == own {
+                            return u.id == t.id;
+                        }
+                        let (ulo, uhi) = window(u);
+                        lo.max(ulo).max(now.unwrap_or(i64::MIN)) <= hi.min(uhi)
+                    };
+                    match self.model.output_joint(&c.state, gate, values, &mut admit) {
+                        Ok(j) => !j.is_empty(),
+                        Err(b) => {
+                            first_refusal.get_or_insert((t.id, b.component()));
+                            false
+                        }
+                    }
+                })
+            });
+            if !answerable && let Some((required, Some(refuser))) = first_refusal {
+                return Some(Unmet { required, refuser });
+            }
+        }
+        None
+    }
+
+    /// If a configuration holds an obligation another component forbids, the verdict cannot be
+    /// `fail`: the reason, naming both sides.
+    fn disagreement(&self, now: Option<i64>) -> Option<String> {
+        self.confs.iter().find_map(|c| {
+            let unmet = self.unanswerable(c, now)?;
+            let t = &self.model.transitions[unmet.required];
+            let file = &self.model.files[self.model.component_of(t)];
+            let refuser = &self.model.files[unmet.refuser];
+            let what = match t.gate {
+                Some(g) => {
+                    let values = self.model.offers(t, &c.state).unwrap_or_default();
+                    let label = Label {
+                        gate: g,
+                        values: values.into_iter().next().unwrap_or_default(),
+                    };
+                    self.model.label_text(&label)
+                }
+                None => "its hidden event".to_owned(),
+            };
+            Some(format!(
+                "the models disagree: {} ({}:{}) requires {what}, which {} refuses in {}; no device can satisfy both",
+                file.name,
+                file.origin,
+                t.span.line,
+                refuser.name,
+                self.model.component_state(unmet.refuser, &c.state)
+            ))
+        })
     }
 
     fn send(&mut self, now: i64, label: &Label) {
@@ -678,8 +868,8 @@ impl<'m> Executor<'m> {
         let Ok(frame) = frame else { return };
         let mut next = Vec::new();
         for c in &self.confs {
-            for (t, n) in self.input_successors(c, label, now) {
-                self.taken.insert(t);
+            for (ts, n) in self.input_successors(c, label, now) {
+                self.taken.extend(ts);
                 next.push(n);
             }
         }
@@ -693,7 +883,7 @@ impl<'m> Executor<'m> {
         self.inputs_sent
             .push(format!("?{}", self.model.label_text(label)));
         self.input_times.push(now - self.start);
-        self.confs = self.closure(next);
+        self.confs = self.closure(next, now);
         self.visit();
         let text = LabelText::parse(&self.model.label_text(label));
         if let Some(text) = text
@@ -777,7 +967,7 @@ impl<'m> Executor<'m> {
                 self.waiting_for_script = true;
                 return;
             }
-            let inputs = self.inputs();
+            let inputs = self.inputs(now);
             match inputs
                 .iter()
                 .find(|(l, _)| format!("?{}", self.model.label_text(l)) == next.label)
@@ -801,7 +991,7 @@ impl<'m> Executor<'m> {
             }
             return;
         }
-        let inputs = self.inputs();
+        let inputs = self.inputs(now);
         let send = !inputs.is_empty() && self.rand(100) < usize::from(self.config.input_percent);
         if send {
             let fresh: Vec<&(Label, Vec<usize>)> = match self.config.strategy {
@@ -891,7 +1081,8 @@ impl<'m> Executor<'m> {
             Phase::Deciding(at) => Some(at),
             Phase::Observing(until, _) => {
                 let deadline = self.confs.iter().filter_map(|c| self.deadline(c)).min();
-                Some(deadline.map_or(until, |d| until.min(d + 1)))
+                let due = deadline.map_or(until, |d| until.min(d + 1));
+                Some(self.next_opening(self.closed_at).map_or(due, |open| due.min(open)))
             }
             Phase::Finished => None,
         }

@@ -1,7 +1,8 @@
 //! The untimed semantics of a model and the exploration of its state space.
 //!
-//! Processes interleave: in a state, every enabled transition of every process is a step. A step's
-//! guard and updates read the state before it; updates must stay in their variable's domain.
+//! The composed semantics of [`crate::compose`]: internal steps interleave per process; inputs,
+//! outputs and hidden events synchronise the components that hold them. A step's guards and
+//! updates read the state before it; updates must stay in their variable's domain.
 //! Exploration enumerates the concrete labels of inputs (their patterns are bounded: the static
 //! checks see to that) and of outputs with values or sets; an output field the model leaves open
 //! (`_`, or a range wider than [`MAX_INPUT_CHOICES`]) stays open in the label (`!_`). Clocks are
@@ -155,27 +156,88 @@ impl Model {
         }
     }
 
-    /// Every step from `state`: transition, label (none for internal), target.
+    /// Every step from `state` in the composed semantics ([`crate::compose`]): transition (the one
+    /// that starts the step), label (none for internal steps and hidden events), target.
+    /// Internal steps are per process; inputs, outputs and hidden events synchronise every
+    /// component that holds them. Duplicate steps (the same label to the same state) are listed
+    /// once.
     pub fn steps(&self, state: &[i64]) -> Result<Vec<Step>, (usize, String)> {
-        let mut out = Vec::new();
+        use crate::compose::Blocked;
+        let mut out: Vec<Step> = Vec::new();
+        let push = |out: &mut Vec<Step>, step: Step| {
+            if !out.iter().any(|(_, l, s)| *l == step.1 && *s == step.2) {
+                out.push(step);
+            }
+        };
+        let error = |b: Blocked| match b {
+            Blocked::Error(t, e) => Err((t, e)),
+            Blocked::Refused(_) => Ok(()),
+        };
+        let mut inputs: Vec<Label> = Vec::new();
         for t in &self.transitions {
             if !self.located(t, state) {
                 continue;
             }
             let fail = |e: String| (t.id, e);
-            match t.gate {
-                None => {
-                    if self.guard_holds(t, state, &[]).map_err(|e| fail(e.to_string()))? {
-                        out.push((t.id, None, self.apply(t, state, &[]).map_err(fail)?));
+            match t.kind {
+                Kind::Internal | Kind::Signal => {
+                    if !self.guard_holds(t, state, &[]).map_err(|e| fail(e.to_string()))? {
+                        continue;
+                    }
+                    match self.signal_joint(state, t.id) {
+                        Ok(joint) => {
+                            for j in joint {
+                                push(&mut out, (t.id, None, j.state));
+                            }
+                        }
+                        Err(b) => error(b)?,
                     }
                 }
-                Some(gate) => {
+                Kind::On => {}
+                Kind::Input => {
+                    if t.passive {
+                        continue;
+                    }
+                    let Some(gate) = t.gate else { continue };
                     for values in self.offers(t, state).map_err(|e| fail(e.to_string()))? {
-                        let known: Vec<i64> = values.iter().map(|v| v.unwrap_or(0)).collect();
-                        let next = self.apply(t, state, &known).map_err(fail)?;
-                        out.push((t.id, Some(Label { gate, values }), next));
+                        let label = Label {
+                            gate,
+                            values: values.iter().map(|v| Some(v.unwrap_or(0))).collect(),
+                        };
+                        if !inputs.contains(&label) {
+                            inputs.push(label);
+                        }
                     }
                 }
+                Kind::Output | Kind::MaybeOutput => {
+                    let Some(gate) = t.gate else { continue };
+                    let own = self.component_of(t);
+                    for values in self.offers(t, state).map_err(|e| fail(e.to_string()))? {
+                        // The initiator takes part with this transition; every other holder with
+                        // one of its own.
+                        let mut admit = |u: &Transition| self.component_of(u) != own || u.id == t.id;
+                        match self.output_joint(state, gate, &values, &mut admit) {
+                            Ok(joint) => {
+                                for j in joint {
+                                    push(&mut out, (t.id, Some(Label { gate, values: values.clone() }), j.state));
+                                }
+                            }
+                            Err(b) => error(b)?,
+                        }
+                    }
+                }
+            }
+        }
+        for label in inputs {
+            let values: Vec<i64> = label.values.iter().map(|v| v.unwrap_or(0)).collect();
+            match self.input_joint(state, label.gate, &values) {
+                Ok(joint) => {
+                    for j in joint {
+                        let first = j.transitions[0];
+                        push(&mut out, (first, Some(label.clone()), j.state));
+                    }
+                }
+                Err(b) => error(b)?,
             }
         }
         Ok(out)

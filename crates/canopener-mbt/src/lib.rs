@@ -11,6 +11,7 @@
 
 pub mod aut;
 pub mod compile;
+pub mod compose;
 pub(crate) mod device_facts;
 pub mod diagnostics;
 pub mod executor;

@@ -16,12 +16,16 @@ use crate::syntax::ast::Direction;
 pub struct Model {
     /// The model files composed, in the order they were loaded (used models first).
     pub files: Vec<ModelFile>,
-    /// The parameters with their values, by name (`NODEID` first).
+    /// The parameters with their values, `NODEID` first, then each file's as `model.NAME`.
     pub params: Vec<(String, i64)>,
     /// The gates.
     pub gates: Vec<Gate>,
-    /// The clocks.
+    /// The clocks; each belongs to the file that declares it (two files' `cmd` are two clocks).
     pub clocks: Vec<String>,
+    /// The hidden events (`event NAME`), by name across the files.
+    pub events: Vec<String>,
+    /// The components of the composition, one per model file (see [`crate::compose`]).
+    pub components: Vec<Component>,
     /// The processes.
     pub processes: Vec<Process>,
     /// Every transition of every process; processes refer to theirs by index.
@@ -51,6 +55,21 @@ pub struct ModelFile {
     pub origin: String,
 }
 
+/// One model file of a composition as a component: what it declares and what it holds.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Component {
+    /// Index into [`Model::files`].
+    pub file: usize,
+    /// The gates the file declares: its alphabet of frames.
+    pub gates: Vec<usize>,
+    /// The hidden events the file declares.
+    pub events: Vec<usize>,
+    /// Its processes.
+    pub processes: Vec<usize>,
+    /// The transitions of its processes.
+    pub transitions: Vec<usize>,
+}
+
 /// A gate: one kind of CAN frame.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Gate {
@@ -66,6 +85,15 @@ pub struct Gate {
     pub fields: Vec<Field>,
     /// Data length: the sum of the fields' sizes.
     pub dlc: u8,
+}
+
+impl Gate {
+    /// The frames this gate names: CAN-ID, remote flag, length and direction. Two gates with the
+    /// same key (declared under different names) name the same frames, so components that declare
+    /// either synchronise on them.
+    pub fn frame_key(&self) -> (u16, bool, u8, Direction) {
+        (self.cob_id, self.remote, self.dlc, self.direction)
+    }
 }
 
 /// A field of a gate.
@@ -131,12 +159,21 @@ pub enum Kind {
     MaybeOutput,
     /// The device changes state without a frame: at once, or within its window.
     Internal,
+    /// `signal EVENT`: an internal step every component declaring the event takes part in.
+    Signal,
+    /// `on EVENT`: takes part in another component's `signal EVENT`; never happens alone.
+    On,
 }
 
 impl Kind {
     /// Whether the device sends a frame.
     pub fn is_output(self) -> bool {
         matches!(self, Kind::Output | Kind::MaybeOutput)
+    }
+
+    /// Whether the step is unobservable (no frame): internal steps and hidden events.
+    pub fn is_hidden(self) -> bool {
+        matches!(self, Kind::Internal | Kind::Signal | Kind::On)
     }
 }
 
@@ -168,6 +205,12 @@ pub struct Transition {
     pub kind: Kind,
     /// The gate, for inputs and outputs.
     pub gate: Option<usize>,
+    /// The hidden event, for `signal` and `on`.
+    pub event: Option<usize>,
+    /// An input that follows another component's input and is never chosen for its own sake.
+    pub passive: bool,
+    /// A passive input taken only when no other input transition of the component takes the label.
+    pub otherwise: bool,
     /// One pattern per field of the gate.
     pub patterns: Vec<CPattern>,
     /// The guard (reads the label's fields for inputs).
@@ -199,9 +242,13 @@ impl Model {
         self.gates.iter().position(|g| g.name == name)
     }
 
-    /// A parameter's value.
+    /// A parameter's value: `NODEID`, `nmt.HB` (a file's parameter), or `HB` (the first file's that
+    /// has one).
     pub fn param(&self, name: &str) -> Option<i64> {
-        self.params.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+        self.params
+            .iter()
+            .find(|(n, _)| n == name || n.rsplit_once('.').is_some_and(|(_, short)| short == name))
+            .map(|(_, v)| *v)
     }
 
     /// The node-ID the model is instantiated for.

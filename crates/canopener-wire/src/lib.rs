@@ -12,6 +12,8 @@
 //!   transfer CRC [`crc16_ccitt`].
 //! - Tables: [`abort_code_text`], [`emcy_code_text`], [`error_register_text`], [`bit_timing_text`],
 //!   and [`classify`] for the service of a CAN-ID.
+//! - [`accepted`]: the one table of the abort codes a refusal may carry and the answers an SDO
+//!   server may choose between, which the conformance suites and the model-based tester share.
 //! - [`Decoder`]: the stateful monitor decoder. It follows SDO transfers (segmented and block) and node
 //!   guarding per node, so that every frame gets one line such as
 //!   `SDO rx node 5: download segment toggle=1 7 bytes (14/23) of 1008h:00`, with protocol mistakes
@@ -34,6 +36,7 @@
 #![warn(missing_docs)]
 
 pub mod abort;
+pub mod accepted;
 mod cob;
 mod crc;
 mod decoded;

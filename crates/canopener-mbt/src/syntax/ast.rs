@@ -32,6 +32,8 @@ pub struct File {
     pub gates: Vec<GateDecl>,
     /// `clock` declarations.
     pub clocks: Vec<Name>,
+    /// `event` declarations: hidden gates the composed components synchronise on.
+    pub events: Vec<Name>,
     /// `process` blocks.
     pub processes: Vec<ProcessDecl>,
     /// `purpose` blocks.
@@ -157,6 +159,11 @@ pub enum ActionKind {
     MaybeOutput,
     /// `internal`: the device changes state without a frame.
     Internal,
+    /// `signal EVENT`: the device changes state without a frame, and every composed model that
+    /// declares the event takes part (a hidden gate).
+    Signal,
+    /// `on EVENT`: follows another model's `signal EVENT`; never happens alone.
+    On,
 }
 
 /// An action with a gate: `GATE(pattern, name = pattern, ...)`.
@@ -203,6 +210,13 @@ pub struct TransitionDecl {
     pub kind: ActionKind,
     /// The gate and patterns (none for internal transitions).
     pub action: Option<Action>,
+    /// The hidden event of a `signal` or `on` transition.
+    pub event: Option<Name>,
+    /// `passive`: an input that follows what another composed model sends; never chosen for this one.
+    pub passive: bool,
+    /// `otherwise`: a passive input taken only when no other input transition of the model takes the
+    /// label.
+    pub otherwise: bool,
     /// `when GUARD` (several are joined with `&&`).
     pub guards: Vec<Expr>,
     /// `do VAR := EXPR, ...`.
@@ -317,6 +331,6 @@ pub enum ExprKind {
     InRange(Box<Expr>, Box<Expr>, Box<Expr>),
     /// `if c then a else b`.
     If(Box<Expr>, Box<Expr>, Box<Expr>),
-    /// `f(args)`: `od`, `exists`, `min`, `max`, `pdo_bytes`.
+    /// `f(args)`: `od`, `exists`, `min`, `max`, `pdo_bytes`, `accepted`.
     Call(String, Vec<Expr>),
 }

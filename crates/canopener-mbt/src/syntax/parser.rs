@@ -8,7 +8,7 @@ use crate::syntax::ast::*;
 use crate::syntax::lexer::{Tok, Token, lex};
 
 /// The functions of the expression language.
-pub const FUNCTIONS: &[&str] = &["od", "exists", "pdo_bytes", "min", "max"];
+pub const FUNCTIONS: &[&str] = &["od", "exists", "pdo_bytes", "min", "max", "accepted"];
 
 /// Deeper nesting than this is refused, so that hostile input cannot overflow the stack.
 const MAX_DEPTH: usize = 64;
@@ -51,6 +51,7 @@ const ITEM_KEYWORDS: &[&str] = &[
     "input",
     "output",
     "clock",
+    "event",
     "process",
     "purpose",
 ];
@@ -273,10 +274,14 @@ impl Parser {
                 };
                 file.gates.push(self.gate(direction)?);
             }
-            "clock" => {
+            "clock" | "event" => {
                 self.advance();
                 loop {
-                    file.clocks.push(self.name("a clock name")?);
+                    if word == "clock" {
+                        file.clocks.push(self.name("a clock name")?);
+                    } else {
+                        file.events.push(self.name("an event name")?);
+                    }
                     if !self.eat_punct(",") {
                         break;
                     }
@@ -446,6 +451,7 @@ impl Parser {
         };
         self.expect_punct(":")?;
         let kind_span = self.span();
+        let mut event = None;
         let (kind, action) = if self.eat_word("in") {
             (ActionKind::Input, Some(self.action()?))
         } else if self.eat_word("out") {
@@ -455,10 +461,16 @@ impl Parser {
             (ActionKind::MaybeOutput, Some(self.action()?))
         } else if self.eat_word("internal") {
             (ActionKind::Internal, None)
+        } else if self.eat_word("signal") {
+            event = Some(self.name("the event to signal")?);
+            (ActionKind::Signal, None)
+        } else if self.eat_word("on") {
+            event = Some(self.name("the event to follow")?);
+            (ActionKind::On, None)
         } else {
             return self.error(
                 kind_span,
-                "expected `in GATE(...)`, `out GATE(...)`, `maybe out GATE(...)` or `internal`",
+                "expected `in GATE(...)`, `out GATE(...)`, `maybe out GATE(...)`, `internal`, `signal EVENT` or `on EVENT`",
             );
         };
         let mut t = TransitionDecl {
@@ -466,6 +478,9 @@ impl Parser {
             to,
             kind,
             action,
+            event,
+            passive: false,
+            otherwise: false,
             guards: Vec::new(),
             updates: Vec::new(),
             resets: Vec::new(),
@@ -505,6 +520,13 @@ impl Parser {
                 t.window = Some(Window { lo, hi, clock });
             } else if self.eat_word("tag") {
                 t.tags.push(self.string("a requirement tag")?);
+            } else if self.at_word("passive") || self.at_word("otherwise") {
+                let word = self.advance();
+                if t.kind != ActionKind::Input {
+                    return self.error(word.span, "only an input (`in GATE(...)`) can be `passive` or `otherwise`");
+                }
+                t.passive = true;
+                t.otherwise |= matches!(&word.tok, Tok::Ident(w) if w == "otherwise");
             } else {
                 return Ok(t);
             }
