@@ -286,7 +286,9 @@ impl<'a> Compiler<'a> {
                     if def.kind == DefKind::Param {
                         // Parameters belong to their file: `nmt.TOL` and `sync.TOL` may differ.
                         let file = &self.model.files[self.file].name;
-                        self.model.params.push((format!("{file}.{}", def.name.text), value));
+                        self.model
+                            .params
+                            .push((format!("{file}.{}", def.name.text), value));
                     }
                     Binding::Value(value)
                 }
@@ -907,10 +909,12 @@ impl<'a> Compiler<'a> {
             return None;
         }
         let name = match args.as_slice() {
-            [Expr {
-                kind: ExprKind::Name(n),
-                ..
-            }] => n.clone(),
+            [
+                Expr {
+                    kind: ExprKind::Name(n),
+                    ..
+                },
+            ] => n.clone(),
             _ => {
                 self.error(
                     MbtCode::BadCall,
@@ -930,7 +934,10 @@ impl<'a> Compiler<'a> {
                 self.error(
                     MbtCode::BadCall,
                     e.span,
-                    format!("`{name}` is not a set of accepted answers; there are {}", names.join(", ")),
+                    format!(
+                        "`{name}` is not a set of accepted answers; there are {}",
+                        names.join(", ")
+                    ),
                 );
                 Some(None)
             }
@@ -1138,7 +1145,9 @@ impl<'a> Compiler<'a> {
                 self.error(
                     MbtCode::BadCall,
                     span,
-                    format!("`{f}` is not a function; there are od, exists, pdo_bytes, min, max and accepted"),
+                    format!(
+                        "`{f}` is not a function; there are od, exists, pdo_bytes, min, max and accepted"
+                    ),
                 );
                 return None;
             }

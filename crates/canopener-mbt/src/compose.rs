@@ -96,7 +96,8 @@ impl Model {
                     let t = &self.transitions[*t];
                     t.kind == Kind::Input
                         && t.otherwise == otherwise
-                        && t.gate.is_some_and(|g| self.gates[g].frame_key() == self.gates[gate].frame_key())
+                        && t.gate
+                            .is_some_and(|g| self.gates[g].frame_key() == self.gates[gate].frame_key())
                         && self.located(t, state)
                         && self.patterns_match(t, state, values).unwrap_or(false)
                         && self.guard_holds(t, state, values).unwrap_or(false)
@@ -104,7 +105,11 @@ impl Model {
                 .collect()
         };
         let explicit = takes(false);
-        if explicit.is_empty() { takes(true) } else { explicit }
+        if explicit.is_empty() {
+            takes(true)
+        } else {
+            explicit
+        }
     }
 
     /// The output transitions of `component` that may produce the label (`gate`, `values`; `None`
@@ -163,7 +168,8 @@ impl Model {
                 CPattern::Value(e) => e.eval(state, &known).is_ok_and(|x| x == *v),
                 CPattern::Set(items) => items.iter().any(|i| i.eval(state, &known).is_ok_and(|x| x == *v)),
                 CPattern::Range(lo, hi) => {
-                    lo.eval(state, &known).is_ok_and(|l| l <= *v) && hi.eval(state, &known).is_ok_and(|h| *v <= h)
+                    lo.eval(state, &known).is_ok_and(|l| l <= *v)
+                        && hi.eval(state, &known).is_ok_and(|h| *v <= h)
                 }
             }
         })
@@ -180,7 +186,10 @@ impl Model {
             for (taken, after) in &partial {
                 for &t in transitions {
                     let mut after = after.clone();
-                    for (slot, value) in self.writes(&self.transitions[t], state, fields).map_err(|e| Blocked::Error(t, e))? {
+                    for (slot, value) in self
+                        .writes(&self.transitions[t], state, fields)
+                        .map_err(|e| Blocked::Error(t, e))?
+                    {
                         after[slot] = value;
                     }
                     let mut taken = taken.clone();
@@ -257,7 +266,10 @@ impl Model {
         self.components[component]
             .processes
             .iter()
-            .map(|p| self.location_name(*p, state[self.processes[*p].location_slot]).replacen('.', "@", 1))
+            .map(|p| {
+                self.location_name(*p, state[self.processes[*p].location_slot])
+                    .replacen('.', "@", 1)
+            })
             .collect::<Vec<_>>()
             .join(" ")
     }
@@ -327,13 +339,18 @@ mod tests {
         assert_eq!(joint.len(), 1);
         assert_eq!(m.describe_state(&joint[0].state), "a@Busy b@Heard b.n=1 c@Z");
         // b takes 2 explicitly; a refuses it, so the composition does.
-        assert_eq!(m.input_joint(&m.initial, req, &[2]).unwrap_err().component(), Some(0));
+        assert_eq!(
+            m.input_joint(&m.initial, req, &[2]).unwrap_err().component(),
+            Some(0)
+        );
         // The answer: both take it; in the initial state `b` would, but `a` owes nothing yet.
         let after = &joint[0].state;
         let out = m.output_joint(after, res, &[Some(1)], &mut |_| true).unwrap();
         assert_eq!(m.describe_state(&out[0].state), "a@Idle b@Quiet b.n=1 c@Z");
         assert_eq!(
-            m.output_joint(&m.initial, res, &[Some(1)], &mut |_| true).unwrap_err().component(),
+            m.output_joint(&m.initial, res, &[Some(1)], &mut |_| true)
+                .unwrap_err()
+                .component(),
             Some(0)
         );
     }
@@ -343,10 +360,17 @@ mod tests {
         let emitter = "model e\nevent ERR\nclock t\nprocess e {\n location Up, Down\n Up -> Down: signal ERR within 1ms..2ms of t\n}\n";
         let listener = "model l\nevent ERR\nprocess l {\n var hit: bool = false\n location L\n L -> same: on ERR when !hit do hit := true\n}\n";
         let m = composed(&[emitter, listener]);
-        let signal = m.transitions.iter().position(|t| t.kind == crate::model::Kind::Signal).unwrap();
+        let signal = m
+            .transitions
+            .iter()
+            .position(|t| t.kind == crate::model::Kind::Signal)
+            .unwrap();
         let joint = m.signal_joint(&m.initial, signal).unwrap();
         assert_eq!(m.describe_state(&joint[0].state), "e@Down l@L l.hit=true");
         // A listener that cannot follow blocks the event.
-        assert_eq!(m.signal_joint(&joint[0].state, signal).unwrap_err().component(), Some(1));
+        assert_eq!(
+            m.signal_joint(&joint[0].state, signal).unwrap_err().component(),
+            Some(1)
+        );
     }
 }

@@ -410,7 +410,8 @@ impl<'m> Executor<'m> {
     fn deadline(&self, c: &Conf) -> Option<i64> {
         let mut per_process: Vec<Option<i64>> = vec![None; self.model.processes.len()];
         for t in &self.model.transitions {
-            let must = t.kind == Kind::Output || (matches!(t.kind, Kind::Internal | Kind::Signal) && t.window.is_some());
+            let must = t.kind == Kind::Output
+                || (matches!(t.kind, Kind::Internal | Kind::Signal) && t.window.is_some());
             if !must
                 || !self.model.located(t, &c.state)
                 || !self.model.guard_holds(t, &c.state, &[]).unwrap_or(false)
@@ -631,7 +632,10 @@ impl<'m> Executor<'m> {
                                 }
                             }
                             self.taken.extend(j.transitions.iter().copied());
-                            next.push(Conf { state: j.state, clocks });
+                            next.push(Conf {
+                                state: j.state,
+                                clocks,
+                            });
                         }
                     }
                     Err(Blocked::Refused(component)) => {
@@ -714,7 +718,10 @@ impl<'m> Executor<'m> {
         candidates.retain(|(label, _)| {
             self.confs.iter().all(|c| {
                 let next = self.input_successors(c, label, now);
-                !next.is_empty() && next.iter().all(|(_, n)| self.unanswerable(n, Some(now)).is_none())
+                !next.is_empty()
+                    && next
+                        .iter()
+                        .all(|(_, n)| self.unanswerable(n, Some(now)).is_none())
             })
         });
         candidates
@@ -736,7 +743,13 @@ impl<'m> Executor<'m> {
                         clocks[*r] = now;
                     }
                 }
-                (j.transitions, Conf { state: j.state, clocks })
+                (
+                    j.transitions,
+                    Conf {
+                        state: j.state,
+                        clocks,
+                    },
+                )
             })
             .collect()
     }
@@ -1082,7 +1095,10 @@ impl<'m> Executor<'m> {
             Phase::Observing(until, _) => {
                 let deadline = self.confs.iter().filter_map(|c| self.deadline(c)).min();
                 let due = deadline.map_or(until, |d| until.min(d + 1));
-                Some(self.next_opening(self.closed_at).map_or(due, |open| due.min(open)))
+                Some(
+                    self.next_opening(self.closed_at)
+                        .map_or(due, |open| due.min(open)),
+                )
             }
             Phase::Finished => None,
         }

@@ -219,7 +219,17 @@ impl Model {
                         match self.output_joint(state, gate, &values, &mut admit) {
                             Ok(joint) => {
                                 for j in joint {
-                                    push(&mut out, (t.id, Some(Label { gate, values: values.clone() }), j.state));
+                                    push(
+                                        &mut out,
+                                        (
+                                            t.id,
+                                            Some(Label {
+                                                gate,
+                                                values: values.clone(),
+                                            }),
+                                            j.state,
+                                        ),
+                                    );
                                 }
                             }
                             Err(b) => error(b)?,

@@ -49,6 +49,11 @@ pub const MODELS: &[Shipped] = &[
         text: include_str!("../models/heartbeat.mbt"),
     },
     Shipped {
+        name: "store",
+        covers: "Store and restore parameters: 1010h/1011h capability bits, the signatures \"save\"/\"load\" (wrong ones refused with 0800 0020h), a saved parameter survives reset node and reset communication, \"load\" brings the default back at the next reset node (CiA 301 §7.5.2.13-14); uses nmt",
+        text: include_str!("../models/store.mbt"),
+    },
+    Shipped {
         name: "energybus-ems",
         covers: "DRAFT: EnergyBus EMS virtual device FSA (CiA 454) from public material only: control word 6001h transitions, status word 6002h state, automatic steps; no device to test it on here",
         text: include_str!("../models/energybus-ems.mbt"),

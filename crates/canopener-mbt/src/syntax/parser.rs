@@ -523,7 +523,10 @@ impl Parser {
             } else if self.at_word("passive") || self.at_word("otherwise") {
                 let word = self.advance();
                 if t.kind != ActionKind::Input {
-                    return self.error(word.span, "only an input (`in GATE(...)`) can be `passive` or `otherwise`");
+                    return self.error(
+                        word.span,
+                        "only an input (`in GATE(...)`) can be `passive` or `otherwise`",
+                    );
                 }
                 t.passive = true;
                 t.otherwise |= matches!(&word.tok, Tok::Ident(w) if w == "otherwise");
