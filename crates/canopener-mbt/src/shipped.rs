@@ -54,6 +54,11 @@ pub const MODELS: &[Shipped] = &[
         text: include_str!("../models/store.mbt"),
     },
     Shipped {
+        name: "pdo",
+        covers: "PDO mapping procedure on a TPDO (not valid, sub-index 0 = 0, entries, sub-index 0 = n, valid) with the refusals of a mapping changed while valid or while sub-index 0 is not 0, a non-mappable object, too many entries, a restricted CAN-ID and a CAN-ID changed while valid; remote requests answered in Operational (type 253 or event-driven), not in Pre-operational (CiA 301 §7.5.2.35-38, §7.2.2); uses nmt",
+        text: include_str!("../models/pdo.mbt"),
+    },
+    Shipped {
         name: "energybus-ems",
         covers: "DRAFT: EnergyBus EMS virtual device FSA (CiA 454) from public material only: control word 6001h transitions, status word 6002h state, automatic steps; no device to test it on here",
         text: include_str!("../models/energybus-ems.mbt"),

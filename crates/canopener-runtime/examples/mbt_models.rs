@@ -119,7 +119,19 @@ fn main() {
                 o.coverage.transitions[1],
                 o.coverage.states_seen
             );
-            if o.verdict != Verdict::Pass && a.trace {
+            if std::env::var("UNCOVERED").is_ok() {
+                let taken: BTreeSet<usize> = o.coverage.taken.iter().copied().collect();
+                for (f, file) in model.files.iter().enumerate() {
+                    let lines: Vec<u32> = model
+                        .transitions
+                        .iter()
+                        .filter(|t| model.processes[t.process].file == f && !taken.contains(&t.id))
+                        .map(|t| t.span.line)
+                        .collect();
+                    println!("    {}: lines not taken {lines:?}", file.name);
+                }
+            }
+            if a.trace && (o.verdict != Verdict::Pass || std::env::var("ALL").is_ok()) {
                 for s in &o.trace {
                     println!("    {:9.3} {:?} {}", s.t, s.dir, s.label);
                 }
