@@ -59,6 +59,11 @@ pub const MODELS: &[Shipped] = &[
         text: include_str!("../models/pdo.mbt"),
     },
     Shipped {
+        name: "sdo-block",
+        covers: "SDO block upload (1000h, 1018h:01, 1008h; block sizes 1, 2, 127; sequence numbers, c on the last segment, end n, CRC-16 of the data checked when both sides support it) and block download (1005h, with and without CRC, a wrong CRC refused with 0504 0004h); invalid block size and sequence number refused (CiA 301 §7.2.4.3.9-16); uses nmt",
+        text: include_str!("../models/sdo-block.mbt"),
+    },
+    Shipped {
         name: "energybus-ems",
         covers: "DRAFT: EnergyBus EMS virtual device FSA (CiA 454) from public material only: control word 6001h transitions, status word 6002h state, automatic steps; no device to test it on here",
         text: include_str!("../models/energybus-ems.mbt"),

@@ -122,11 +122,17 @@ fn main() {
             if std::env::var("UNCOVERED").is_ok() {
                 let taken: BTreeSet<usize> = o.coverage.taken.iter().copied().collect();
                 for (f, file) in model.files.iter().enumerate() {
-                    let lines: Vec<u32> = model
+                    let lines: Vec<String> = model
                         .transitions
                         .iter()
                         .filter(|t| model.processes[t.process].file == f && !taken.contains(&t.id))
-                        .map(|t| t.span.line)
+                        .map(|t| {
+                            format!(
+                                "{}{}",
+                                t.span.line,
+                                t.tags.first().map_or(String::new(), |g| format!(" {g}"))
+                            )
+                        })
                         .collect();
                     println!("    {}: lines not taken {lines:?}", file.name);
                 }

@@ -131,6 +131,12 @@ pub const TOGGLE: Accepted = Accepted {
     codes: &[abort::TOGGLE_BIT_NOT_ALTERNATED, abort::GENERAL_ERROR],
     source: CIA_TABLE,
 };
+/// A server that gives up on a transfer its client stopped serving (CiA 301 sets no time for it).
+pub const TIMED_OUT: Accepted = Accepted {
+    name: "timed_out",
+    codes: &[abort::PROTOCOL_TIMED_OUT, abort::GENERAL_ERROR],
+    source: CIA_TABLE,
+};
 /// A block upload with a block size outside 1..127 (CCT SDO 26).
 pub const BLOCK_SIZE: Accepted = Accepted {
     name: "block_size",
@@ -150,6 +156,13 @@ pub const SEQUENCE_NUMBER: Accepted = Accepted {
         abort::GENERAL_ERROR,
     ],
     source: CCT_LOG,
+};
+/// A block download whose end frame carries a CRC that does not match the data (CiA 301 block
+/// download end, when client and server both support the CRC).
+pub const CRC: Accepted = Accepted {
+    name: "crc",
+    codes: &[abort::CRC_ERROR, abort::GENERAL_ERROR],
+    source: CIA_TABLE,
 };
 /// The answer of a device without block transfer to a block request (CCT SDO 19, 22).
 pub const NO_BLOCK_TRANSFER: Accepted = Accepted {
@@ -244,8 +257,10 @@ pub const ABORT_SETS: &[Accepted] = &[
     TOO_HIGH,
     TOO_LOW,
     TOGGLE,
+    TIMED_OUT,
     BLOCK_SIZE,
     SEQUENCE_NUMBER,
+    CRC,
     NO_BLOCK_TRANSFER,
     MAPPING_SEQUENCE,
     MAPPING_LENGTH,
