@@ -153,6 +153,7 @@ pub fn compile(
                 file,
                 gates: compiler.file_gates.get(file).cloned().unwrap_or_default(),
                 events: compiler.file_events.get(file).cloned().unwrap_or_default(),
+                resets: compiler.file_resets.get(file).cloned().unwrap_or_default(),
                 processes,
                 transitions,
             }
@@ -184,6 +185,8 @@ struct Compiler<'a> {
     file_gates: Vec<Vec<usize>>,
     /// Per file, the hidden events it declares.
     file_events: Vec<Vec<usize>>,
+    /// Per file, its `reset` stimuli.
+    file_resets: Vec<Vec<Label>>,
     quiescence_declared: bool,
 }
 
@@ -224,6 +227,7 @@ impl<'a> Compiler<'a> {
             clock_index: BTreeMap::new(),
             file_gates: Vec::new(),
             file_events: Vec::new(),
+            file_resets: Vec::new(),
             quiescence_declared: false,
         }
     }
@@ -534,6 +538,10 @@ impl<'a> Compiler<'a> {
             {
                 // Each distinct stimulus once: composed models that reset alike reset once.
                 let label = Label::concrete(gate, &values);
+                while self.file_resets.len() <= self.file {
+                    self.file_resets.push(Vec::new());
+                }
+                self.file_resets[self.file].push(label.clone());
                 if !self.model.resets.contains(&label) {
                     self.model.resets.push(label);
                 }
@@ -1229,8 +1237,18 @@ impl<'a> Compiler<'a> {
         reached[0] = true;
         for &t in &process.transitions {
             let t = &self.model.transitions[t];
+            // A step that stays where it is and writes a variable its guard reads changes its own
+            // condition (`when foreign do foreign := false`): not a loop by itself.
+            let mut read = Vec::new();
+            if let Some(g) = &t.guard {
+                g.slots(&mut read);
+            }
+            let settles = t.to.is_none() && t.updates.iter().any(|(slot, ..)| read.contains(slot));
             for (f, to) in targets(t) {
-                if matches!(t.kind, Kind::Internal | Kind::Signal) && t.window.is_none() {
+                if matches!(t.kind, Kind::Internal | Kind::Signal)
+                    && t.window.is_none()
+                    && !(settles && f == to)
+                {
                     tau[f].push(to);
                 }
             }

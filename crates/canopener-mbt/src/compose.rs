@@ -57,6 +57,11 @@ impl Model {
         self.processes[t.process].file
     }
 
+    /// Whether `t` is an action on a gate that names the frames of `key`.
+    pub fn on_frames(&self, t: &Transition, key: (u16, bool, u8, crate::syntax::ast::Direction)) -> bool {
+        t.gate.is_some_and(|g| self.gates[g].frame_key() == key)
+    }
+
     /// The gates naming the same frames as `gate` (itself included).
     pub fn aliases(&self, gate: usize) -> impl Iterator<Item = usize> + '_ {
         let key = self.gates[gate].frame_key();
@@ -129,7 +134,7 @@ impl Model {
         for &t in &self.components[component].transitions {
             let tr = &self.transitions[t];
             if !tr.kind.is_output()
-                || !tr.gate.is_some_and(|g| self.gates[g].frame_key() == key)
+                || !self.on_frames(tr, key)
                 || !self.located(tr, state)
                 || !self.guard_holds(tr, state, &known).unwrap_or(false)
                 || !self.matches_open(tr, state, values)
@@ -159,7 +164,7 @@ impl Model {
     }
 
     /// Whether `t`'s patterns match `values` in `state`, an open value matching anything.
-    fn matches_open(&self, t: &Transition, state: &[i64], values: &[Option<i64>]) -> bool {
+    pub(crate) fn matches_open(&self, t: &Transition, state: &[i64], values: &[Option<i64>]) -> bool {
         t.patterns.iter().zip(values).all(|(p, v)| {
             let Some(v) = v else { return true };
             let known = [*v];
@@ -292,7 +297,7 @@ impl Model {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use crate::compile::{Options, Source, compile};
     use crate::model::Model;
 

@@ -36,12 +36,19 @@ pub(crate) fn value(eds: &Eds, node_id: u8, index: u16, sub: u8) -> Result<i64, 
 }
 
 /// The data length in bytes of the PDO whose mapping parameter is `mapping_index` (1600h.., 1A00h..),
-/// from the mapping entries it starts with.
+/// from the mapping entries it starts with; 0 if an entry maps an object the description does not
+/// have (the description's PDO cannot be sent as described, so a model must not expect it). Entries
+/// of the data-type area (index 0001h..001Fh) are dummy mappings and count with their length.
 pub(crate) fn pdo_bytes(eds: &Eds, node_id: u8, mapping_index: u16) -> Result<i64, String> {
     let count = value(eds, node_id, mapping_index, 0)?;
     let mut bits = 0;
     for sub in 1..=u8::try_from(count).unwrap_or(0).min(64) {
-        bits += value(eds, node_id, mapping_index, sub)? & 0xFF;
+        let entry = value(eds, node_id, mapping_index, sub)?;
+        let (index, mapped_sub) = ((entry >> 16) as u16, (entry >> 8) as u8);
+        if index >= 0x20 && !exists(eds, index, mapped_sub) {
+            return Ok(0);
+        }
+        bits += entry & 0xFF;
     }
     Ok((bits + 7) / 8)
 }

@@ -56,6 +56,13 @@ canopener_eds::diagnostic_codes! {
     /// Processes of different models that both take the same input: both would expect their own
     /// answer, which the device gives once.
     OverlappingInputs = "M040", "overlapping-inputs", Warning;
+    /// Composed models that disagree in a reachable state: one requires an output (or a hidden
+    /// event) that another, which holds the same frame, refuses. No device can satisfy both; the
+    /// executor never sends the input that leads there.
+    Disagreement = "M043", "models-disagree", Warning;
+    /// Composed models whose `reset` stimuli differ on a shared gate: each model's initial state
+    /// assumes only its own.
+    ResetsDiffer = "M044", "resets-differ", Warning;
     /// A location no transition leads to.
     UnreachableLocation = "M041", "unreachable-location", Warning;
     /// A process without locations.

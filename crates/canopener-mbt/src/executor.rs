@@ -333,6 +333,15 @@ impl<'m> Executor<'m> {
     /// drops the source then). A hidden event happens only with every component that declares it.
     fn closure(&mut self, confs: Vec<Conf>, now: i64) -> Vec<Conf> {
         self.closed_at = self.closed_at.max(now);
+        let mut taken = BTreeSet::new();
+        let out = self.closed(confs, now, &mut taken);
+        self.taken.extend(taken);
+        out
+    }
+
+    /// [`Executor::closure`] without recording anything: the configurations and, in `taken`, the
+    /// internal transitions on the way.
+    fn closed(&self, confs: Vec<Conf>, now: i64, taken: &mut BTreeSet<usize>) -> Vec<Conf> {
         let mut out: Vec<Conf> = Vec::new();
         let mut work = confs;
         let mut guard = 0;
@@ -364,7 +373,7 @@ impl<'m> Executor<'m> {
                     if !out.contains(&n) && !work.contains(&n) {
                         work.push(n);
                     }
-                    self.taken.extend(j.transitions);
+                    taken.extend(j.transitions);
                 }
             }
             if !urgent && !out.contains(&c) {
@@ -717,11 +726,16 @@ impl<'m> Executor<'m> {
         }
         candidates.retain(|(label, _)| {
             self.confs.iter().all(|c| {
-                let next = self.input_successors(c, label, now);
-                !next.is_empty()
-                    && next
-                        .iter()
-                        .all(|(_, n)| self.unanswerable(n, Some(now)).is_none())
+                let next: Vec<Conf> = self
+                    .input_successors(c, label, now)
+                    .into_iter()
+                    .map(|(_, n)| n)
+                    .collect();
+                if next.is_empty() {
+                    return false;
+                }
+                let after = self.closed(next, now, &mut BTreeSet::new());
+                after.iter().all(|n| self.unanswerable(n, Some(now)).is_none())
             })
         });
         candidates
@@ -1029,7 +1043,27 @@ impl<'m> Executor<'m> {
             } else {
                 fresh
             };
-            let label = pool[self.rand(pool.len())].0.clone();
+            // Each component of a composition gets its share of the stimuli: one whose inputs are
+            // in the pool is chosen first, then one of its inputs, so that a model with one
+            // procedure step is not drowned by another's dozen commands.
+            let mut owners: Vec<usize> = pool
+                .iter()
+                .flat_map(|(_, ts)| {
+                    ts.iter()
+                        .map(|t| self.model.component_of(&self.model.transitions[*t]))
+                })
+                .collect();
+            owners.sort_unstable();
+            owners.dedup();
+            let owner = owners[self.rand(owners.len())];
+            let own: Vec<&&(Label, Vec<usize>)> = pool
+                .iter()
+                .filter(|(_, ts)| {
+                    ts.iter()
+                        .any(|t| self.model.component_of(&self.model.transitions[*t]) == owner)
+                })
+                .collect();
+            let label = own[self.rand(own.len())].0.clone();
             self.send(now, &label);
         } else {
             self.observe_from(now);

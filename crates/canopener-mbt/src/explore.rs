@@ -32,6 +32,10 @@ pub struct Lts {
 /// the state it leads to.
 pub type Step = (usize, Option<Label>, Vec<i64>);
 
+/// One step of the composed untimed semantics with every transition taking part (the initiator
+/// first), its label and the state it leads to.
+pub type JointStep = (Vec<usize>, Option<Label>, Vec<i64>);
+
 /// The explored state space of a model.
 #[derive(Debug, Clone)]
 pub struct StateSpace {
@@ -119,16 +123,7 @@ impl Model {
                     }
                 }
             };
-            labels = labels
-                .into_iter()
-                .flat_map(|prefix| {
-                    choices.iter().map(move |c| {
-                        let mut l = prefix.clone();
-                        l.push(*c);
-                        l
-                    })
-                })
-                .collect();
+            labels = extend_each(labels, &choices);
         }
         let mut kept = Vec::new();
         for l in labels {
@@ -162,9 +157,19 @@ impl Model {
     /// component that holds them. Duplicate steps (the same label to the same state) are listed
     /// once.
     pub fn steps(&self, state: &[i64]) -> Result<Vec<Step>, (usize, String)> {
+        Ok(self
+            .joint_steps(state)?
+            .into_iter()
+            .map(|(ts, label, next)| (ts[0], label, next))
+            .collect())
+    }
+
+    /// [`Model::steps`] with every transition that takes part in each step (one per component
+    /// holding its frame or event; the initiator first).
+    pub fn joint_steps(&self, state: &[i64]) -> Result<Vec<JointStep>, (usize, String)> {
         use crate::compose::Blocked;
-        let mut out: Vec<Step> = Vec::new();
-        let push = |out: &mut Vec<Step>, step: Step| {
+        let mut out: Vec<JointStep> = Vec::new();
+        let push = |out: &mut Vec<JointStep>, step: JointStep| {
             if !out.iter().any(|(_, l, s)| *l == step.1 && *s == step.2) {
                 out.push(step);
             }
@@ -187,7 +192,7 @@ impl Model {
                     match self.signal_joint(state, t.id) {
                         Ok(joint) => {
                             for j in joint {
-                                push(&mut out, (t.id, None, j.state));
+                                push(&mut out, (j.transitions, None, j.state));
                             }
                         }
                         Err(b) => error(b)?,
@@ -212,7 +217,8 @@ impl Model {
                 Kind::Output | Kind::MaybeOutput => {
                     let Some(gate) = t.gate else { continue };
                     let own = self.component_of(t);
-                    for values in self.offers(t, state).map_err(|e| fail(e.to_string()))? {
+                    let offers = self.offers(t, state).map_err(|e| fail(e.to_string()))?;
+                    for values in offers.into_iter().flat_map(|v| self.refine(state, gate, v)) {
                         // The initiator takes part with this transition; every other holder with
                         // one of its own.
                         let mut admit = |u: &Transition| self.component_of(u) != own || u.id == t.id;
@@ -222,7 +228,7 @@ impl Model {
                                     push(
                                         &mut out,
                                         (
-                                            t.id,
+                                            j.transitions,
                                             Some(Label {
                                                 gate,
                                                 values: values.clone(),
@@ -238,13 +244,22 @@ impl Model {
                 }
             }
         }
+        // Maximal progress: an internal step without a window happens at once, so a state that has
+        // one is left before anything else can happen (the executor's closure does the same).
+        let urgent: Vec<JointStep> = out
+            .iter()
+            .filter(|(ts, label, _)| label.is_none() && self.transitions[ts[0]].window.is_none())
+            .cloned()
+            .collect();
+        if !urgent.is_empty() {
+            return Ok(urgent);
+        }
         for label in inputs {
             let values: Vec<i64> = label.values.iter().map(|v| v.unwrap_or(0)).collect();
             match self.input_joint(state, label.gate, &values) {
                 Ok(joint) => {
                     for j in joint {
-                        let first = j.transitions[0];
-                        push(&mut out, (first, Some(label.clone()), j.state));
+                        push(&mut out, (j.transitions, Some(label.clone()), j.state));
                     }
                 }
                 Err(b) => error(b)?,
@@ -253,10 +268,89 @@ impl Model {
         Ok(out)
     }
 
+    /// An output label whose fields the initiator leaves open, made concrete wherever a holder of
+    /// the frame cares: each open field takes every value some holder's pattern names there, and
+    /// one value none names (still open if no holder names any). Without this, two holders could
+    /// each read the same open label as a different frame (a confirmation and an abort).
+    fn refine(&self, state: &[i64], gate: usize, values: Vec<Option<i64>>) -> Vec<Vec<Option<i64>>> {
+        const MAX_LABELS: usize = 64;
+        let key = self.gates[gate].frame_key();
+        let mut choices: Vec<Vec<Option<i64>>> = Vec::new();
+        for (field, value) in values.iter().enumerate() {
+            if value.is_some() {
+                choices.push(vec![*value]);
+                continue;
+            }
+            let mut named: Vec<i64> = Vec::new();
+            for t in &self.transitions {
+                // Only holders' transitions that could take this label (its known fields) name
+                // values that matter.
+                if !t.kind.is_output()
+                    || !self.on_frames(t, key)
+                    || !self.located(t, state)
+                    || !self.matches_open(t, state, &values)
+                {
+                    continue;
+                }
+                match t.patterns.get(field) {
+                    Some(CPattern::Value(e)) => named.extend(e.eval(state, &[]).ok()),
+                    Some(CPattern::Set(items)) => {
+                        named.extend(items.iter().filter_map(|i| i.eval(state, &[]).ok()))
+                    }
+                    _ => {}
+                }
+            }
+            named.sort_unstable();
+            named.dedup();
+            if named.is_empty() {
+                choices.push(vec![None]);
+                continue;
+            }
+            // A value no holder names: one past the largest, or below the smallest at the top of
+            // the field's range.
+            let size = self.gates[gate].fields[field].size;
+            let max = if size >= 8 {
+                i64::MAX
+            } else {
+                (1i64 << (8 * size)) - 1
+            };
+            let fresh = named
+                .last()
+                .map(|v| v + 1)
+                .filter(|v| *v <= max)
+                .or_else(|| (0..=max).find(|v| !named.contains(v)));
+            let mut options: Vec<Option<i64>> = named.into_iter().map(Some).collect();
+            options.extend(fresh.map(Some));
+            choices.push(options);
+        }
+        let mut labels: Vec<Vec<Option<i64>>> = vec![Vec::new()];
+        for options in choices {
+            labels = extend_each(labels, &options);
+            if labels.len() > MAX_LABELS {
+                return vec![values];
+            }
+        }
+        labels
+    }
+
     /// The direction of a transition's label, if it has one.
     pub fn direction(&self, t: &Transition) -> Option<Direction> {
         t.gate.map(|g| self.gates[g].direction)
     }
+}
+
+/// Every label of `labels` extended by every value of `choices` (a cartesian product, field by field).
+fn extend_each(labels: Vec<Vec<Option<i64>>>, choices: &[Option<i64>]) -> Vec<Vec<Option<i64>>> {
+    labels
+        .into_iter()
+        .flat_map(|prefix| {
+            choices.iter().map(move |c| {
+                let mut l = prefix.clone();
+                l.push(*c);
+                l
+            })
+        })
+        .collect()
 }
 
 /// Explores the state space breadth first, up to `max_states` states.

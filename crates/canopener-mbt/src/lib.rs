@@ -9,6 +9,7 @@
 
 #![warn(missing_docs)]
 
+pub mod agreement;
 pub mod aut;
 pub mod compile;
 pub mod compose;

@@ -68,6 +68,8 @@ pub struct Component {
     pub processes: Vec<usize>,
     /// The transitions of its processes.
     pub transitions: Vec<usize>,
+    /// Its own `reset` stimuli (the run sends every component's, each distinct one once).
+    pub resets: Vec<crate::label::Label>,
 }
 
 /// A gate: one kind of CAN frame.

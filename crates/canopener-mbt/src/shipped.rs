@@ -9,44 +9,56 @@ pub struct Shipped {
     pub covers: &'static str,
     /// The model text.
     pub text: &'static str,
+    /// The model tests any CANopen device (CiA 301/305 services), so it joins the composition
+    /// matrix (`examples/mbt_compose.rs` in canopener-runtime: every subset of these models must pass
+    /// on clean simulated devices). `false` for models that need a particular device (the EnergyBus
+    /// draft needs an EnergyBus device).
+    pub canopen: bool,
 }
 
 /// Every shipped model.
 pub const MODELS: &[Shipped] = &[
     Shipped {
         name: "nmt",
-        covers: "NMT slave: boot-up, every module-control transition (own node-ID and broadcast), heartbeat producer with period and state byte (CiA 301 §7.3.2, §7.2.8.3)",
+        covers: "NMT slave: boot-up, every module-control transition (own node-ID and broadcast), heartbeat producer with period 1017h and state byte, no SDO answer in Stopped, the 1029h reaction to a signalled communication error (CiA 301 §7.3.2, §7.2.8.3, table 43)",
         text: include_str!("../models/nmt.mbt"),
+        canopen: true,
     },
     Shipped {
         name: "sdo",
-        covers: "SDO server, expedited and segmented: upload sizes of 1000h/1001h/1018h, segmented upload of 1008h and download to 1005h with the toggle bit, aborts for an absent object and sub-index, a read-only write, an unknown command and a wrong toggle (0503 0000h), silence in Stopped (CiA 301 §7.2.4.3); uses nmt",
+        covers: "SDO server, expedited and segmented: upload sizes of 1000h/1001h/1018h (size indicated or not), segmented upload of 1008h and download to 1005h with the toggle bit, aborts for an absent object and sub-index, a read-only write, an unknown command and a wrong toggle, judged with the conformance suites' accepted codes, silence in Stopped (CiA 301 §7.2.4.3); uses nmt",
         text: include_str!("../models/sdo.mbt"),
+        canopen: true,
     },
     Shipped {
         name: "sync",
-        covers: "SYNC producer configured over SDO: period 1006h and counter 1019h on every SYNC, including a missing counter byte; SYNC consumer: TPDO1 of synchronous type n after every n-th SYNC and never between (CiA 301 §7.2.5, 1800h)",
+        covers: "SYNC producer configured over SDO: period 1006h and counter 1019h on every SYNC, including a missing counter byte; SYNC consumer: TPDO1 of synchronous type n after every n-th SYNC and never between, in Operational (CiA 301 §7.2.5, 1800h); uses nmt",
         text: include_str!("../models/sync.mbt"),
+        canopen: true,
     },
     Shipped {
         name: "lss",
         covers: "LSS slave: waiting/configuration, switch state global and selective, inquire identity and node-ID, fastscan (non-configured devices are found part by part and selected, configured ones keep silent) (CiA 305)",
         text: include_str!("../models/lss.mbt"),
+        canopen: true,
     },
     Shipped {
         name: "emcy",
-        covers: "EMCY producer: heartbeat-consumer event 8130h with error register 11h after 1016h's time, and the error reset 0000h when heartbeats resume (CiA 301 §7.2.7)",
+        covers: "EMCY producer: heartbeat-consumer event 8130h with error register 11h after 1016h's time, and the error reset 0000h when heartbeats resume (CiA 301 §7.2.7); uses heartbeat",
         text: include_str!("../models/emcy.mbt"),
+        canopen: true,
     },
     Shipped {
         name: "guarding",
-        covers: "Node guarding after 1017h = 0: every remote request answered with the NMT state and a toggle bit that starts at 0 after initialisation and alternates (CiA 301 §7.2.8.3.2.1)",
+        covers: "Node guarding after 1017h = 0: every remote request answered with the NMT state and a toggle bit that starts at 0 after initialisation and alternates (CiA 301 §7.2.8.3.2.1); uses nmt",
         text: include_str!("../models/guarding.mbt"),
+        canopen: true,
     },
     Shipped {
         name: "heartbeat",
-        covers: "Heartbeat consumer 1016h: timeout after the consumer time, EMCY 8130h, NMT reaction per 1029h:01 (absent = Pre-operational) seen in the device's heartbeat (CiA 301 §7.2.8.3.2.2, 1029h)",
+        covers: "Heartbeat consumer 1016h: timeout after the consumer time, EMCY 8130h, NMT reaction per 1029h:01 (absent = Pre-operational) signalled to nmt, which judges it in the device's heartbeat (CiA 301 §7.2.8.3.2.2, 1029h); uses nmt",
         text: include_str!("../models/heartbeat.mbt"),
+        canopen: true,
     },
     Shipped {
         name: "store",
@@ -67,8 +79,14 @@ pub const MODELS: &[Shipped] = &[
         name: "energybus-ems",
         covers: "DRAFT: EnergyBus EMS virtual device FSA (CiA 454) from public material only: control word 6001h transitions, status word 6002h state, automatic steps; no device to test it on here",
         text: include_str!("../models/energybus-ems.mbt"),
+        canopen: false,
     },
 ];
+
+/// The shipped models that test any CANopen device (see [`Shipped::canopen`]).
+pub fn canopen_models() -> impl Iterator<Item = &'static Shipped> {
+    MODELS.iter().filter(|m| m.canopen)
+}
 
 /// The text of the shipped model `name`.
 pub fn text(name: &str) -> Option<&'static str> {

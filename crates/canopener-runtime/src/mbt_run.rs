@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use canopener_mbt::executor::{Executor, Outcome, RunConfig, ScriptStep};
 use canopener_mbt::model::Model;
+use rayon::prelude::*;
 
 use crate::link::{Ended, Flow, Link, LinkError, drive};
 
@@ -32,6 +33,56 @@ pub fn run<L: Link + ?Sized>(
             outcome
         }
     })
+}
+
+/// One seed's run of a campaign ([`run_seeds`]).
+#[derive(Debug, Clone)]
+pub struct SeedRun {
+    /// The seed.
+    pub seed: u64,
+    /// What the run found.
+    pub outcome: Outcome,
+    /// Wall-clock time the run took.
+    pub wall: Duration,
+}
+
+/// Runs `model` once per seed of `seeds`, the seeds in parallel on the machine's cores (a rayon
+/// pool), each on its own link from `link_for_seed` (a fresh simulated device on virtual time: each
+/// run is deterministic, so the order they finish in changes nothing). `on_done` is told of each run
+/// as it ends (a progress bar). The runs come back in the order of `seeds`; the first error stops
+/// the campaign.
+pub fn run_seeds<L, E, F>(
+    seeds: &[u64],
+    link_for_seed: F,
+    model: &Model,
+    config: &RunConfig,
+    limit: Option<Duration>,
+    on_done: &(dyn Fn(&SeedRun) + Sync),
+) -> Result<Vec<SeedRun>, E>
+where
+    L: Link,
+    E: From<LinkError> + Send,
+    F: Fn(u64) -> Result<L, E> + Sync,
+{
+    seeds
+        .par_iter()
+        .map(|&seed| {
+            let started = std::time::Instant::now();
+            let mut link = link_for_seed(seed)?;
+            let config = RunConfig {
+                seed,
+                ..config.clone()
+            };
+            let outcome = run(&mut link, model, config, limit)?;
+            let done = SeedRun {
+                seed,
+                outcome,
+                wall: started.elapsed(),
+            };
+            on_done(&done);
+            Ok(done)
+        })
+        .collect()
 }
 
 /// A failing run's inputs shrunk by delta debugging against the device.

@@ -25,10 +25,12 @@ pub(crate) enum MbtCommand {
   canopener mbt models
   canopener mbt models --format json | jq -r '.[].name'")]
     Models(ModelsArgs),
-    /// Check models: syntax, names, bounded domains, τ-cycles, gate directions, time bounds.
+    /// Check models: syntax, names, bounded domains, τ-cycles, gate directions, time bounds; composed
+    /// models: where one requires an output another refuses (M043), resets that differ (M044).
     #[command(after_help = "Examples:
   canopener mbt check nmt sdo                     # shipped models
   canopener mbt check my-device.mbt --eds device.eds --node 0x05
+  canopener mbt check nmt my-consumer.mbt         # does my model agree with nmt?
 Diagnostics are printed as FILE:LINE:COLUMN: severity[CODE]: message.
 Exit status: 0 the models check, 3 a model has errors, 2 bad arguments.")]
     Check(ModelArgs),

@@ -26,11 +26,21 @@ pub(crate) fn models(args: ModelsArgs) -> CliResult {
     }
 }
 
+/// How many states of a composition `check` explores for disagreements.
+const AGREEMENT_STATES: usize = 50_000;
+
 pub(crate) fn check(args: ModelArgs) -> CliResult {
     let eds = description(args.eds.as_ref())?;
     let loaded = load(&args.models, args.node, eds.as_ref(), &args.set)?;
     eprint!("{}", loaded.warnings);
     let m = &loaded.model;
+    // Composed models: where one requires what another refuses (M043), resets that differ (M044).
+    for (file, d) in canopener_mbt::agreement::check(m, AGREEMENT_STATES) {
+        eprint!(
+            "{}",
+            canopener_mbt::diagnostics::render(&m.files[file].origin, &[d])
+        );
+    }
     print_stdout(&format!(
         "{}: {} processes, {} locations, {} transitions, {} gates, {} purposes; model hash {}\n",
         m.name(),
