@@ -17,19 +17,15 @@
 // An example front end: it prints what it measured.
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
-use std::collections::BTreeSet;
-use std::time::Duration;
-
-use canopener_can::Instant;
 use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
 use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
-use canopener_runtime::mbt_run::run;
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_runtime::mbt_sim::{run_simulated, sdo_download_settings};
 use canopener_testkit::corpus;
+use std::collections::BTreeSet;
 
 /// Vendored in `corpus/eds`. The composition matrix's six, and three with life guarding (100Ch,
 /// 100Dh) and limits.
@@ -42,12 +38,51 @@ const DEVICES: &[&str] = &[
     "Daxbot__node-canopen__examples__eds__example.eds",
 ];
 
-/// The models of issue 23 and the faults each is about.
-const MODELS: &[(&str, &[Fault])] = &[("store", &[Fault::StoreIgnored])];
+/// With life guarding (100Ch, 100Dh).
+const GUARDED: &[&str] = &[
+    "CANopenNode__CANopenSocket__canopend__objDict__CANopenSocket.eds",
+    "christiansandberg__canopen__examples__eds__e35.eds",
+    "ljessendk__CanFestival__examples__DS401_Slave_Gui__DS401_Slave_Gui.eds",
+    "ros-industrial__ros2_canopen__canopen_tests__config__cia402__cia402_slave.eds",
+    "ros-industrial__ros_canopen__canopen_test_utils__config__Schunk.eds",
+];
+
+/// With entries sdo-download writes (a long string, an entry with limits; `mbt_settings`).
+const WRITABLE: &[&str] = &[
+    "christiansandberg__canopen__test__sample.eds",
+    "samsamfire__gocanopen__pkg__od__base.eds",
+    "YamamotoSoya__maxon_epos4compact50-5can_ros2__maxon_epos4_ros2__config__bus_config_cia402_epos4_pos__maxon_epos4_0x1018.eds",
+    "christiansandberg__canopen__examples__eds__e35.eds",
+    "ros-industrial__ros_canopen__canopen_chain_node__test__eds__ISD860.eds",
+    "CANopenNode__CANopenNode__example__IO.eds",
+];
+
+/// The models of issue 23, the faults each is about, and the devices (with the feature) it runs on
+/// when no `--eds` is given.
+const MODELS: &[(&str, &[Fault], &[&str])] = &[
+    ("sdo-block", &[Fault::BlockCrcWrong], DEVICES),
+    (
+        "sdo-download",
+        &[Fault::LimitNotEnforced, Fault::SdoToggleIgnored],
+        WRITABLE,
+    ),
+    (
+        "pdo",
+        &[
+            Fault::UnmappableAccepted,
+            Fault::PdoCobIdUnchecked,
+            Fault::NoTpdoRtr,
+        ],
+        DEVICES,
+    ),
+    ("store", &[Fault::StoreIgnored], DEVICES),
+    ("lss-config", &[Fault::LssStateNotChanged, Fault::NoLss], DEVICES),
+    ("life-guarding", &[Fault::NoEmcy], GUARDED),
+];
 
 struct Args {
     models: Vec<String>,
-    eds: Vec<String>,
+    eds: Option<Vec<String>>,
     seeds: u64,
     steps: usize,
     fault: Option<Fault>,
@@ -59,7 +94,7 @@ struct Args {
 fn args() -> Args {
     let mut a = Args {
         models: Vec::new(),
-        eds: DEVICES.iter().map(|s| (*s).to_owned()).collect(),
+        eds: None,
         seeds: 5,
         steps: 2000,
         fault: None,
@@ -71,7 +106,7 @@ fn args() -> Args {
     while let Some(flag) = it.next() {
         let mut value = || it.next().unwrap_or_else(|| panic!("{flag} needs a value"));
         match flag.as_str() {
-            "--eds" => a.eds = value().split(',').map(str::to_owned).collect(),
+            "--eds" => a.eds = Some(value().split(',').map(str::to_owned).collect()),
             "--seeds" => a.seeds = value().parse().expect("--seeds N"),
             "--steps" => a.steps = value().parse().expect("--steps N"),
             "--fault" => a.fault = Some(value().parse().expect("a catalogue fault")),
@@ -100,8 +135,12 @@ fn main() {
         return;
     }
     let names: Vec<&str> = a.models.iter().map(String::as_str).collect();
-    for file in &a.eds {
+    let default: Vec<String> = DEVICES.iter().map(|s| (*s).to_owned()).collect();
+    for file in a.eds.as_ref().unwrap_or(&default) {
         let eds = load(file);
+        if names.contains(&"sdo-download") {
+            println!("{}: {:?}", short(file), sdo_download_settings(&eds, a.node));
+        }
         let Some(model) = compose(&names, &eds, a.node, &a.set) else {
             continue;
         };
@@ -149,13 +188,17 @@ fn main() {
 
 /// The tables of `docs/mbt.md`: per model, clean runs alone and with nmt, coverage, faults.
 fn tables(a: &Args) {
-    for (name, faults) in MODELS {
+    for (name, faults, devices) in MODELS {
+        let files: Vec<String> = match &a.eds {
+            Some(files) => files.clone(),
+            None => devices.iter().map(|s| (*s).to_owned()).collect(),
+        };
         println!("#### `{name}`\n");
         println!("| device | alone | with nmt | transitions covered | locations covered | states seen |");
         println!("|---|---|---|---|---|---|");
         let mut taken = BTreeSet::new();
         let mut total = 0;
-        for file in &a.eds {
+        for file in &files {
             let eds = load(file);
             let Some(alone) = compose(&[name], &eds, a.node, &a.set) else {
                 println!("| {} | does not compile | | | | |", short(file));
@@ -196,7 +239,7 @@ fn tables(a: &Args) {
         );
         println!("|---|---|---|---|---|---|");
         for fault in *faults {
-            for file in &a.eds {
+            for file in &files {
                 let eds = load(file);
                 let Some(model) = compose(&[name], &eds, a.node, &a.set) else {
                     continue;
@@ -293,10 +336,19 @@ fn compose(names: &[&str], eds: &Eds, node_id: u8, set: &[(String, i64)]) -> Opt
             text: text(n),
         })
         .collect();
+    // The entries sdo-download writes, from the description (given ones win).
+    let mut set = set.to_vec();
+    if names.contains(&"sdo-download") {
+        for (name, value) in sdo_download_settings(eds, node_id) {
+            if !set.iter().any(|(n, _)| *n == name) {
+                set.push((name, value));
+            }
+        }
+    }
     let options = Options {
         node_id,
         eds: Some(eds),
-        set: set.to_vec(),
+        set,
     };
     let (model, report) = compile(&sources, &options, &|n| shipped::text(n).map(str::to_owned));
     if model.is_none() {
@@ -310,17 +362,10 @@ fn compose(names: &[&str], eds: &Eds, node_id: u8, set: &[(String, i64)]) -> Opt
 }
 
 fn test(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
-    let mut bus = Simulation::ideal()
-        .device(eds, node_id)
-        .faults(faults.iter().copied())
-        .start()
-        .expect("simulation");
-    // The device's power-on boot-up is history when the tester starts with its own reset.
-    bus.run_until(Instant::from_millis(100)).expect("virtual time");
     let config = RunConfig {
         seed,
         steps,
         ..RunConfig::default()
     };
-    run(&mut bus, model, config, Some(Duration::from_secs(1_000_000))).expect("virtual bus")
+    run_simulated(model, eds, node_id, faults, config).expect("simulated run")
 }
