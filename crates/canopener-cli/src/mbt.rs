@@ -5,3 +5,4 @@ pub(crate) mod args;
 pub(crate) mod inspect;
 pub(crate) mod load;
 pub(crate) mod run;
+pub(crate) mod seeds;

@@ -297,6 +297,11 @@ impl<'m> Executor<'m> {
         exec
     }
 
+    /// Steps taken so far (for a progress display).
+    pub fn steps_taken(&self) -> usize {
+        self.steps
+    }
+
     /// The outcome, once the run is over.
     pub fn outcome(&self) -> Option<&Outcome> {
         self.outcome.as_ref()

@@ -11,17 +11,29 @@
 //! * `--subsets all|sample` (all): `sample` takes the single models, the compositions,
 //!   every model with nmt, and the whole set (the CI sample);
 //! * `--no-faults`: the clean part only;
+//! * `--results FILE` (`target/mbt_compose.tsv`): every finished run is appended there, and runs
+//!   already there (same subset, device, seed and steps) are not run again, so a matrix cut short
+//!   goes on where it stopped when the same command is given again;
+//! * `--budget SECONDS`: start no run after that much wall time (the table then says how many of
+//!   the runs it has; give the command again to run the rest);
+//! * `--write FILE`: also put the tables into FILE between the lines `<!-- mbt_compose: begin -->`
+//!   and `<!-- mbt_compose: end -->` (`docs/mbt.md`), through a temporary file and a rename;
 //! * `--trace`: print the last steps of every run that does not pass (on stderr).
 //!
-//! A subset passes when every run is `pass`; a fault counts as caught by a model alone when at
-//! least one of its fault seeds fails, and is then required to fail (at least one seed) in every
-//! composition containing that model. The runs go in parallel on a rayon pool; each is
-//! deterministic (virtual time), so the table does not depend on the machine.
+//! A subset passes when every run is `pass`; a fault counts as caught by a model alone when one of
+//! its fault seeds fails (the seeds are tried in order and the first failure ends the search), and
+//! is then required to fail (on some seed) in every composition containing that model. The runs go
+//! in parallel on a rayon pool; each is deterministic (virtual time), so the table does not depend
+//! on the machine, only the wall times do.
 
 // An example front end: it prints what it measured.
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::sync::Mutex;
 use std::time::Duration;
 
 use canopener_can::Instant;
@@ -31,6 +43,7 @@ use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
+use canopener_runtime::files::write_atomic;
 use canopener_runtime::mbt_run::run;
 use canopener_runtime::simulator::simulation::Simulation;
 use canopener_testkit::corpus;
@@ -48,6 +61,8 @@ const DEVICES: &[&str] = &[
     "Daxbot__node-canopen__examples__eds__example.eds",
 ];
 const NODE: u8 = 5;
+const BEGIN: &str = "<!-- mbt_compose: begin -->";
+const END: &str = "<!-- mbt_compose: end -->";
 
 struct Args {
     steps: usize,
@@ -57,6 +72,9 @@ struct Args {
     fault_seeds: u64,
     sample: bool,
     faults: bool,
+    results: PathBuf,
+    budget: Option<Duration>,
+    write: Option<PathBuf>,
     trace: bool,
 }
 
@@ -69,6 +87,9 @@ fn args() -> Args {
         fault_seeds: 5,
         sample: false,
         faults: true,
+        results: PathBuf::from("target/mbt_compose.tsv"),
+        budget: None,
+        write: None,
         trace: false,
     };
     let mut it = std::env::args().skip(1);
@@ -82,6 +103,9 @@ fn args() -> Args {
             "--fault-seeds" => a.fault_seeds = value().parse().expect("--fault-seeds N"),
             "--subsets" => a.sample = value() == "sample",
             "--no-faults" => a.faults = false,
+            "--results" => a.results = value().into(),
+            "--budget" => a.budget = Some(Duration::from_secs(value().parse().expect("--budget SECONDS"))),
+            "--write" => a.write = Some(value().into()),
             "--trace" => a.trace = true,
             other => panic!("unknown argument {other}; see the example's doc comment"),
         }
@@ -151,8 +175,126 @@ fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> 
     run(&mut bus, model, config, Some(Duration::from_secs(1_000_000))).expect("virtual bus")
 }
 
+/// The runs done so far, one line each in a tab-separated file: a key (what was run) and what came
+/// out. Runs are appended as they finish, so nothing is lost when the matrix is cut short.
+struct Results {
+    done: Mutex<HashMap<String, Vec<String>>>,
+    file: Mutex<std::fs::File>,
+    /// Runs made by this command (not taken from the file).
+    new: std::sync::atomic::AtomicUsize,
+}
+
+impl Results {
+    fn open(path: &PathBuf) -> Results {
+        let text = std::fs::read_to_string(path).unwrap_or_default();
+        let mut done = HashMap::new();
+        for line in text.lines() {
+            let fields: Vec<&str> = line.split('\t').collect();
+            let key_len = match fields.first() {
+                Some(&"clean") => 5,
+                Some(&"fault") => 6,
+                _ => continue,
+            };
+            if fields.len() > key_len {
+                done.insert(
+                    fields[..key_len].join("\t"),
+                    fields[key_len..].iter().map(|s| (*s).to_owned()).collect(),
+                );
+            }
+        }
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+        }
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        Results {
+            done: Mutex::new(done),
+            file: Mutex::new(file),
+            new: std::sync::atomic::AtomicUsize::new(0),
+        }
+    }
+
+    fn get(&self, key: &str) -> Option<Vec<String>> {
+        let done = self
+            .done
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        done.get(key).cloned()
+    }
+
+    fn record(&self, key: &str, value: &[String]) {
+        // Tabs and line breaks in a reason would break the file's lines.
+        let value: Vec<String> = value.iter().map(|v| v.replace(['\t', '\n'], " ")).collect();
+        let line = format!("{key}\t{}\n", value.join("\t"));
+        let mut file = self
+            .file
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        file.write_all(line.as_bytes()).expect("results file");
+        drop(file);
+        let mut done = self
+            .done
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        done.insert(key.to_owned(), value);
+        self.new.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+/// One clean run as the table needs it.
+struct Clean {
+    pass: bool,
+    verdict: String,
+    steps: usize,
+    frames: usize,
+    covered: usize,
+    total: usize,
+    reason: String,
+}
+
+impl Clean {
+    fn of(o: &Outcome) -> Clean {
+        Clean {
+            pass: o.verdict == Verdict::Pass,
+            verdict: format!("{:?}", o.verdict).to_lowercase(),
+            steps: o.steps,
+            frames: o.outputs_seen,
+            covered: o.coverage.transitions[0],
+            total: o.coverage.transitions[1],
+            reason: o.reason.clone(),
+        }
+    }
+
+    fn fields(&self) -> Vec<String> {
+        vec![
+            self.verdict.clone(),
+            self.steps.to_string(),
+            self.frames.to_string(),
+            self.covered.to_string(),
+            self.total.to_string(),
+            self.reason.clone(),
+        ]
+    }
+
+    fn parse(f: &[String]) -> Option<Clean> {
+        Some(Clean {
+            pass: f.first()? == "pass",
+            verdict: f.first()?.clone(),
+            steps: f.get(1)?.parse().ok()?,
+            frames: f.get(2)?.parse().ok()?,
+            covered: f.get(3)?.parse().ok()?,
+            total: f.get(4)?.parse().ok()?,
+            reason: f.get(5).cloned().unwrap_or_default(),
+        })
+    }
+}
+
 fn main() {
     let a = args();
+    let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
     let names: Vec<&str> = shipped::canopen_models().map(|m| m.name).collect();
     let devices: Vec<(String, Eds)> = a
         .eds
@@ -163,163 +305,270 @@ fn main() {
         })
         .collect();
     let masks = subsets(&names, a.sample);
+    let results = Results::open(&a.results);
     let wall = std::time::Instant::now();
+    let in_budget = || a.budget.is_none_or(|b| wall.elapsed() < b);
+    let mut out = String::new();
 
     // Clean devices: every subset x device x seed.
+    let clean_key = |m: u32, d: usize, s: u64| {
+        format!(
+            "clean\t{}\t{}\t{s}\t{}",
+            subset_name(&names, m),
+            devices[d].0,
+            a.steps
+        )
+    };
     let jobs: Vec<(u32, usize, u64)> = masks
         .iter()
         .flat_map(|m| (0..devices.len()).flat_map(move |d| (1..=a.seeds).map(move |s| (*m, d, s))))
         .collect();
-    let models: BTreeMap<(u32, usize), Model> = masks
-        .iter()
-        .flat_map(|m| (0..devices.len()).map(move |d| (*m, d)))
-        .collect::<Vec<_>>()
+    let pending: Vec<(u32, usize)> = {
+        let mut p: Vec<(u32, usize)> = jobs
+            .iter()
+            .filter(|(m, d, s)| results.get(&clean_key(*m, *d, *s)).is_none())
+            .map(|(m, d, _)| (*m, *d))
+            .collect();
+        p.dedup();
+        p
+    };
+    let models: BTreeMap<(u32, usize), Model> = pending
         .into_par_iter()
         .map(|(m, d)| ((m, d), compose(&names, m, &devices[d].1)))
         .collect();
-    let clean: Vec<(u32, usize, u64, Outcome)> = jobs
+    let clean: Vec<(u32, usize, u64, Clean)> = jobs
         .par_iter()
-        .map(|&(m, d, s)| (m, d, s, test(&models[&(m, d)], &devices[d].1, &[], s, a.steps)))
+        .filter_map(|&(m, d, s)| {
+            let key = clean_key(m, d, s);
+            if let Some(done) = results.get(&key).and_then(|f| Clean::parse(&f)) {
+                return Some((m, d, s, done));
+            }
+            if !in_budget() {
+                return None;
+            }
+            let o = test(&models[&(m, d)], &devices[d].1, &[], s, a.steps);
+            if a.trace && o.verdict != Verdict::Pass {
+                let mut text = format!(
+                    "--- {} on device {} seed {s}: {}\n",
+                    subset_name(&names, m),
+                    d + 1,
+                    o.reason
+                );
+                for step in &o.trace[o.trace.len().saturating_sub(25)..] {
+                    let _ = writeln!(text, "  {:>9.3}s {}", step.t, step.label);
+                }
+                for allowed in &o.allowed {
+                    let _ = writeln!(text, "  allowed: {allowed}");
+                }
+                eprint!("{text}");
+            }
+            let done = Clean::of(&o);
+            results.record(&key, &done.fields());
+            Some((m, d, s, done))
+        })
         .collect();
     let clean_wall = wall.elapsed();
 
-    println!(
+    let _ = writeln!(
+        out,
         "#### Clean devices: {} compositions x {} devices x {} seeds x {} steps\n",
         masks.len(),
         devices.len(),
         a.seeds,
         a.steps
     );
-    println!("Devices (corpus/eds, node {NODE}):\n");
+    let _ = writeln!(
+        out,
+        "Printed by `cargo run --release -p canopener-runtime --example mbt_compose -- {command}`.\n"
+    );
+    if clean.len() < jobs.len() {
+        let _ = writeln!(
+            out,
+            "**Incomplete: {} of the {} runs are done.** The same command runs the rest (the runs done are kept in `{}`).\n",
+            clean.len(),
+            jobs.len(),
+            a.results.display()
+        );
+    }
+    let _ = writeln!(out, "Devices (corpus/eds, node {NODE}):\n");
     for (i, (f, _)) in devices.iter().enumerate() {
-        println!("{}. `{f}`", i + 1);
+        let _ = writeln!(out, "{}. `{f}`", i + 1);
     }
     let mut failures = Vec::new();
     let mut by_size: BTreeMap<u32, (usize, usize)> = BTreeMap::new();
-    for (m, d, s, o) in &clean {
+    for (m, d, s, c) in &clean {
         let entry = by_size.entry(m.count_ones()).or_default();
         entry.1 += 1;
-        if o.verdict == Verdict::Pass {
+        if c.pass {
             entry.0 += 1;
         } else {
             failures.push(format!(
-                "`{}` on device {} seed {s}: {:?} after {} steps: {}",
+                "`{}` on device {} seed {s}: {} after {} steps: {}",
                 subset_name(&names, *m),
                 d + 1,
-                o.verdict,
-                o.steps,
-                o.reason
+                c.verdict,
+                c.steps,
+                c.reason
             ));
-            if a.trace {
-                eprintln!("--- {}", failures.last().map_or("", String::as_str));
-                for step in &o.trace[o.trace.len().saturating_sub(25)..] {
-                    eprintln!("  {:>9.3}s {}", step.t, step.label);
-                }
-                for allowed in &o.allowed {
-                    eprintln!("  allowed: {allowed}");
-                }
-            }
         }
     }
-    println!("\n| models composed | compositions | runs | pass |");
-    println!("|---|---|---|---|");
+    let _ = writeln!(out, "\n| models composed | compositions | runs | pass |");
+    let _ = writeln!(out, "|---|---|---|---|");
     for (size, (pass, runs)) in &by_size {
         let compositions = masks.iter().filter(|m| m.count_ones() == *size).count();
-        println!("| {size} | {compositions} | {runs} | {pass} |");
+        let _ = writeln!(out, "| {size} | {compositions} | {runs} | {pass} |");
     }
-    let passed = clean.iter().filter(|c| c.3.verdict == Verdict::Pass).count();
-    println!("| all | {} | {} | {passed} |\n", masks.len(), clean.len());
+    let passed = clean.iter().filter(|c| c.3.pass).count();
+    let _ = writeln!(out, "| all | {} | {} | {passed} |\n", masks.len(), clean.len());
     if failures.is_empty() {
-        println!("Every run passed.\n");
+        let _ = writeln!(out, "Every run passed.\n");
     } else {
-        println!("Runs that did not pass:\n");
+        let _ = writeln!(out, "Runs that did not pass:\n");
         for f in &failures {
-            println!("* {f}");
+            let _ = writeln!(out, "* {f}");
         }
-        println!();
+        let _ = writeln!(out);
     }
     // Coverage of the whole set, per device: how much of the composition one run exercises.
     let all = *masks.iter().max().unwrap_or(&0);
     if masks.contains(&all) {
-        println!(
+        let _ = writeln!(
+            out,
             "The whole set (`{}`), transitions covered per device (best seed):\n",
             subset_name(&names, all)
         );
-        println!("| device | transitions covered | frames judged (median) |");
-        println!("|---|---|---|");
+        let _ = writeln!(out, "| device | transitions covered | frames judged (median) |");
+        let _ = writeln!(out, "|---|---|---|");
         for d in 0..devices.len() {
-            let runs: Vec<&Outcome> = clean
+            let runs: Vec<&Clean> = clean
                 .iter()
                 .filter(|c| c.0 == all && c.1 == d)
                 .map(|c| &c.3)
                 .collect();
-            let best = runs.iter().map(|o| o.coverage.transitions[0]).max().unwrap_or(0);
-            let total = runs.first().map_or(0, |o| o.coverage.transitions[1]);
-            let mut frames: Vec<usize> = runs.iter().map(|o| o.outputs_seen).collect();
+            let best = runs.iter().map(|c| c.covered).max().unwrap_or(0);
+            let total = runs.first().map_or(0, |c| c.total);
+            let mut frames: Vec<usize> = runs.iter().map(|c| c.frames).collect();
             frames.sort_unstable();
-            println!(
+            let _ = writeln!(
+                out,
                 "| {} | {best}/{total} | {} |",
                 d + 1,
                 frames.get(frames.len() / 2).copied().unwrap_or(0)
             );
         }
-        println!();
+        let _ = writeln!(out);
     }
     eprintln!(
-        "clean part: {} runs in {:.1} s",
+        "clean part: {} runs ({} compositions compiled for new runs) in {:.1} s",
         clean.len(),
+        models.len(),
         clean_wall.as_secs_f64()
     );
 
-    if !a.faults {
-        return;
+    if a.faults {
+        faults(&a, &names, &masks, &devices[0], &results, &in_budget, &mut out);
     }
-    let (device, eds) = &devices[0];
-    // Faults each model catches alone.
+    let _ = writeln!(
+        out,
+        "This command made {} of the runs in {:.0} s of wall time; the others were taken from `{}`, where earlier runs of it left them.",
+        results.new.load(std::sync::atomic::Ordering::Relaxed),
+        wall.elapsed().as_secs_f64(),
+        a.results.display()
+    );
+    print!("{out}");
+    if let Some(path) = &a.write {
+        let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let (Some(begin), Some(end)) = (text.find(BEGIN), text.find(END)) else {
+            panic!(
+                "{} has no lines {BEGIN} and {END} to write between",
+                path.display()
+            );
+        };
+        let updated = format!("{}{BEGIN}\n\n{out}\n{}", &text[..begin], &text[end..]);
+        write_atomic(path, updated.as_bytes(), false).unwrap_or_else(|e| panic!("{e}"));
+        eprintln!("wrote the tables into {}", path.display());
+    }
+}
+
+/// The fault part: the faults each model catches alone, then each of them against every
+/// composition containing the model.
+fn faults(
+    a: &Args,
+    names: &[&str],
+    masks: &[u32],
+    (device, eds): &(String, Eds),
+    results: &Results,
+    in_budget: &(dyn Fn() -> bool + Sync),
+    out: &mut String,
+) {
     let singles: Vec<u32> = (0..names.len()).map(|i| 1u32 << i).collect();
-    let fault_models: BTreeMap<u32, Model> = masks
-        .iter()
-        .chain(&singles)
-        .map(|m| (*m, compose(&names, *m, eds)))
-        .collect();
-    let caught = |m: u32, fault: Fault| -> (usize, Vec<usize>) {
-        let fails: Vec<usize> = (1..=a.fault_seeds)
-            .into_par_iter()
-            .filter_map(|s| {
-                let o = test(&fault_models[&m], eds, &[fault], s, a.fault_steps);
-                (o.verdict == Verdict::Fail).then_some(o.steps)
-            })
-            .collect();
-        (fails.len(), fails)
+    let fault_key = |m: u32, fault: Fault| {
+        format!(
+            "fault\t{}\t{device}\t{fault}\t{}\t{}",
+            subset_name(names, m),
+            a.fault_steps,
+            a.fault_seeds
+        )
     };
-    let alone: Vec<(usize, Vec<Fault>)> = (0..names.len())
+    let model_of: Mutex<BTreeMap<u32, std::sync::Arc<Model>>> = Mutex::new(BTreeMap::new());
+    let model = |m: u32| {
+        let mut cache = model_of.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        std::sync::Arc::clone(
+            cache
+                .entry(m)
+                .or_insert_with(|| std::sync::Arc::new(compose(names, m, eds))),
+        )
+    };
+    // The first failing seed, 0 if none fails; None if the budget ran out before it was tried.
+    let caught = |m: u32, fault: Fault| -> Option<u64> {
+        let key = fault_key(m, fault);
+        if let Some(seed) = results.get(&key).and_then(|f| f.first()?.parse().ok()) {
+            return Some(seed);
+        }
+        if !in_budget() {
+            return None;
+        }
+        let model = model(m);
+        let seed = (1..=a.fault_seeds)
+            .find(|s| test(&model, eds, &[fault], *s, a.fault_steps).verdict == Verdict::Fail)
+            .unwrap_or(0);
+        results.record(&key, &[seed.to_string()]);
+        Some(seed)
+    };
+    let alone: Vec<(usize, Vec<Fault>, usize)> = (0..names.len())
         .into_par_iter()
         .map(|i| {
-            let found = Fault::ALL
-                .iter()
-                .copied()
-                .filter(|f| caught(1 << i, *f).0 > 0)
+            let tried: Vec<(Fault, Option<u64>)> = Fault::ALL
+                .par_iter()
+                .map(|f| (*f, caught(singles[i], *f)))
                 .collect();
-            (i, found)
+            let found = tried
+                .iter()
+                .filter(|(_, s)| s.is_some_and(|s| s > 0))
+                .map(|(f, _)| *f)
+                .collect();
+            let untried = tried.iter().filter(|(_, s)| s.is_none()).count();
+            (i, found, untried)
         })
         .collect();
-    println!(
+    let _ = writeln!(
+        out,
         "#### Faults: every catalogue fault a model catches alone, in every composition containing that model ({} seeds x at most {} steps, device 1 `{device}`)\n",
         a.fault_seeds, a.fault_steps
     );
-    println!("| model | faults it catches alone |");
-    println!("|---|---|");
-    for (i, found) in &alone {
+    let _ = writeln!(out, "| model | faults it catches alone |");
+    let _ = writeln!(out, "|---|---|");
+    for (i, found, untried) in &alone {
         let list: Vec<&str> = found.iter().map(|f| f.name()).collect();
-        println!(
-            "| {} | {} |",
-            names[*i],
-            if list.is_empty() {
-                "–".to_owned()
-            } else {
-                list.join(", ")
-            }
-        );
+        let mut cell = if list.is_empty() {
+            "–".to_owned()
+        } else {
+            list.join(", ")
+        };
+        if *untried > 0 {
+            let _ = write!(cell, " ({untried} faults not tried yet)");
+        }
+        let _ = writeln!(out, "| {} | {cell} |", names[*i]);
     }
     // Every composition: the faults its members catch alone, each run against the composition.
     let checks: Vec<(u32, Fault)> = masks
@@ -327,43 +576,63 @@ fn main() {
         .flat_map(|m| {
             let mut faults: Vec<Fault> = alone
                 .iter()
-                .filter(|(i, _)| m & (1 << i) != 0)
-                .flat_map(|(_, f)| f.iter().copied())
+                .filter(|(i, _, _)| m & (1 << i) != 0)
+                .flat_map(|(_, f, _)| f.iter().copied())
                 .collect();
             faults.sort_by_key(|f| f.name());
             faults.dedup();
             faults.into_iter().map(move |f| (*m, f))
         })
         .collect();
-    let results: Vec<(u32, Fault, usize)> = checks.par_iter().map(|&(m, f)| (m, f, caught(m, f).0)).collect();
-    let mut per_mask: BTreeMap<u32, (usize, usize, Vec<String>)> = BTreeMap::new();
-    for (m, f, n) in &results {
-        let e = per_mask.entry(*m).or_default();
-        e.1 += 1;
-        if *n > 0 {
-            e.0 += 1;
+    let results: Vec<(u32, Fault, Option<u64>)> =
+        checks.par_iter().map(|&(m, f)| (m, f, caught(m, f))).collect();
+    let caught_in = |seed: &Option<u64>| seed.is_some_and(|s| s > 0);
+    let checked = results.iter().filter(|r| r.2.is_some()).count();
+    let untried = results.len() - checked;
+    let missed: Vec<String> = results
+        .iter()
+        .filter(|r| r.2 == Some(0))
+        .map(|(m, f, _)| format!("`{f}` in `{}`", subset_name(names, *m)))
+        .collect();
+    let _ = writeln!(
+        out,
+        "\n{checked} (composition, fault) pairs checked, {} caught, {} missed{}.\n",
+        checked - missed.len(),
+        missed.len(),
+        if untried > 0 || alone.iter().any(|(_, _, u)| *u > 0) {
+            format!(
+                "; **incomplete: {untried} pairs not run yet, and the faults some models catch alone not all known** (give the same command again)"
+            )
         } else {
-            e.2.push(f.name().to_owned());
+            String::new()
         }
-    }
-    let missed: usize = per_mask.values().map(|e| e.1 - e.0).sum();
-    println!(
-        "\n{} (composition, fault) pairs checked, {} caught, {missed} missed.\n",
-        results.len(),
-        results.len() - missed
     );
-    println!("| composition | faults its models catch alone | caught in the composition | missed |");
-    println!("|---|---|---|---|");
-    for (m, (ok, total, miss)) in &per_mask {
-        println!(
-            "| {} | {total} | {ok} | {} |",
-            subset_name(&names, *m),
-            if miss.is_empty() {
-                "–".to_owned()
-            } else {
-                miss.join(", ")
-            }
+    let _ = writeln!(
+        out,
+        "| model | faults it catches alone | compositions containing it | (composition, fault) pairs | caught |"
+    );
+    let _ = writeln!(out, "|---|---|---|---|---|");
+    for (i, found, _) in &alone {
+        let bit = 1u32 << i;
+        let pairs: Vec<&(u32, Fault, Option<u64>)> = results
+            .iter()
+            .filter(|(m, f, s)| m & bit != 0 && found.contains(f) && s.is_some())
+            .collect();
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} |",
+            names[*i],
+            found.len(),
+            masks.iter().filter(|m| *m & bit != 0).count(),
+            pairs.len(),
+            pairs.iter().filter(|r| caught_in(&r.2)).count()
         );
     }
-    eprintln!("everything: {:.1} s", wall.elapsed().as_secs_f64());
+    if !missed.is_empty() {
+        let _ = writeln!(out, "\nMissed:\n");
+        for m in &missed {
+            let _ = writeln!(out, "* {m}");
+        }
+    }
+    let _ = writeln!(out);
 }

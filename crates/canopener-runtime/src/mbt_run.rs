@@ -18,12 +18,29 @@ pub fn run<L: Link + ?Sized>(
     config: RunConfig,
     limit: Option<Duration>,
 ) -> Result<Outcome, LinkError> {
+    run_watched(link, model, config, limit, &mut |_| {})
+}
+
+/// [`run`], telling `on_step` the number of steps taken each time it grows (a progress bar for a
+/// long run on a real bus).
+pub fn run_watched<L: Link + ?Sized>(
+    link: &mut L,
+    model: &Model,
+    config: RunConfig,
+    limit: Option<Duration>,
+    on_step: &mut dyn FnMut(usize),
+) -> Result<Outcome, LinkError> {
     let start = link.now();
-    let mut executor = Executor::new(model, config, start);
+    let mut watched = Watched {
+        executor: Executor::new(model, config, start),
+        steps: 0,
+        on_step,
+    };
     let deadline = limit.map(|limit| start + limit);
-    let ended = drive(link, &mut executor, deadline, |_, outcome| {
+    let ended = drive(link, &mut watched, deadline, |_, outcome| {
         Ok::<_, LinkError>(Flow::Done(outcome))
     })?;
+    let executor = &mut watched.executor;
     Ok(match ended {
         Ok(outcome) => outcome,
         Err(Ended::Deadline) => executor.finish("the time limit passed without a failure"),
@@ -35,6 +52,57 @@ pub fn run<L: Link + ?Sized>(
     })
 }
 
+/// The executor with an observer of its step count: the core the driver loop sees.
+struct Watched<'m, 'f> {
+    executor: Executor<'m>,
+    steps: usize,
+    on_step: &'f mut dyn FnMut(usize),
+}
+
+impl std::fmt::Debug for Watched<'_, '_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Watched")
+            .field("steps", &self.steps)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Watched<'_, '_> {
+    fn tell(&mut self) {
+        let steps = self.executor.steps_taken();
+        if steps != self.steps {
+            self.steps = steps;
+            (self.on_step)(steps);
+        }
+    }
+}
+
+impl canopener_can::Core for Watched<'_, '_> {
+    type Event = Outcome;
+
+    fn handle_frame(&mut self, now: canopener_can::Instant, frame: &canopener_can::CanFrame) {
+        self.executor.handle_frame(now, frame);
+        self.tell();
+    }
+
+    fn handle_timeout(&mut self, now: canopener_can::Instant) {
+        self.executor.handle_timeout(now);
+        self.tell();
+    }
+
+    fn poll_transmit(&mut self) -> Option<canopener_can::CanFrame> {
+        self.executor.poll_transmit()
+    }
+
+    fn poll_event(&mut self) -> Option<Outcome> {
+        self.executor.poll_event()
+    }
+
+    fn poll_timeout(&self) -> Option<canopener_can::Instant> {
+        self.executor.poll_timeout()
+    }
+}
+
 /// One seed's run of a campaign ([`run_seeds`]).
 #[derive(Debug, Clone)]
 pub struct SeedRun {
@@ -44,6 +112,17 @@ pub struct SeedRun {
     pub outcome: Outcome,
     /// Wall-clock time the run took.
     pub wall: Duration,
+}
+
+/// A campaign's runs ([`run_seeds`]) and the wall-clock time it took.
+#[derive(Debug, Clone)]
+pub struct Campaign {
+    /// One run per seed, in the order of the seeds.
+    pub runs: Vec<SeedRun>,
+    /// Wall-clock time of the whole campaign.
+    pub wall: Duration,
+    /// How many runs went at once (the threads of the pool).
+    pub threads: usize,
 }
 
 /// Runs `model` once per seed of `seeds`, the seeds in parallel on the machine's cores (a rayon
@@ -58,13 +137,14 @@ pub fn run_seeds<L, E, F>(
     config: &RunConfig,
     limit: Option<Duration>,
     on_done: &(dyn Fn(&SeedRun) + Sync),
-) -> Result<Vec<SeedRun>, E>
+) -> Result<Campaign, E>
 where
     L: Link,
     E: From<LinkError> + Send,
     F: Fn(u64) -> Result<L, E> + Sync,
 {
-    seeds
+    let started = std::time::Instant::now();
+    let runs = seeds
         .par_iter()
         .map(|&seed| {
             let started = std::time::Instant::now();
@@ -82,7 +162,13 @@ where
             on_done(&done);
             Ok(done)
         })
-        .collect()
+        .collect::<Result<Vec<_>, E>>()?;
+    Ok(Campaign {
+        runs,
+        wall: started.elapsed(),
+        // The machine's cores, or RAYON_NUM_THREADS.
+        threads: rayon::current_num_threads(),
+    })
 }
 
 /// A failing run's inputs shrunk by delta debugging against the device.

@@ -3,15 +3,16 @@
 
 use std::time::Duration;
 
-use canopener_can::Instant;
+use canopener_can::{CanFrame, Instant};
 use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
 use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
+use canopener_runtime::link::{Link, LinkError};
 use canopener_runtime::mbt_run::{run, shrink};
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
 use canopener_testkit::corpus;
 
 /// CANopenNode's example I/O device: heartbeat every 1000 ms (1017h), the CiA 301 objects.
@@ -48,14 +49,20 @@ fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> 
     test_node(model, eds, NODE, faults, seed, steps)
 }
 
-fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+/// A simulated device 100 ms after power-on: its boot-up is history when the tester starts with
+/// its own reset.
+fn booted(eds: &Eds, node_id: u8, faults: &[Fault]) -> SimulatedBus {
     let mut bus = Simulation::ideal()
         .device(eds, node_id)
         .faults(faults.iter().copied())
         .start()
         .expect("simulation");
-    // The device's power-on boot-up is history when the tester starts with its own reset.
     bus.run_until(Instant::from_millis(100)).expect("virtual time");
+    bus
+}
+
+fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+    let mut bus = booted(eds, node_id, faults);
     let config = RunConfig {
         seed,
         steps,
@@ -390,7 +397,7 @@ fn failing_runs_shrink_to_one_minimal_scripts() {
                 .start()
                 .expect("simulation");
             bus.run_until(Instant::from_millis(100))?;
-            Ok::<_, canopener_runtime::link::LinkError>(bus)
+            Ok::<_, LinkError>(bus)
         };
         let shrunk = shrink(&mut new_bus, &model, &config, &failing.script(), None)
             .unwrap()
@@ -443,11 +450,7 @@ fn a_purpose_guides_the_run_and_ends_it_when_reached() {
         .expect("shipped purpose")
         .clone();
     for seed in 1..=5 {
-        let mut bus = Simulation::ideal()
-            .device(&eds, NODE)
-            .start()
-            .expect("simulation");
-        bus.run_until(Instant::from_millis(100)).expect("virtual time");
+        let mut bus = booted(&eds, NODE, &[]);
         let config = RunConfig {
             seed,
             steps: 400,
@@ -567,7 +570,8 @@ fn an_input_whose_answer_another_model_forbids_is_never_sent() {
 
 /// The composition matrix's CI sample (`examples/mbt_compose.rs --subsets sample` is the full
 /// version): every shipped CANopen model alone and with nmt, the issue's composition and all of
-/// them together, on two devices; and the whole set still catches a fault of each model.
+/// them together, on three devices (the demoDevice is the one issue 23 saw `nmt heartbeat sdo`
+/// fail on); and the whole set still catches a fault of each model.
 #[test]
 fn a_sample_of_the_composition_matrix_passes_and_catches() {
     let names: Vec<&str> = shipped::canopen_models().map(|m| m.name).collect();
@@ -575,10 +579,14 @@ fn a_sample_of_the_composition_matrix_passes_and_catches() {
     subsets.extend(names.iter().filter(|n| **n != "nmt").map(|n| vec!["nmt", *n]));
     subsets.push(vec!["nmt", "heartbeat", "sdo"]);
     subsets.push(names.clone());
-    for file in [IO, "christiansandberg__canopen__test__sample.eds"] {
+    for file in [
+        IO,
+        "CANopenNode__CANopenDemo__demo__demoDevice.eds",
+        "christiansandberg__canopen__test__sample.eds",
+    ] {
         let eds = canopener_eds::load(&std::fs::read(corpus::eds(file)).expect("EDS file")).eds;
         for subset in &subsets {
-            let outcome = test(&model(subset, &eds), &eds, &[], 1, 400);
+            let outcome = test(&model(subset, &eds), &eds, &[], 1, 600);
             assert_eq!(
                 outcome.verdict,
                 Verdict::Pass,
@@ -601,4 +609,136 @@ fn a_sample_of_the_composition_matrix_passes_and_catches() {
         let caught = (1..=3).any(|seed| test(&all, &eds, &[fault], seed, 1000).verdict == Verdict::Fail);
         assert!(caught, "{fault} is not caught by all the models together");
     }
+}
+
+/// What a progress bar on a real bus is told: the step count as it grows, one by one up to the
+/// steps of the outcome, and the same outcome as an unwatched run of the same seed.
+#[test]
+fn a_watched_run_reports_every_step_and_judges_the_same() {
+    let eds = eds();
+    let model = model(&["nmt", "heartbeat"], &eds);
+    let mut bus = booted(&eds, NODE, &[]);
+    let config = RunConfig {
+        seed: 2,
+        steps: 150,
+        ..RunConfig::default()
+    };
+    let mut told = Vec::new();
+    let watched = canopener_runtime::mbt_run::run_watched(
+        &mut bus,
+        &model,
+        config,
+        Some(Duration::from_secs(3600)),
+        &mut |steps| told.push(steps),
+    )
+    .expect("link");
+    assert_eq!(told, (1..=watched.steps).collect::<Vec<_>>());
+    let plain = test(&model, &eds, &[], 2, 150);
+    assert_eq!(
+        (watched.verdict, watched.steps, watched.trace.len()),
+        (plain.verdict, plain.steps, plain.trace.len())
+    );
+}
+
+/// The device's SDO answers rewritten on their way to the tester: a device that answers with
+/// another alternative than the simulator's.
+struct Rewritten {
+    inner: SimulatedBus,
+    rewrite: Rewrite,
+}
+
+/// How a device's SDO answer (its 8 data bytes) is changed.
+type Rewrite = fn(&[u8]) -> Vec<u8>;
+
+impl Link for Rewritten {
+    fn now(&self) -> Instant {
+        self.inner.now()
+    }
+
+    fn send(&mut self, frame: &CanFrame) -> Result<(), LinkError> {
+        self.inner.send(frame)
+    }
+
+    fn recv_until(&mut self, deadline: Instant) -> Result<Option<(Instant, CanFrame)>, LinkError> {
+        Ok(self.inner.recv_until(deadline)?.map(|(at, frame)| {
+            if frame.id().as_raw() == 0x580 + u32::from(NODE) && !frame.is_remote() {
+                let data = (self.rewrite)(frame.data());
+                (at, CanFrame::new(frame.id(), &data).expect("8 bytes"))
+            } else {
+                (at, frame)
+            }
+        }))
+    }
+
+    fn is_cancelled(&self) -> bool {
+        self.inner.is_cancelled()
+    }
+
+    fn describe(&self) -> String {
+        self.inner.describe()
+    }
+}
+
+/// The `sdo` model on a device whose SDO answers `rewrite` changes, seeds 1..=4.
+fn rewritten_runs(model: &Model, eds: &Eds, rewrite: Rewrite) -> Vec<Outcome> {
+    (1..=4)
+        .map(|seed| {
+            let mut link = Rewritten {
+                inner: booted(eds, NODE, &[]),
+                rewrite,
+            };
+            let config = RunConfig {
+                seed,
+                steps: 400,
+                ..RunConfig::default()
+            };
+            run(&mut link, model, config, Some(Duration::from_secs(3600))).expect("link")
+        })
+        .collect()
+}
+
+/// An abort of a write to a read-only object (0601 0002h) carrying `code` instead.
+fn read_only_abort_as(d: &[u8], code: u32) -> Vec<u8> {
+    let mut d = d.to_vec();
+    if d.len() == 8 && d[0] == 0x80 && d[4..] == 0x0601_0002u32.to_le_bytes() {
+        d[4..].copy_from_slice(&code.to_le_bytes());
+    }
+    d
+}
+
+/// Issue 23: a run judges SDO answers through the table the conformance suites use. An expedited
+/// upload answered without the size (42h) and a write to a read-only object aborted with 0601 0000h
+/// or 0800 0000h instead of 0601 0002h pass; an answer outside the table (0609 0011h for the
+/// read-only write) fails.
+#[test]
+fn sdo_answers_are_judged_through_the_accepted_table() {
+    let eds = eds();
+    let model = model(&["sdo"], &eds);
+    let alternatives: [(&str, Rewrite); 3] = [
+        ("!SDO_TX !0x42", |d| {
+            let mut d = d.to_vec();
+            // 43h/47h/4Bh/4Fh: expedited with the size; 42h: without it.
+            if d.first().is_some_and(|c| c & 0xF3 == 0x43) {
+                d[0] = 0x42;
+            }
+            d
+        }),
+        ("!0x06010000", |d| read_only_abort_as(d, 0x0601_0000)),
+        ("!0x08000000", |d| read_only_abort_as(d, 0x0800_0000)),
+    ];
+    for (seen, rewrite) in alternatives {
+        let runs = rewritten_runs(&model, &eds, rewrite);
+        for o in &runs {
+            assert_eq!(o.verdict, Verdict::Pass, "{seen}: {}", show(o));
+        }
+        assert!(
+            runs.iter().flat_map(|o| &o.trace).any(|s| s.label.contains(seen)),
+            "no answer was rewritten to {seen} in four seeds"
+        );
+    }
+    let outside = rewritten_runs(&model, &eds, |d| read_only_abort_as(d, 0x0609_0011));
+    assert!(
+        outside.iter().any(|o| o.verdict == Verdict::Fail),
+        "0609 0011h for a read-only write was not a failure"
+    );
 }

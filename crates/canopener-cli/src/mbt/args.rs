@@ -48,6 +48,9 @@ Exit status: 0 explored, 3 the model has errors, 5 an output file could not be w
   canopener mbt synth nmt --purpose-aut my-purpose.aut
 The graph keeps the specification's labels (?GATE tester sends, !GATE device sends, QUIESCENCE);
 states with a PASS or INCONCLUSIVE loop are verdicts; outputs missing from the graph are fail.
+The graph is untimed: the models' clocks and windows are dropped, so it cannot judge an output that
+comes too late or too early, nor how long QUIESCENCE must last; `mbt run --purpose P` follows the same
+purpose with the clocks (a late output is fail there).
 Exit status: 0 synthesised, 6 the purpose cannot be reached, 3 a model or .aut that does not read.")]
     Synth(SynthArgs),
     /// Test a device against models on the fly: ioco with timed quiescence.
@@ -59,6 +62,8 @@ Exit status: 0 synthesised, 6 the purpose cannot be reached, 3 a model or .aut t
   canopener mbt run nmt --sim device.eds --node 5 --purpose stop_and_start
   canopener mbt run lss --sim device.eds --node 0xFF --purpose fastscan_select  # no node-ID yet
   canopener mbt run guarding --sim device.eds --node 5 --coverage-svg coverage.svg
+  canopener mbt run nmt heartbeat sdo --sim device.eds --node 5 --steps 2000 --seeds 1..100
+On a real bus a progress bar shows the steps (on a terminal).
 Exit status: 0 pass, 6 fail or inconclusive, 7 the device did not answer at all, 3 a model that does
 not check, 2 bad arguments, 4 bus error.")]
     Run(RunArgs),
@@ -174,6 +179,17 @@ pub(crate) struct RunArgs {
     /// The master seed: the same seed, models and device give the same run.
     #[arg(long, default_value = "1", value_parser = parse_u64, value_name = "S")]
     pub(crate) seed: u64,
+    /// Run every seed of A..B (inclusive) on a fresh simulated device each, in parallel on the
+    /// machine's cores (RAYON_NUM_THREADS limits them), and print one summary: verdicts, steps,
+    /// coverage and the first failing seed. Needs --sim (virtual time).
+    #[arg(
+        long,
+        value_name = "A..B",
+        value_parser = parse_seeds,
+        conflicts_with_all = ["seed", "log", "coverage_dot", "coverage_svg"],
+        requires = "sim"
+    )]
+    pub(crate) seeds: Option<(u64, u64)>,
     /// Tolerance added to every time window (bus latency, timer jitter).
     #[arg(long, default_value = "2ms", value_parser = parse_duration, value_name = "DURATION")]
     pub(crate) tolerance: std::time::Duration,
@@ -236,6 +252,26 @@ pub(crate) struct ShrinkArgs {
     pub(crate) output: Option<PathBuf>,
 }
 
+/// `A..B`: the seeds A to B, inclusive.
+fn parse_seeds(text: &str) -> Result<(u64, u64), String> {
+    let (a, b) = text
+        .split_once("..")
+        .ok_or_else(|| format!("'{text}' is not A..B, e.g. 1..100"))?;
+    let number = |s: &str| {
+        s.trim()
+            .parse::<u64>()
+            .map_err(|_| format!("'{s}' in '{text}' is not a seed (a number)"))
+    };
+    let (a, b) = (number(a)?, number(b)?);
+    if a > b {
+        return Err(format!("'{text}': the first seed is above the last"));
+    }
+    if b - a >= 100_000 {
+        return Err(format!("'{text}': at most 100000 seeds at once"));
+    }
+    Ok((a, b))
+}
+
 /// `NAME=VALUE`, the value a number (decimal or 0x) or a duration with a unit (in µs, as models
 /// count time).
 fn parse_setting(text: &str) -> Result<(String, i64), String> {
@@ -257,6 +293,15 @@ fn parse_setting(text: &str) -> Result<(String, i64), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn seed_ranges_parse() {
+        assert_eq!(parse_seeds("1..100"), Ok((1, 100)));
+        assert_eq!(parse_seeds("7..7"), Ok((7, 7)));
+        assert!(parse_seeds("5..1").is_err());
+        assert!(parse_seeds("1-5").is_err());
+        assert!(parse_seeds("a..5").is_err());
+    }
 
     #[test]
     fn settings_parse() {

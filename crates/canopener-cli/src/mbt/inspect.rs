@@ -141,18 +141,44 @@ pub(crate) fn synth(args: SynthArgs) -> CliResult {
         return Err(CliError::Exit(crate::error::exit_code::CHECK_FAILED));
     };
     let text = canopener_mbt::aut::write(&ctg);
+    let untimed = untimed_note(&loaded.model, &purpose.name, args.spec_aut.is_some());
     match &args.aut {
         Some(path) => {
             write(path, &text)?;
             print_stdout(&format!(
-                "{}: {} states, {} transitions\n",
+                "{}: {} states, {} transitions\n{untimed}",
                 purpose.name,
                 ctg.states,
                 ctg.transitions.len()
             ))
         }
-        None => print_stdout(&text),
+        None => {
+            // The graph alone on stdout (for .aut tools); what it cannot judge on stderr.
+            eprint!("{untimed}");
+            print_stdout(&text)
+        }
     }
+}
+
+/// What an untimed test graph cannot judge, with the figures of these models: the graph keeps no
+/// clock, so a late or early output and the length of a quiescence are not in it.
+fn untimed_note(model: &canopener_mbt::model::Model, purpose: &str, from_aut: bool) -> String {
+    if from_aut {
+        return "untimed: an .aut specification has no clocks; the graph cannot judge when an output comes\n"
+            .to_owned();
+    }
+    let timed = model
+        .transitions
+        .iter()
+        .filter(|t| t.kind.is_output() && t.window.is_some())
+        .count();
+    if timed == 0 {
+        return String::new();
+    }
+    format!(
+        "untimed: the graph drops the windows of {timed} timed outputs (clocks {}); it cannot judge an output that comes too late or too early, nor how long QUIESCENCE must last. `canopener mbt run ... --purpose {purpose}` follows the purpose with the clocks: a late output is fail there.\n",
+        model.clocks.join(", ")
+    )
 }
 
 /// Reads an .aut file; errors are exit 3 with every diagnostic named by place.

@@ -12,6 +12,7 @@ use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
 
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult, exit_code};
+use crate::master::output::count_bar;
 use crate::mbt::args::NON_CONFIGURED;
 use crate::mbt::args::{DeviceArgs, Format, ReplayArgs, RunArgs, ShrinkArgs, Strategy};
 use crate::mbt::load::{description, load, write};
@@ -36,6 +37,9 @@ pub(crate) fn run(args: RunArgs) -> CliResult {
         purpose: find_purpose(&loaded.model, args.purpose.as_deref())?,
         ..RunConfig::default()
     };
+    if let Some(seeds) = args.seeds {
+        return crate::mbt::seeds::run(&args, &loaded.model, config, seeds);
+    }
     let header = RunHeader::new(&args.model.models, &loaded.model.hash, args.model.node, &config);
     let outcome = execute(&args.device, args.model.node, &loaded.model, config)?;
     if let Some(path) = &args.log {
@@ -153,7 +157,7 @@ fn warn_hash(header: &RunHeader, model: &Model) {
 }
 
 /// A fresh simulated device (one per run, so that every run starts from power-on).
-fn simulated(file: &std::path::Path, device: &DeviceArgs, node: u8) -> CliResult<SimulatedBus> {
+pub(crate) fn simulated(file: &std::path::Path, device: &DeviceArgs, node: u8) -> CliResult<SimulatedBus> {
     let mut bus = Simulation::ideal()
         .file(file)
         // Without a node-ID of its own the device starts LSS non-configured.
@@ -173,7 +177,18 @@ fn execute(device: &DeviceArgs, node: u8, model: &Model, config: RunConfig) -> C
     let limit: Option<Duration> = device.time_limit;
     Ok(match &device.sim {
         Some(file) => mbt_run::run(&mut simulated(file, device, node)?, model, config, limit)?,
-        None => mbt_run::run(&mut bus_link(device)?, model, config, limit)?,
+        None => {
+            // On a real bus a long run takes the wall clock's time: show its steps on a terminal.
+            let bar = count_bar(
+                config.steps as u64,
+                "{bar:30} {pos}/{len} steps [{elapsed}<{eta}]",
+            );
+            let outcome = mbt_run::run_watched(&mut bus_link(device)?, model, config, limit, &mut |steps| {
+                bar.set_position(steps as u64);
+            });
+            bar.finish_and_clear();
+            outcome?
+        }
     })
 }
 

@@ -164,6 +164,14 @@ fn synth_writes_the_test_graph_of_a_purpose() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.starts_with("des (0, ") && text.contains("PASS"), "{text}");
+    // The graph is untimed, and the command says what that leaves unjudged (issue 23, item 3).
+    let said = stdout(&output);
+    assert!(
+        said.contains("untimed: the graph drops the windows of")
+            && said.contains("cannot judge an output that comes too late")
+            && said.contains("--purpose stop_and_start"),
+        "{said}"
+    );
     // The same kind of purpose from an .aut file in TGV's convention.
     let purpose = dir.join("stop.aut");
     std::fs::write(
@@ -182,6 +190,11 @@ fn synth_writes_the_test_graph_of_a_purpose() {
     ]);
     assert_eq!(from_aut.status.code(), Some(0), "{}", stderr(&from_aut));
     assert!(stdout(&from_aut).contains("PASS"), "{}", stdout(&from_aut));
+    assert!(
+        stdout(&from_aut).starts_with("des (0, ") && stderr(&from_aut).contains("untimed:"),
+        "{}",
+        stderr(&from_aut)
+    );
     std::fs::write(&purpose, "des (0, 1, 2)\n(0, ACCEPT, 1)\n").unwrap();
     let bad = run(&["mbt", "synth", "nmt", "--purpose-aut", purpose.to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(3), "{}", stderr(&bad));
@@ -192,4 +205,96 @@ fn synth_writes_the_test_graph_of_a_purpose() {
         "{}",
         stderr(&missing)
     );
+}
+
+/// `canopener mbt run --sim EDS` with the other arguments given as one string (no spaces inside
+/// an argument).
+fn sim_run(eds: &str, args: &str) -> std::process::Output {
+    let mut all = vec!["mbt", "run", "--sim", eds];
+    all.extend(args.split_whitespace());
+    run(&all)
+}
+
+/// `--seeds A..B` runs every seed in parallel and sums up: all pass on the clean device; with a
+/// fault the first failing seed is named and the exit code is 6.
+#[test]
+fn seeds_in_parallel_give_one_summary_with_the_first_failing_seed() {
+    let eds = io_eds();
+    let clean = sim_run(
+        &eds,
+        "nmt heartbeat --node 5 --steps 200 --seeds 1..4 --format json",
+    );
+    assert_eq!(clean.status.code(), Some(0), "{}", stderr(&clean));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&clean)).unwrap();
+    let seeds: Vec<u64> = json["seeds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["seed"].as_u64().unwrap())
+        .collect();
+    assert_eq!(seeds, [1, 2, 3, 4]);
+    assert_eq!(json["summary"]["pass"], 4);
+    assert_eq!(json["summary"]["first_failing_seed"], serde_json::Value::Null);
+    assert!(
+        json["seeds"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|s| s["steps"] == 200)
+    );
+
+    // The same faulty device, as a campaign of seeds 3..5 and as seed 3 alone.
+    let faulty_nmt = |seeds: &str| {
+        sim_run(
+            &eds,
+            &format!("nmt --node 5 --steps 300 --fault ignores-nmt-stop {seeds}"),
+        )
+    };
+    let faulty = faulty_nmt("--seeds 3..5");
+    assert_eq!(faulty.status.code(), Some(6), "{}", stderr(&faulty));
+    let text = stdout(&faulty);
+    assert!(
+        text.contains("0 pass, 3 fail, 0 inconclusive; first failing seed: 3"),
+        "{text}"
+    );
+    assert!(text.contains("--seed 3 --log run.jsonl"), "{text}");
+    // One seed alone gives the same verdict as in the campaign.
+    let alone = faulty_nmt("--seed 3");
+    assert_eq!(alone.status.code(), Some(6));
+    let bad = run(&["mbt", "run", "nmt", "--sim", &eds, "--seeds", "5..1"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+}
+
+/// `mbt check` of a composition names both sides of a disagreement (issue 23's heartbeat model
+/// that writes 1016h in any NMT state, against nmt's no SDO answer in Stopped); the shipped models
+/// together have none.
+#[test]
+fn check_reports_where_composed_models_disagree() {
+    let fixture = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../canopener-mbt/test_data/heartbeat-any-state.mbt")
+        .to_string_lossy()
+        .into_owned();
+    let output = run(&["mbt", "check", "nmt", &fixture, "--node", "5"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let text = stderr(&output);
+    assert!(
+        text.contains("heartbeat-any-state.mbt:57:3: warning[M043]")
+            && text.contains("but nmt refuses it in nmt@Stopped (entered by the transition at nmt:78)"),
+        "{text}"
+    );
+    let shipped = run(&[
+        "mbt",
+        "check",
+        "nmt",
+        "sdo",
+        "sync",
+        "lss",
+        "emcy",
+        "guarding",
+        "heartbeat",
+        "--node",
+        "5",
+    ]);
+    assert_eq!(shipped.status.code(), Some(0), "{}", stderr(&shipped));
+    assert!(!stderr(&shipped).contains("M043"), "{}", stderr(&shipped));
 }
