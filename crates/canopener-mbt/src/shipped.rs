@@ -80,7 +80,7 @@ pub const MODELS: &[Shipped] = &[
     },
     Shipped {
         name: "lss-config",
-        covers: "LSS configure services beside `lss`: configure node-ID (own, out of range refused), configure bit timing (table 0, reserved table refused), store configuration, activate bit timing (no frame for twice the switch delay), configure services ignored in waiting (CiA 305); uses nmt",
+        covers: "LSS configure services beside `lss`: configure node-ID (own, out of range refused), configure bit timing (table 0, reserved table refused), store configuration, activate bit timing after 1017h = 0 (no frame for twice the switch delay), configure services ignored in waiting (CiA 305); uses nmt",
         text: include_str!("../models/lss-config.mbt"),
         canopen: false,
     },

@@ -289,6 +289,7 @@ fn lss_configuration_passes_clean_devices_and_catches_a_missing_state_change() {
             "305 node-ID configured",
             "305 node-ID out of range refused",
             "305 store configuration answered",
+            "305 silent for twice the switch delay",
         ],
     );
     catches(
