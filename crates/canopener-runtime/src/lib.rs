@@ -28,7 +28,9 @@
 //!   [`node_scan`], [`node_dump`], [`nmt_command`] (with confirmation), [`lss_session`], [`pdo_map`],
 //!   [`pdo_watch`], [`sync_producer`] and [`heartbeat_watch`]. Their pure parts (plans, reports,
 //!   statistics) are `canopener-master`'s.
-//! - [`mbt_run`]: model-based tests (`canopener-mbt`'s on-the-fly executor) on any link.
+//! - [`mbt_run`]: model-based tests (`canopener-mbt`'s on-the-fly executor) on any link;
+//!   [`mbt_sim`]: a run on a fresh simulated device, and the entries of its description a model is
+//!   told to use (`--set`).
 //! - [`energybus`]: the emulated EnergyBus system (controller and devices) on a virtual bus or a real
 //!   one, its boot and its telegrams.
 //! - [`description`]: reading device descriptions (any format) and rule packs from files.
@@ -47,6 +49,7 @@ pub mod heartbeat_watch;
 pub mod link;
 pub mod lss_session;
 pub mod mbt_run;
+pub mod mbt_sim;
 pub mod nmt_command;
 pub mod node_dump;
 pub mod node_info;

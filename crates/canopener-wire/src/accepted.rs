@@ -157,6 +157,13 @@ pub const SEQUENCE_NUMBER: Accepted = Accepted {
     ],
     source: CCT_LOG,
 };
+/// A block download whose end frame carries a CRC that does not match the data (CiA 301 block
+/// download end, when client and server both support the CRC).
+pub const CRC: Accepted = Accepted {
+    name: "crc",
+    codes: &[abort::CRC_ERROR, abort::GENERAL_ERROR],
+    source: CIA_TABLE,
+};
 /// The answer of a device without block transfer to a block request (CCT SDO 19, 22).
 pub const NO_BLOCK_TRANSFER: Accepted = Accepted {
     name: "no_block_transfer",
@@ -253,6 +260,7 @@ pub const ABORT_SETS: &[Accepted] = &[
     TIMED_OUT,
     BLOCK_SIZE,
     SEQUENCE_NUMBER,
+    CRC,
     NO_BLOCK_TRANSFER,
     MAPPING_SEQUENCE,
     MAPPING_LENGTH,
