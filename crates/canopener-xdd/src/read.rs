@@ -7,6 +7,7 @@
 use std::collections::{BTreeMap, HashMap};
 
 use canopener_eds::dcf::BITRATES_KBIT;
+use canopener_eds::lines::LineIndex;
 use canopener_eds::model::{Properties, int_of};
 use canopener_eds::{AccessType, Eds, Object, Origin, Span, SubObject};
 use roxmltree::{Document, Node};
@@ -23,7 +24,6 @@ use crate::notation::{
     parse_unsigned,
 };
 use crate::side_channel::{FILE_PARAMETER_ID, is_side_channel};
-use crate::xml::Positions;
 use crate::{XddKind, XddLoaded, XddVersion};
 
 const XSI: &str = "http://www.w3.org/2001/XMLSchema-instance";
@@ -96,7 +96,7 @@ const COMMISSIONING_KEYS: &[(&str, &str)] = &[
 pub(crate) fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
     let text = decode(bytes)?;
     let doc = parse(&text)?;
-    let positions = Positions::new(&text);
+    let positions = LineIndex::new(&text);
     let Containers {
         devices: containers,
         wrapper,
@@ -105,7 +105,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
         [only] => {
             let mut loaded = read_container(*only, &positions)?;
             if let Some(root) = wrapper {
-                let (line, column) = positions.at(doc.root_element().range().start);
+                let (line, column) = positions.position(doc.root_element().range().start);
                 loaded.diagnostics.insert(
                     0,
                     XddDiagnostic::new(
@@ -133,7 +133,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
 pub(crate) fn read_project(bytes: &[u8]) -> Result<Vec<XddLoaded>, XddError> {
     let text = decode(bytes)?;
     let doc = parse(&text)?;
-    let positions = Positions::new(&text);
+    let positions = LineIndex::new(&text);
     let Containers {
         devices: containers,
         wrapper,
@@ -196,7 +196,7 @@ fn utf8(bytes: &[u8], encoding: &str) -> Result<String, XddError> {
         Err(e) => {
             let valid =
                 String::from_utf8_lossy(bytes.get(..e.valid_up_to()).unwrap_or_default()).into_owned();
-            let (line, column) = Positions::new(&valid).at(valid.len());
+            let (line, column) = LineIndex::new(&valid).position(valid.len());
             Err(XddError::Encoding {
                 encoding: encoding.to_owned(),
                 line,
@@ -212,10 +212,12 @@ fn parse(text: &str) -> Result<Document<'_>, XddError> {
         let message = e.to_string();
         let suffix = format!(" at {}:{}", pos.row, pos.col);
         let message = message.strip_suffix(&suffix).unwrap_or(&message).to_owned();
+        // roxmltree counts only LF as a line break; every other position of the file counts a lone CR too.
+        let (line, column) = LineIndex::new(text).position_of_lf_counted(pos.row, pos.col);
         XddError::Xml {
             message,
-            line: pos.row,
-            column: pos.col,
+            line,
+            column,
         }
     })
 }
@@ -228,7 +230,7 @@ struct Containers<'a, 'input> {
 
 fn containers<'a, 'input>(
     doc: &'a Document<'input>,
-    positions: &Positions<'_>,
+    positions: &LineIndex<'_>,
 ) -> Result<Containers<'a, 'input>, XddError> {
     let root = doc.root_element();
     let name = root.tag_name().name();
@@ -253,7 +255,7 @@ fn containers<'a, 'input>(
             wrapper: Some(name.to_owned()),
         });
     }
-    let (line, column) = positions.at(root.range().start);
+    let (line, column) = positions.position(root.range().start);
     Err(XddError::NotXdd {
         root: name.to_owned(),
         line,
@@ -274,7 +276,7 @@ struct Bodies<'a, 'input> {
 }
 
 struct Reader<'a, 'input> {
-    positions: &'a Positions<'a>,
+    positions: &'a LineIndex<'a>,
     ids: HashMap<&'a str, Node<'a, 'input>>,
     diagnostics: Vec<XddDiagnostic>,
     /// Attributes CiA 311 does not define, by (element, attribute): count and first offset.
@@ -285,7 +287,7 @@ struct Reader<'a, 'input> {
     locations: Locations,
 }
 
-fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<XddLoaded, XddError> {
+fn read_container(container: Node<'_, '_>, positions: &LineIndex<'_>) -> Result<XddLoaded, XddError> {
     let version = match container.tag_name().namespace() {
         Some(ns) if ns.contains("ethernet-powerlink") => {
             return Err(XddError::Powerlink {
@@ -377,7 +379,7 @@ fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<
 
 impl<'a, 'input> Reader<'a, 'input> {
     fn span(&self, offset: usize) -> Span {
-        let (line, column) = self.positions.at(offset);
+        let (line, column) = self.positions.position(offset);
         Span::new(line, column, 0)
     }
 
@@ -397,7 +399,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     fn push(&mut self, offset: usize, code: XddCode, message: String) {
-        let (line, column) = self.positions.at(offset);
+        let (line, column) = self.positions.position(offset);
         self.diagnostics
             .push(XddDiagnostic::new(code, Span::new(line, column, 0), message));
     }
@@ -425,7 +427,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     });
                 }
                 if !technology.is_empty() && !technology.eq_ignore_ascii_case("CANopen") {
-                    let (line, column) = self.positions.at(tech.range().start);
+                    let (line, column) = self.positions.position(tech.range().start);
                     return Err(XddError::NotCanopen {
                         technology: technology.to_owned(),
                         line,
@@ -448,7 +450,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 Some("ProfileBody_Device_CANopen") => Some(Role::Device),
                 Some("ProfileBody_CommunicationNetwork_CANopen") => Some(Role::Network),
                 Some(other) => {
-                    let (line, column) = self.positions.at(body.range().start);
+                    let (line, column) = self.positions.position(body.range().start);
                     return Err(XddError::NotCanopen {
                         technology: other.to_owned(),
                         line,
@@ -1748,6 +1750,21 @@ mod tests {
             }
             other => panic!("expected a malformed-XML error, got {other:?}"),
         }
+        // A lone CR ends a line here as everywhere (canopener_eds::lines), though the XML parser
+        // counts only LF.
+        let old_mac = text.replace('\n', "\r");
+        assert!(
+            matches!(
+                read(old_mac.as_bytes()),
+                Err(XddError::Xml {
+                    line: 3,
+                    column: 1,
+                    ..
+                })
+            ),
+            "{:?}",
+            read(old_mac.as_bytes()).err()
+        );
         assert!(matches!(read(b""), Err(XddError::Xml { .. })));
         assert!(matches!(
             read(&[0xFF, 0x00, 0x41]),

@@ -7,7 +7,7 @@
 //! finding names a section and key of that text, which [`canopener_xdd::Locations`] maps back into
 //! the XML. Checks whose subject CiA 311 has no place for are not reported ([`applies_to_xml`]).
 
-use std::collections::{BTreeMap, BTreeSet, HashSet};
+use std::collections::{BTreeMap, HashSet};
 
 use canopener_check::{Context, Finding, Selection, registry};
 use canopener_eds::Span;
@@ -86,23 +86,10 @@ pub(super) fn check(
         ));
     }
     canopener_check::sort_by_position(&mut findings);
+    // The reader's positions count lines by canopener_eds::lines; the source lines shown are taken
+    // from the same text by the same rule.
     let text = canopener_xdd::decode(bytes).unwrap_or_default();
-    let lines: Vec<&str> = text.lines().collect();
-    let wanted: BTreeSet<u32> = findings.iter().map(|f| f.diagnostic.span.line).collect();
-    let source = wanted
-        .into_iter()
-        .map(|line| {
-            let index = usize::try_from(line).ok().and_then(|l| l.checked_sub(1));
-            let text = index.and_then(|i| lines.get(i)).copied().unwrap_or("");
-            (line, text.trim_end_matches('\r').to_owned())
-        })
-        .collect();
-    FileReport {
-        path: path.to_owned(),
-        findings,
-        source,
-        problem: None,
-    }
+    FileReport::from_text(path, findings, &text)
 }
 
 /// Whether a built-in check is about something CiA 311 XML has (so it runs on XML files too).
