@@ -25,6 +25,8 @@ pub(crate) struct XmlEntry {
     pub data_type: Option<u16>,
     /// `@accessType` (inline style).
     pub access: Option<AccessType>,
+    /// `@accessType` is there but names no access type: the object's access is not known.
+    pub access_unreadable: bool,
     /// `@defaultValue`.
     pub default_value: Option<String>,
     /// `@lowLimit`.
@@ -46,8 +48,10 @@ pub(crate) struct XmlEntry {
 /// What an ApplicationProcess `parameter` says.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct Param {
-    /// `@access` as written; `None` means the schema default `read`.
+    /// `@access` as read; `None` means the schema default `read`, unless `access_unreadable`.
     pub access: Option<ParamAccess>,
+    /// `@access` is there but names no access: no default stands in for it.
+    pub access_unreadable: bool,
     /// The first `label` (or `description` when there is no label).
     pub label: Option<String>,
     /// The IEC element, also when reached through `dataTypeIDRef` (enum, derived).
@@ -432,10 +436,18 @@ fn access(entry: &XmlEntry, notes: &mut Vec<Note>) -> Option<AccessType> {
         (t, _) => t,
     });
     let explicit = entry.param.as_ref().and_then(|p| p.access);
+    // A parameter without `access` is `read` (P2); one whose access cannot be read is nothing, and an
+    // object whose own accessType cannot be read leaves only what its parameter states.
     let from_param = entry
         .param
         .as_ref()
+        .filter(|p| !p.access_unreadable)
         .map(|p| p.access.unwrap_or(ParamAccess::Read));
+    let from_param = if entry.access_unreadable {
+        explicit
+    } else {
+        from_param
+    };
     match (inline, from_param) {
         (None, None) => None,
         (Some(t), None) => Some(t),
