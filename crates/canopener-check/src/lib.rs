@@ -15,6 +15,7 @@
 
 #![warn(missing_docs)]
 
+mod canchkeds;
 mod check_info;
 mod context;
 mod finding;

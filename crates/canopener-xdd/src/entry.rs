@@ -429,7 +429,20 @@ fn data_type(entry: &XmlEntry, has_default: bool, notes: &mut Vec<Note>) -> Opti
     }
 }
 
+/// The CiA 306 access type: [`stated_access`] with the direction an `rw` entry's PDOmapping gives it
+/// (TPDO: rwr, RPDO: rww; libedssharp #128), whether the rw comes from the object's accessType or its
+/// parameter's readWrite. CiA 311 says the PDO direction of read/write entries there, CiA 306 in the
+/// access type.
 fn access(entry: &XmlEntry, notes: &mut Vec<Note>) -> Option<AccessType> {
+    stated_access(entry, notes).map(|t| match (t, entry.pdo_mapping) {
+        (AccessType::Rw, Some(PdoMapping::Tpdo)) => AccessType::Rwr,
+        (AccessType::Rw, Some(PdoMapping::Rpdo)) => AccessType::Rww,
+        (t, _) => t,
+    })
+}
+
+/// The access the object's accessType or its parameter's access states.
+fn stated_access(entry: &XmlEntry, notes: &mut Vec<Note>) -> Option<AccessType> {
     let inline = entry.access.map(|t| match (t, entry.pdo_mapping) {
         (AccessType::Rw, Some(PdoMapping::Tpdo)) => AccessType::Rwr,
         (AccessType::Rw, Some(PdoMapping::Rpdo)) => AccessType::Rww,
@@ -640,6 +653,25 @@ mod tests {
         assert_eq!(
             to_eds(&entry, &mut Vec::new()).attributes.access_type.as_deref(),
             Some("rww")
+        );
+        // A parameter's readWrite gets its direction from the object's PDOmapping as well (reference
+        // style, where the object carries no accessType).
+        let reference = XmlEntry {
+            object_type: Some(7),
+            pdo_mapping: Some(PdoMapping::Tpdo),
+            param: Some(Param {
+                access: Some(ParamAccess::ReadWrite),
+                simple_type: Some(Iec::Uint),
+                ..Param::default()
+            }),
+            ..XmlEntry::default()
+        };
+        assert_eq!(
+            to_eds(&reference, &mut Vec::new())
+                .attributes
+                .access_type
+                .as_deref(),
+            Some("rwr")
         );
     }
 
