@@ -29,6 +29,6 @@ pub mod profile;
 pub mod fix;
 
 pub use check_info::{CheckDescription, CheckInfo, Group};
-pub use context::Context;
+pub use context::{Context, Place};
 pub use finding::{Finding, sort_by_position};
-pub use run::{FileCheck, Selection, check};
+pub use run::{FileCheck, Selection, check, check_context};

@@ -37,7 +37,7 @@ pub mod xml_text;
 
 pub use diag::{Code, Diagnostic, DiagnosticCode, Severity, Span};
 
-pub use load::{Loaded, build, load};
+pub use load::{Loaded, build, load, model_diagnostics};
 pub use model::{Attributes, Eds, Object, ObjectListKind, Origin, SubObject};
 /// For [`diagnostic_codes!`]: the codes it defines serialise as their code string.
 #[doc(hidden)]

@@ -782,7 +782,7 @@ fn error_control(cx: &Context<'_>, out: &mut Vec<Finding>) {
         "neither 1017h (producer heartbeat time) nor 100Ch and 100Dh (node guarding) are described{guarding}"
     );
     let list = SectionKind::ObjectList(ObjectListKind::Optional);
-    let finding = if cx.section(list).is_some() {
+    let finding = if cx.has_section(list) {
         cx.finding(&ERROR_CONTROL, list, None, message)
     } else {
         cx.file_finding(&ERROR_CONTROL, message)
