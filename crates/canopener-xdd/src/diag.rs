@@ -60,8 +60,9 @@ canopener_eds::diagnostic_codes! {
     /// An OCTET_STRING or DOMAIN value written as space-separated bytes (`C8 3D BB`); joined as CiA
     /// 306 writes it (`C83DBB`).
     SpacedOctets = "X026", "spaced-octets", Info;
-    /// A `fileCreationDate`/`Time` or modification date/time that is not xsd:date/xsd:time.
-    DateTimeNotation = "X030", "date-time-notation", Warning;
+    /// A `fileCreationDate`/`Time` or modification date/time that is not xsd:date/xsd:time: a schema
+    /// type broken, so an error like X016; a time whose meaning is clear (`9:48:42 PM`) is read.
+    DateTimeNotation = "X030", "date-time-notation", Error;
     /// A vendor or product ID in a questionable notation, or two sources that disagree.
     IdNotation = "X031", "id-notation", Warning;
     /// A baud rate that has no CiA 306 key (`100 Kbps`, `auto-baudRate`).
@@ -70,8 +71,9 @@ canopener_eds::diagnostic_codes! {
     NonStandardAttribute = "X034", "non-standard-attribute", Info;
     /// A `deviceCommissioning` value that is not usable as written (node-ID outside 1..=127, ...).
     Commissioning = "X035", "commissioning", Warning;
-    /// A `dummy@entry` outside `Dummy0001=0` ... `Dummy0007=1`.
-    InvalidDummy = "X036", "invalid-dummy", Warning;
+    /// A `dummy@entry` outside `Dummy0001=0` ... `Dummy0007=1`, the schema's enumeration: an error
+    /// like X023.
+    InvalidDummy = "X036", "invalid-dummy", Error;
     /// `key=value|...` pairs in `productText` (a Faulhaber/libedssharp convention) mapped to EDS keys.
     PackedDescription = "X037", "packed-description", Info;
     /// Text with line breaks, which an EDS value cannot hold; joined with spaces.

@@ -338,7 +338,7 @@ Fix: write the bytes without spaces.",
     CheckInfo {
         code: "X030",
         slug: "date-time-notation",
-        severity: Severity::Warning,
+        severity: Severity::Error,
         group: Group::Xml,
         title: "file dates and times are xsd:date and xsd:time",
         reference: &[],
@@ -346,7 +346,7 @@ Fix: write the bytes without spaces.",
         explanation: "\
 fileCreationDate/Time or fileModificationDate/Time are not xsd:date (`2024-03-01`) or xsd:time (`13:05:00`).
 
-A warning because the file is not schema-valid and tools show no or a wrong date.
+An error, as every value outside its CiA 311 schema type is (X016, X023): the file is not schema-valid, a validating reader refuses it and other tools show no or a wrong date. A time whose meaning is clear (`9:48:42 PM`) is read as that time; anything else is kept as written, never replaced by another date.
 
 Fix: write the dates and times in XML Schema notation.",
         fixable: false,
@@ -418,7 +418,7 @@ Fix: write the node-ID and bit rate the device runs with.",
     CheckInfo {
         code: "X036",
         slug: "invalid-dummy",
-        severity: Severity::Warning,
+        severity: Severity::Error,
         group: Group::Xml,
         title: "dummyUsage entries are Dummy0001..Dummy0007",
         reference: &[],
@@ -426,7 +426,7 @@ Fix: write the node-ID and bit rate the device runs with.",
         explanation: "\
 A `dummy@entry` is not one of the 14 strings `Dummy0001=0` ... `Dummy0007=1` the schema allows.
 
-A warning because the entry is ignored by validating readers.
+An error, as every value outside its CiA 311 schema type is (X023): a validating reader refuses the file, and readers that are not strict disagree on the entry.
 
 Fix: use the schema's spelling.",
         fixable: false,
