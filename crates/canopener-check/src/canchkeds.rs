@@ -61,6 +61,13 @@ pub(crate) const MESSAGES: &[ForeignMessage] = &[
         note: "the list has no count (C401); the key is a misspelling of SupportedObjects (C105) with a character keys cannot have (P016)",
     },
     ForeignMessage {
+        message: "CANeds (VectorEds) warning",
+        text: "a PDO COB-ID default without `$NODEID+`",
+        source: "python canopen #49",
+        codes: &["C713"],
+        note: "a valid PDO1-4 whose default COB-ID is not the pre-defined connection set's `$NODEID` formula, a plain number such as 0x181 included",
+    },
+    ForeignMessage {
         message: "CANchkEDS, accepted",
         text: "`$NodeID` in mixed case (\"EDS Checker is fine with $NodeID\")",
         source: "CANopenEditor #57",
