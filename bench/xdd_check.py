@@ -5,7 +5,7 @@ Usage (via bench/run.sh, i.e. cargo xtask bench): bench/xdd_check.py [--quick] [
 Runs target/release/examples/xdd_check_timing on every XDD/XDC/XPD/NXDD of the corpus (vendored plus the
 extended corpus when present): per file, on one thread, the median of N runs of the XDD reader alone
 (canopener_xdd::read: model, diagnostics, locations) and of the whole check (Checker::check: reading, every
-model check on the model's canonical EDS form, placing findings in the XML). Files the checker refuses
+model check on the reader's model, placing findings in the XML). Files the checker refuses
 (POWERLINK) are listed and left out of the sums. Results: bench-results/xdd_check.md and .json.
 """
 

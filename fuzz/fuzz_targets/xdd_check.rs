@@ -1,12 +1,16 @@
 //! Arbitrary bytes as a CiA 311 XDD/XDC through `eds check`'s XML pipeline (the reader, the model
-//! checks on its canonical EDS form, placing findings in the XML): no panic, no hang; a refused file
-//! has no findings; every finding points at a line and column of the XML text.
+//! checks, placing findings in the XML): no panic, no hang; a refused file has no findings; every
+//! finding points at a line and column of the XML text, and the source line the report shows under it
+//! is that line, both counted by the one rule of `canopener_eds::lines` (a lone CR ends a line).
 //! Seed it with the corpus: `cargo +nightly fuzz run xdd_check /tmp/seeds` after copying `corpus/xdd`.
 
 #![no_main]
 
 use canopener_description::{Checker, Format, Selection};
 use libfuzzer_sys::fuzz_target;
+
+#[path = "shared/report_lines.rs"]
+mod report_lines;
 
 fuzz_target!(|data: &[u8]| {
     if !Format::is_xml(Some("xdd"), data) {
@@ -20,10 +24,5 @@ fuzz_target!(|data: &[u8]| {
         return;
     }
     let text = canopener_xdd::decode(data).expect("a file the checker read decodes");
-    let lines = text.lines().count().max(1);
-    for finding in &report.findings {
-        let line = usize::try_from(finding.diagnostic.span.line).unwrap_or(usize::MAX);
-        assert!((1..=lines + 1).contains(&line), "finding outside the file: {finding:?}");
-        assert!(finding.diagnostic.span.column >= 1, "finding with column 0: {finding:?}");
-    }
+    report_lines::assert_findings_on_their_lines(&report, &text);
 });

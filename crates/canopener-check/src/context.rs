@@ -1,11 +1,14 @@
-//! One loaded file as the checks see it: the model, the lossless document, and lookups from a
-//! section's meaning to where it is written.
+//! One file as the checks see it: the model, and lookups from a section's meaning to where it is
+//! written. For EDS/DCF text that is the lossless document; for a model read from another format (CiA
+//! 311 XML) it is the sections the model has, named canonically, placed by the reader's locations
+//! ([`Context::for_model`]): the same checks run on the model directly, with no text written and read
+//! again.
 
 use std::sync::OnceLock;
 
 use canopener_eds::section_name::{self, SectionKind};
 use canopener_eds::syntax::Section;
-use canopener_eds::{Diagnostic, Document, Eds, Loaded, Span};
+use canopener_eds::{Diagnostic, Document, Eds, Loaded, Span, write};
 
 use crate::check_info::CheckInfo;
 use crate::finding::Finding;
@@ -18,10 +21,14 @@ pub(crate) const FILE_START: Span = Span {
     len: 0,
 };
 
-/// A loaded file handed to every check.
-#[derive(Debug)]
+/// Where a section (canonical name; `None` for the file as a whole) and one of its keys are written
+/// in a file that is not EDS text.
+pub type Place<'p> = dyn Fn(Option<&str>, Option<&str>) -> Span + 'p;
+
+/// A file handed to every check.
 pub struct Context<'a> {
-    /// The lossless document (spans, keys as written, duplicates).
+    /// The lossless document (spans, keys as written, duplicates); empty for a model read from
+    /// another format, which has no CiA 306 text.
     pub document: &'a Document,
     /// The object dictionary model.
     pub eds: &'a Eds,
@@ -40,6 +47,23 @@ pub struct Context<'a> {
     /// reports one finding per entry of an object list would otherwise scan the whole list for each
     /// (issue 13: 16 000 misplaced list entries took 1.25 s).
     long_sections: OnceLock<EntryIndex>,
+    /// For a model read from another format: where its sections and keys are.
+    place: Option<&'a Place<'a>>,
+}
+
+impl std::fmt::Debug for Context<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Context")
+            .field("file_name", &self.file_name)
+            .field("model", &self.place.is_some())
+            .finish_non_exhaustive()
+    }
+}
+
+/// The document of a model read from another format: no text.
+fn empty_document() -> &'static Document {
+    static EMPTY: OnceLock<Document> = OnceLock::new();
+    EMPTY.get_or_init(|| Document::parse(b"").0)
 }
 
 /// Sections with at most this many entries are searched line by line: cheaper than the index for
@@ -75,6 +99,39 @@ impl<'a> Context<'a> {
             sorted_kinds,
             sorted_sections,
             long_sections: OnceLock::new(),
+            place: None,
+        }
+    }
+
+    /// A model read from another format (CiA 311 XML), with the diagnostics loading gives about its
+    /// objects ([`canopener_eds::model_diagnostics`]) and where its sections and keys are written.
+    /// The sections are those its canonical CiA 306 text would have, named canonically; every span is
+    /// `place(section, key)`.
+    pub fn for_model(
+        eds: &'a Eds,
+        diagnostics: &'a [Diagnostic],
+        file_name: Option<&'a str>,
+        place: &'a Place<'a>,
+    ) -> Self {
+        Self {
+            document: empty_document(),
+            eds,
+            diagnostics,
+            file_name,
+            kinds: Vec::new(),
+            sorted_kinds: Vec::new(),
+            sorted_sections: Vec::new(),
+            long_sections: OnceLock::new(),
+            place: Some(place),
+        }
+    }
+
+    /// Whether the file has a section of this kind: written in the document, or for a model (which
+    /// has no document) in its canonical text.
+    pub fn has_section(&self, kind: SectionKind) -> bool {
+        match self.place {
+            Some(_) => write::model_has_section(self.eds, kind),
+            None => self.section(kind).is_some(),
         }
     }
 
@@ -159,13 +216,25 @@ impl<'a> Context<'a> {
         index
     }
 
-    /// The key as written and the value of an entry.
+    /// The key as written and the value of an entry (for a model: as its canonical text writes it).
     pub fn entry(&self, kind: SectionKind, key: &str) -> Option<(&'a str, &'a str)> {
+        if self.place.is_some() {
+            return write::model_entry(self.eds, kind, key);
+        }
         self.document.entry(self.entry_line(kind, key)?)
+    }
+
+    /// Where a model's section and key are, by the reader's locations.
+    fn placed(&self, kind: SectionKind, key: Option<&str>) -> Option<Span> {
+        let place = self.place?;
+        Some(place(Some(&self.display_name(kind)), key))
     }
 
     /// The span of a section's header line, or the start of the file when it is not written.
     pub fn section_span(&self, kind: SectionKind) -> Span {
+        if let Some(span) = self.placed(kind, None) {
+            return span;
+        }
         self.section(kind)
             .map_or(FILE_START, |s| self.document.line_span(s.header_line))
     }
@@ -173,14 +242,26 @@ impl<'a> Context<'a> {
     /// The span of an entry's value; the section header when the key is missing; the file start when
     /// the section is missing.
     pub fn value_span(&self, kind: SectionKind, key: &str) -> Span {
+        if let Some(span) = self.placed(kind, Some(key)) {
+            return span;
+        }
         self.entry_line(kind, key)
             .map_or_else(|| self.section_span(kind), |l| self.document.value_span(l))
     }
 
     /// The span of an entry's key, with the same fallbacks as [`Context::value_span`].
     pub fn key_span(&self, kind: SectionKind, key: &str) -> Span {
+        if let Some(span) = self.placed(kind, Some(key)) {
+            return span;
+        }
         self.entry_line(kind, key)
             .map_or_else(|| self.section_span(kind), |l| self.document.key_span(l))
+    }
+
+    /// Where a finding about the file as a whole points: its first line, or for a model the file's
+    /// place.
+    pub fn file_span(&self) -> Span {
+        self.place.map_or(FILE_START, |place| place(None, None))
     }
 
     /// A finding about a section, or about one key of it when `key` is given. The span is the
@@ -203,9 +284,9 @@ impl<'a> Context<'a> {
         }
     }
 
-    /// A finding about the file as a whole (points at its first line).
+    /// A finding about the file as a whole (points at its first line, or a model's file place).
     pub fn file_finding(&self, info: &CheckInfo, message: impl Into<String>) -> Finding {
-        Finding::new(info, FILE_START, message)
+        Finding::new(info, self.file_span(), message)
     }
 }
 

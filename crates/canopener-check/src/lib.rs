@@ -17,6 +17,7 @@
 
 #![warn(missing_docs)]
 
+mod canchkeds;
 mod check_info;
 mod context;
 mod finding;
@@ -31,6 +32,6 @@ pub mod value_rules;
 pub mod fix;
 
 pub use check_info::{CheckDescription, CheckInfo, Group};
-pub use context::Context;
+pub use context::{Context, Place};
 pub use finding::{Finding, sort_by_position};
-pub use run::{FileCheck, Selection, check};
+pub use run::{FileCheck, Selection, check, check_context};

@@ -51,6 +51,7 @@ pub fn catalogue_markdown() -> String {
             check.title.replace('|', "\\|")
         ));
     }
+    out.push_str(&canchkeds_markdown());
     for check in &all {
         out.push_str(&format!(
             "\n## {}\n\n`{}` · {} · {} · {}{}\n\n",
@@ -79,6 +80,46 @@ pub fn catalogue_markdown() -> String {
         }
         out.push_str(check.explanation.trim());
         out.push('\n');
+    }
+    out
+}
+
+/// The section on CiA's EDS checker: every CANchkEDS and CANeds message the references name with the
+/// checks that cover it, and the subjects of its manual.
+fn canchkeds_markdown() -> String {
+    let links = |codes: &[&str]| -> String {
+        if codes.is_empty() {
+            return "not covered".to_owned();
+        }
+        codes
+            .iter()
+            .map(|c| format!("[{c}](#{})", c.to_ascii_lowercase()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut out = String::from(
+        "\n## CiA's EDS checker (CANchkEDS) and canopener\n\n\
+         CANchkEDS is the checker the CiA conformance test runs on the EDS first; Vector's CANeds has the \
+         same checks. Its manual is not public. Every message of it, or of CANeds, that canopener's \
+         references quote, with the checks that report the same (`crates/canopener-check/src/canchkeds.rs`):\n\n\
+         | message | text | source | canopener | how |\n|---|---|---|---|---|\n",
+    );
+    for m in crate::canchkeds::MESSAGES {
+        out.push_str(&format!(
+            "| {} | {} | {} | {} | {} |\n",
+            m.message,
+            m.text.replace('|', "\\|"),
+            m.source,
+            links(m.codes),
+            m.note
+        ));
+    }
+    out.push_str(
+        "\nThe subjects of the CANchkEDS manual v1.4 (its table of contents), and canopener's checks on each:\n\n\
+         | subject | canopener | what |\n|---|---|---|\n",
+    );
+    for (subject, codes, what) in crate::canchkeds::MANUAL_SUBJECTS {
+        out.push_str(&format!("| {subject} | {} | {what} |\n", links(codes)));
     }
     out
 }
@@ -147,6 +188,16 @@ mod tests {
             );
         }
         assert_eq!(lookup("c537").map(|c| c.slug), Some("sub0-not-highest-sub-index"));
+        let foreign = crate::canchkeds::MESSAGES
+            .iter()
+            .flat_map(|m| m.codes.iter())
+            .chain(crate::canchkeds::MANUAL_SUBJECTS.iter().flat_map(|s| s.1.iter()));
+        for code in foreign {
+            assert!(
+                lookup(code).is_some(),
+                "the CANchkEDS table names {code}, which is no check"
+            );
+        }
         assert_eq!(lookup("duplicate-section").map(|c| c.code), Some("P020"));
         assert!(lookup("C999").is_none());
     }

@@ -44,10 +44,15 @@ pub struct FileCheck {
 ///
 /// `file_name` is the file's name without directories (for the `FileName` check).
 pub fn check(loaded: &Loaded, file_name: Option<&str>, selection: &Selection) -> FileCheck {
-    let cx = Context::new(loaded, file_name);
+    check_context(&Context::new(loaded, file_name), selection)
+}
+
+/// Runs every built-in check on a file as a [`Context`] presents it (EDS text, or a model read from
+/// another format, [`Context::for_model`]) and keeps the selected findings.
+pub fn check_context(cx: &Context<'_>, selection: &Selection) -> FileCheck {
     let mut findings = Vec::new();
     for group in crate::checks::GROUPS {
-        (group.run)(&cx, &mut findings);
+        (group.run)(cx, &mut findings);
     }
     if *selection != Selection::default() {
         let dropped: std::collections::HashSet<&str> = registry::builtin()

@@ -7,7 +7,7 @@
 //!
 //! Every file is read from disk once; then, `N` times each (default 7) on one thread, the XDD reader
 //! alone (`canopener_xdd::read`: the model, diagnostics and locations) and the whole check
-//! (`Checker::check`: reading, the model checks on its canonical EDS form, placing findings in the
+//! (`Checker::check`: reading, the model checks on the reader's model, placing findings in the
 //! XML). One JSON document gives per file the median and fastest time of both in microseconds and
 //! the finding count.
 

@@ -2,8 +2,9 @@
 //! converted to XDD/XDC and back is the file it was, as `canopener eds convert` does it.
 //!
 //! - A configuration (a DCF, or an EDS carrying DCF keys: `[DeviceComissioning]`, `LastEDS`,
-//!   `ParameterValue`, `Denotation`) becomes an XDC and comes back with `--to dcf`, exactly: no
-//!   ParameterValue the source did not have, no commissioning lost.
+//!   `ParameterValue`, `Denotation`) becomes an XDC and comes back with `--to dcf`, exactly: every
+//!   entry with a ParameterValue (or Denotation) comes back with one and no other entry gains one
+//!   (issue 22), no commissioning lost. An empty `ParameterValue=` configures nothing and is not kept.
 //! - A template (an EDS, or a `.dcf` that holds no configuration) becomes an XDD and comes back with
 //!   `--to eds`, exactly.
 //! - An `.eds` carrying DCF keys: with `[DeviceComissioning]` or `LastEDS` it is a DCF in all but name,
@@ -12,12 +13,39 @@
 
 use canopener_description::convert::{Target, convert};
 use canopener_description::{Description, Format};
-use canopener_eds::dcf;
+use std::collections::BTreeSet;
+
 use canopener_eds::diff::diff;
+use canopener_eds::{Eds, dcf};
 use canopener_testkit::corpus::{self, Kind};
 
 fn load(format: Format, bytes: &[u8], what: &str) -> Description {
     Description::load_as(format, bytes).unwrap_or_else(|e| panic!("{what} does not load: {e}"))
+}
+
+/// The entries (`1005`, `1018sub2`) whose `key` holds a value; an empty value configures nothing.
+fn entries_with(eds: &Eds, key: &str) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    for (index, object) in &eds.objects {
+        if object.attributes.get(key).is_some_and(|v| !v.trim().is_empty()) {
+            out.insert(format!("{index:04X}"));
+        }
+        for (sub, sub_object) in &object.subs {
+            if sub_object
+                .attributes
+                .get(key)
+                .is_some_and(|v| !v.trim().is_empty())
+            {
+                out.insert(format!("{index:04X}sub{sub:X}"));
+            }
+        }
+    }
+    out
+}
+
+/// How many entries of a model carry a ParameterValue.
+fn before_count(eds: &Eds) -> usize {
+    entries_with(eds, "ParameterValue").len()
 }
 
 #[test]
@@ -30,6 +58,7 @@ fn every_corpus_eds_and_dcf_survives_the_xdd_round_trip_exactly() {
     );
     let mut failures = Vec::new();
     let (mut configurations, mut templates, mut eds_dropping, mut eds_keeping) = (0, 0, 0, 0);
+    let mut dcf_entries = 0;
     for file in &files {
         let bytes = canopener_testkit::fixture::read(&file.path)
             .unwrap_or_else(|e| panic!("{} is not readable: {e}", file.path.display()));
@@ -63,6 +92,24 @@ fn every_corpus_eds_and_dcf_survives_the_xdd_round_trip_exactly() {
                 if configuration { "XDC" } else { "XDD" }
             ));
         }
+        // Issue 22: equal values are not enough. A configuration tool downloads every ParameterValue,
+        // so an entry comes back with a ParameterValue (and a Denotation) exactly when it had one.
+        for key in ["ParameterValue", "Denotation"] {
+            let (before, after) = (entries_with(&original.eds, key), entries_with(&back.eds, key));
+            if before != after {
+                let gained: Vec<&String> = after.difference(&before).take(5).collect();
+                let lost: Vec<&String> = before.difference(&after).take(5).collect();
+                failures.push(format!(
+                    "{}: {key} gained on {} entries {gained:?}, lost on {} {lost:?}",
+                    file.name,
+                    after.difference(&before).count(),
+                    before.difference(&after).count()
+                ));
+            }
+        }
+        if configuration {
+            dcf_entries += before_count(&original.eds);
+        }
         if configuration && file.name.to_ascii_lowercase().ends_with(".eds") {
             let as_eds = convert(&xdd, Target::Eds).expect("an EDS is always writable");
             if xdd.eds.is_dcf() {
@@ -93,11 +140,15 @@ fn every_corpus_eds_and_dcf_survives_the_xdd_round_trip_exactly() {
         }
     }
     println!(
-        "{} files: {configurations} configurations through XDC and --to dcf, {templates} templates through XDD \
-         and --to eds; of the .eds files with DCF keys, {eds_dropping} are DCFs in all but name (--to eds names \
-         every key it drops) and {eds_keeping} only carry ParameterValues (EDS -> XDD -> EDS keeps them)",
+        "{} files: {configurations} configurations through XDC and --to dcf ({dcf_entries} entries with a \
+         ParameterValue, each back with one and none added), {templates} templates through XDD and --to eds; \
+         of the .eds files with DCF keys, {eds_dropping} are DCFs in all but name (--to eds names every key it \
+         drops) and {eds_keeping} only carry ParameterValues (EDS -> XDD -> EDS keeps them)",
         files.len()
     );
+    if files.len() == Kind::Eds.full_count() {
+        assert_eq!(configurations, 70, "the corpus's configurations");
+    }
     assert!(
         failures.is_empty(),
         "{} differences:\n{}",

@@ -65,7 +65,10 @@ const ERRORS: &[(&str, &[(&str, usize)])] = &[
         &[("C309", 2), ("C537", 2), ("C703", 1), ("P080", 2)],
     ),
     ("jiujiujiur0000__CANopenEditor__project.xdd", &[("C802", 1)]),
-    ("jrholand__EagleEyePhotography__Node1.config.xdc", &[("C537", 2)]),
+    (
+        "jrholand__EagleEyePhotography__Node1.config.xdc",
+        &[("C537", 2), ("X030", 2)],
+    ),
     (
         "oresat__CANopen-monitor__canopen_monitor__assets__dcfs__gps.xdd",
         &[("C714", 2), ("C730", 2), ("C908", 1)],

@@ -118,14 +118,16 @@ fn sdo_write_to_1017h_changes_the_heartbeat_period() {
 #[test]
 fn pdo_remapped_over_sdo_then_sent_on_sync() {
     let mut bus = booted(base_device(5));
+    // The input 6000h:01 (ro), mapped again after clearing the mapping. (The output 6200h:01 is rww,
+    // which only an RPDO may map.)
     bus.core
         .od_mut()
-        .set_value(ObjectKey::new(0x6200, 1), &[0x5A])
-        .expect("6200h");
+        .set_value(ObjectKey::new(0x6000, 1), &[0x5A])
+        .expect("6000h");
     // CiA 301 mapping procedure: invalidate, clear, map, count, type 1 (every SYNC), validate.
     bus.rx(ms(1), &download(5, 0x1800, 1, &0x8000_0185u32.to_le_bytes()));
     bus.rx(ms(2), &download(5, 0x1A00, 0, &[0]));
-    bus.rx(ms(3), &download(5, 0x1A00, 1, &0x6200_0108u32.to_le_bytes()));
+    bus.rx(ms(3), &download(5, 0x1A00, 1, &0x6000_0108u32.to_le_bytes()));
     bus.rx(ms(4), &download(5, 0x1A00, 0, &[1]));
     bus.rx(ms(5), &download(5, 0x1800, 2, &[1]));
     bus.rx(ms(6), &download(5, 0x1800, 1, &0x0000_0185u32.to_le_bytes()));

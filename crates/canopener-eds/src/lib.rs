@@ -2,6 +2,7 @@
 //! from the specification, and write it back without destroying anything.
 //!
 //! Layers:
+//! - [`lines`]: the one rule for lines and columns every report counts by (EDS text and XML alike);
 //! - [`syntax`]: the lossless [`Document`] (every byte kept, with line/column spans) and line edits;
 //! - [`model`]: the object dictionary [`Eds`] built by [`load`], with [`Diagnostic`]s;
 //! - [`value`]: typed values in every CiA 306 notation, `$NODEID` formulas kept symbolic.
@@ -23,6 +24,7 @@ pub mod dcf;
 pub mod diag;
 pub mod diff;
 pub mod json;
+pub mod lines;
 mod load;
 pub mod model;
 pub mod section_name;
@@ -35,7 +37,7 @@ pub mod xml_text;
 
 pub use diag::{Code, Diagnostic, DiagnosticCode, Severity, Span};
 
-pub use load::{Loaded, build, load};
+pub use load::{Loaded, build, load, model_diagnostics};
 pub use model::{Attributes, Eds, Object, ObjectListKind, Origin, SubObject};
 /// For [`diagnostic_codes!`]: the codes it defines serialise as their code string.
 #[doc(hidden)]

@@ -977,7 +977,6 @@ impl<'a> Loader<'a> {
         // The map is moved out while it is checked, so no object is cloned; it goes back unchanged.
         let objects = std::mem::take(&mut self.eds.objects);
         let mut checker = Checker {
-            doc: self.doc,
             objects: &objects,
             diags: &mut *self.diags,
         };
@@ -990,8 +989,9 @@ impl<'a> Loader<'a> {
                 .get(&index)
                 .and_then(|&i| self.doc.sections().get(i))
             {
-                checker.check_attributes(&object.attributes, section, None);
-                checker.check_sub_number(object, section);
+                let (name, at) = (self.doc.section_name(section), text_placer(self.doc, section));
+                checker.check_attributes(&object.attributes, name, &at, None);
+                checker.check_sub_number(object, name, &at);
             }
             for (sub, sub_object) in &object.subs {
                 if sub_object.origin != Origin::Explicit {
@@ -1002,7 +1002,8 @@ impl<'a> Loader<'a> {
                     .get(&(index, *sub))
                     .and_then(|&i| self.doc.sections().get(i))
                 {
-                    checker.check_attributes(&sub_object.attributes, section, Some(object));
+                    let (name, at) = (self.doc.section_name(section), text_placer(self.doc, section));
+                    checker.check_attributes(&sub_object.attributes, name, &at, Some(object));
                 }
             }
         }
@@ -1010,52 +1011,104 @@ impl<'a> Loader<'a> {
     }
 
     fn check_pdo_pairs(&mut self, places: &Places) {
-        for (comm_base, map_base, what) in [(0x1400u16, 0x1600u16, "RPDO"), (0x1800, 0x1A00, "TPDO")] {
-            // Only PDO numbers some object uses are looked at; scanning all 512 costs small files dearly.
-            let present = |base: u16| -> BTreeSet<u16> {
-                self.eds
-                    .objects
-                    .range(base..base + 0x200)
-                    .filter(|(_, o)| o.origin != Origin::Orphan)
-                    .map(|(i, _)| i - base)
-                    .collect()
-            };
-            let (comms, maps) = (present(comm_base), present(map_base));
-            for n in comms.union(&maps).copied().collect::<Vec<u16>>() {
-                let (comm, map) = (comm_base + n, map_base + n);
-                let (has_comm, has_map) = (comms.contains(&n), maps.contains(&n));
-                if has_comm == has_map {
-                    continue;
-                }
-                let (present, missing, kind) = if has_comm {
-                    (comm, map, "mapping")
-                } else {
-                    (map, comm, "communication")
-                };
-                let span = places
-                    .objects
-                    .get(&present)
-                    .and_then(|&i| self.section_at(i))
-                    .map_or(FILE_START, |s| self.doc.line_span(s.header_line));
-                self.push(
-                    Diagnostic::new(
-                        Code::PdoPairIncomplete,
-                        span,
-                        format!("{what}{} has object {present:X}h but no {kind} object {missing:X}h", n + 1),
-                    )
-                    .at(Some(&format!("{present:X}")), None)
-                    .with_help("CiA 301 PDOs need both their communication and mapping objects; lely's dcfchk crashes here"),
-                );
+        let doc = self.doc;
+        let header = |index: u16| {
+            places
+                .objects
+                .get(&index)
+                .and_then(|&i| doc.sections().get(i))
+                .map_or(FILE_START, |s| doc.line_span(s.header_line))
+        };
+        pdo_pairs(&self.eds, self.diags, &header);
+    }
+}
+
+/// PDOs with a communication object and no mapping object, or the reverse (`P080`), each placed at the
+/// object that is there by `header`.
+fn pdo_pairs(eds: &Eds, diags: &mut Vec<Diagnostic>, header: &dyn Fn(u16) -> Span) {
+    for (comm_base, map_base, what) in [(0x1400u16, 0x1600u16, "RPDO"), (0x1800, 0x1A00, "TPDO")] {
+        // Only PDO numbers some object uses are looked at; scanning all 512 costs small files dearly.
+        let present = |base: u16| -> BTreeSet<u16> {
+            eds.objects
+                .range(base..base + 0x200)
+                .filter(|(_, o)| o.origin != Origin::Orphan)
+                .map(|(i, _)| i - base)
+                .collect()
+        };
+        let (comms, maps) = (present(comm_base), present(map_base));
+        for n in comms.union(&maps).copied().collect::<Vec<u16>>() {
+            let (comm, map) = (comm_base + n, map_base + n);
+            let (has_comm, has_map) = (comms.contains(&n), maps.contains(&n));
+            if has_comm == has_map {
+                continue;
             }
+            let (present, missing, kind) = if has_comm {
+                (comm, map, "mapping")
+            } else {
+                (map, comm, "communication")
+            };
+            diags.push(
+                Diagnostic::new(
+                    Code::PdoPairIncomplete,
+                    header(present),
+                    format!("{what}{} has object {present:X}h but no {kind} object {missing:X}h", n + 1),
+                )
+                .at(Some(&format!("{present:X}")), None)
+                .with_help("CiA 301 PDOs need both their communication and mapping objects; lely's dcfchk crashes here"),
+            );
         }
     }
 }
 
 /// Per-section checks that read the object map while the loader owns it.
 struct Checker<'a, 'd> {
-    doc: &'a Document,
     objects: &'a BTreeMap<u16, Object>,
     diags: &'d mut Vec<Diagnostic>,
+}
+
+/// Where a section's diagnostics point: the span of one of its keys' values, or with `None` the
+/// section itself (its header in EDS text).
+type Placer<'p> = dyn Fn(Option<&str>) -> Span + 'p;
+
+/// The span of `key`'s value in a section of `doc`, else the section's header.
+fn text_placer<'p>(doc: &'p Document, section: &'p Section) -> impl Fn(Option<&str>) -> Span + 'p {
+    move |key| {
+        let header = doc.line_span(section.header_line);
+        key.and_then(|k| doc.find_entry(section, k))
+            .map_or(header, |l| doc.value_span(l))
+    }
+}
+
+/// The diagnostics loading gives about a model's objects, for a model read from another format (CiA
+/// 311 XML): values that are not valid for their data type, `$NODEID` on non-integers, unknown object
+/// and data types, missing keys, `SubNumber`, and PDOs without their other object (the codes
+/// `check_objects` and `check_pdo_pairs` report on EDS text). Every explicit object and sub-object is
+/// named canonically (`1018`, `1018sub1`) and placed by `place(section, key)`.
+pub fn model_diagnostics(eds: &Eds, place: &dyn Fn(&str, Option<&str>) -> Span) -> Vec<Diagnostic> {
+    let mut diags = Vec::new();
+    let mut checker = Checker {
+        objects: &eds.objects,
+        diags: &mut diags,
+    };
+    for (&index, object) in &eds.objects {
+        if object.origin != Origin::Explicit {
+            continue;
+        }
+        let name = format!("{index:X}");
+        let at = |key: Option<&str>| place(&name, key);
+        checker.check_attributes(&object.attributes, &name, &at, None);
+        checker.check_sub_number(object, &name, &at);
+        for (sub, sub_object) in &object.subs {
+            if sub_object.origin != Origin::Explicit {
+                continue;
+            }
+            let name = format!("{index:X}sub{sub:X}");
+            let at = |key: Option<&str>| place(&name, key);
+            checker.check_attributes(&sub_object.attributes, &name, &at, Some(object));
+        }
+    }
+    pdo_pairs(eds, &mut diags, &|index| place(&format!("{index:X}"), None));
+    diags
 }
 
 impl Checker<'_, '_> {
@@ -1064,7 +1117,7 @@ impl Checker<'_, '_> {
     }
 
     /// `SubNumber` counts the sub-objects present, sub 0 included and FFh excluded (CiA 306 §4.6.3.2).
-    fn check_sub_number(&mut self, object: &Object, section: &Section) {
+    fn check_sub_number(&mut self, object: &Object, name: &str, place: &Placer<'_>) {
         let explicit = object
             .subs
             .iter()
@@ -1074,11 +1127,7 @@ impl Checker<'_, '_> {
             && object.attributes.compact_sub_obj() == 0
             && declared != explicit as u64
         {
-            let line = self.doc.find_entry(section, "SubNumber");
-            let span = line.map_or(self.doc.line_span(section.header_line), |l| {
-                self.doc.value_span(l)
-            });
-            let name = self.doc.section_name(section);
+            let span = place(Some("SubNumber"));
             self.push(
                 Diagnostic::new(
                     Code::SubNumberMismatch,
@@ -1091,11 +1140,9 @@ impl Checker<'_, '_> {
     }
 
     /// Key obligations (CiA 306 §4.6.3.2 table) and typed values of one section.
-    fn check_attributes(&mut self, a: &Attributes, section: &Section, parent: Option<&Object>) {
-        let doc = self.doc;
-        let name = doc.section_name(section);
-        let header = doc.line_span(section.header_line);
-        let value_span = |key: &str| doc.find_entry(section, key).map_or(header, |l| doc.value_span(l));
+    fn check_attributes(&mut self, a: &Attributes, name: &str, place: &Placer<'_>, parent: Option<&Object>) {
+        let header = place(None);
+        let value_span = |key: &str| place(Some(key));
         for (key, text) in [
             ("ObjectType", &a.object_type),
             ("DataType", &a.data_type),
@@ -1543,6 +1590,50 @@ mod tests {
         assert_eq!(codes(&text), [Code::MissingKey, Code::HexSuffix]);
         let text = BASE.replace("AccessType=ro", "AccessType=readwrite");
         assert_eq!(codes(&text), [Code::UnknownAccessType]);
+    }
+
+    /// A model from another format gets the object diagnostics loading gives EDS text: the same codes,
+    /// messages, sections and keys, placed by the caller.
+    #[test]
+    fn model_diagnostics_are_the_object_diagnostics_of_loading() {
+        let text = format!(
+            "{BASE}[2000]\nParameterName=a\nObjectType=0x7\nDataType=0x0005\nAccessType=rw\nDefaultValue=300\n\
+             [2001]\nParameterName=b\nObjectType=0x3\n[2002]\nParameterName=c\nDataType=0x0009\nAccessType=ro\n\
+             DefaultValue=$NODEID+1\n[1800]\nParameterName=TPDO1\nObjectType=0x9\nSubNumber=1\n\
+             [1800sub0]\nParameterName=n\nDataType=0x0005\nAccessType=ro\nDefaultValue=0\n"
+        );
+        let loaded = load(text.as_bytes());
+        let of_model = |d: &Diagnostic| (d.code, d.message.clone(), d.section.clone(), d.key.clone());
+        let placed = |_section: &str, key: Option<&str>| Span::new(7, 7, u32::from(key.is_some()));
+        let from_model: Vec<_> = model_diagnostics(&loaded.eds, &placed)
+            .iter()
+            .map(of_model)
+            .collect();
+        let model_codes: BTreeSet<Code> = from_model.iter().map(|d| d.0).collect();
+        let mut from_text: Vec<_> = loaded
+            .diagnostics
+            .iter()
+            .filter(|d| model_codes.contains(&d.code))
+            .map(of_model)
+            .collect();
+        let mut sorted = from_model.clone();
+        sorted.sort();
+        from_text.sort();
+        assert_eq!(sorted, from_text);
+        let codes: BTreeSet<Code> = model_codes;
+        for code in [
+            Code::OutOfRange,
+            Code::UnknownObjectType,
+            Code::NodeIdOnNonInteger,
+            Code::PdoPairIncomplete,
+        ] {
+            assert!(codes.contains(&code), "{code:?} in {from_model:?}");
+        }
+        assert!(
+            model_diagnostics(&loaded.eds, &placed)
+                .iter()
+                .all(|d| d.span.line == 7)
+        );
     }
 
     #[test]

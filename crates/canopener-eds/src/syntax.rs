@@ -14,32 +14,10 @@ use std::ops::Range;
 use std::sync::OnceLock;
 
 use crate::diag::{Code, Diagnostic, Span};
+use crate::lines::{ending_at, line_end};
 use crate::text::{self, Encoding, Unencodable};
 
-/// How a line ends.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum LineEnding {
-    /// `\n`
-    Lf,
-    /// `\r\n`
-    CrLf,
-    /// A bare `\r` (not allowed by CiA 306, seen in old Mac files).
-    Cr,
-    /// The last line of a file without a final newline.
-    None,
-}
-
-impl LineEnding {
-    /// The characters of this ending.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Lf => "\n",
-            Self::CrLf => "\r\n",
-            Self::Cr => "\r",
-            Self::None => "",
-        }
-    }
-}
+pub use crate::lines::LineEnding;
 
 /// What a line is.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -488,12 +466,7 @@ fn split_lines(text: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<Line> {
         let eq = (key_len > 0 && bytes.get(start + key_len) == Some(&b'=')).then_some(start + key_len);
         // Key characters are never line breaks, so the search for the line end resumes after them.
         let end = line_end(bytes, eq.map_or(start + key_len, |eq| eq + 1));
-        let (ending, next) = match bytes.get(end) {
-            Some(b'\n') => (LineEnding::Lf, end + 1),
-            Some(_) if bytes.get(end + 1) == Some(&b'\n') => (LineEnding::CrLf, end + 2),
-            Some(_) => (LineEnding::Cr, end + 1),
-            None => (LineEnding::None, end),
-        };
+        let (ending, next) = ending_at(bytes, end);
         let number = out.len();
         saw_lf |= ending == LineEnding::Lf;
         saw_crlf |= ending == LineEnding::CrLf;
@@ -551,32 +524,6 @@ fn is_key_byte(b: u8) -> bool {
         table
     };
     TABLE[usize::from(b)]
-}
-
-/// The offset of the first CR or LF at or after `from`, or the text length.
-fn line_end(bytes: &[u8], from: usize) -> usize {
-    const ONES: u64 = u64::from_ne_bytes([0x01; 8]);
-    const HIGHS: u64 = u64::from_ne_bytes([0x80; 8]);
-    const LFS: u64 = u64::from_ne_bytes([b'\n'; 8]);
-    const CRS: u64 = u64::from_ne_bytes([b'\r'; 8]);
-    // Marks the zero bytes of a word; the lowest mark is exact (borrows only run upwards), which is
-    // all the search needs.
-    let zero_bytes = |v: u64| v.wrapping_sub(ONES) & !v & HIGHS;
-    let mut i = from;
-    // Eight bytes per step: values and comments are long enough for this to beat a byte loop.
-    while let Some(word) = bytes.get(i..).and_then(<[u8]>::first_chunk::<8>) {
-        let word = u64::from_le_bytes(*word);
-        let found = zero_bytes(word ^ LFS) | zero_bytes(word ^ CRS);
-        if found != 0 {
-            // Little-endian: the lowest marked byte is the first in the text.
-            return i + (found.trailing_zeros() / 8) as usize;
-        }
-        i += 8;
-    }
-    bytes
-        .get(i..)
-        .and_then(|rest| rest.iter().position(|&b| b == b'\n' || b == b'\r'))
-        .map_or(bytes.len(), |p| i + p)
 }
 
 /// The trimmed value range of an entry whose `=` is at `eq` (an empty range right after `=` when the

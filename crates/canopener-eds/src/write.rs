@@ -102,6 +102,85 @@ pub fn model_sections(eds: &Eds) -> Vec<ModelSection> {
     out
 }
 
+/// Whether the canonical text of `eds` ([`model_sections`]) has a section of this kind, without
+/// writing it: what checks ask of a model read from another format (CiA 311 XML), which has no
+/// document to look in.
+pub fn model_has_section(eds: &Eds, kind: SectionKind) -> bool {
+    let written = |o: &&Object| matches!(o.origin, Origin::Explicit | Origin::Orphan);
+    match kind {
+        SectionKind::FileInfo | SectionKind::DeviceInfo => true,
+        SectionKind::DummyUsage => eds.dummy_usage.is_some(),
+        SectionKind::Comments => eds.comments.is_some(),
+        SectionKind::ObjectList(list) => eds.object_lists.contains_key(&list),
+        SectionKind::Commissioning(_) => eds.commissioning.is_some(),
+        SectionKind::Tools => eds.tools.is_some(),
+        SectionKind::Tool(n) => eds.tool_sections.contains_key(&n),
+        SectionKind::DynamicChannels => eds.dynamic_channels.is_some(),
+        SectionKind::SupportedModules => eds.supported_modules.is_some(),
+        SectionKind::ConnectedModules => eds.connected_modules.is_some(),
+        SectionKind::Object(index) => eds
+            .objects
+            .get(&index)
+            .is_some_and(|o| o.origin == Origin::Explicit),
+        SectionKind::Sub(index, sub) => eds
+            .objects
+            .get(&index)
+            .filter(written)
+            .and_then(|o| o.subs.get(&sub))
+            .is_some_and(|s| s.origin.is_written()),
+        SectionKind::Companion(index, companion) => eds
+            .objects
+            .get(&index)
+            .filter(written)
+            .is_some_and(|o| companion_of(o, companion).is_some()),
+        SectionKind::Module(x, _) => eds.modules.contains_key(&x),
+        SectionKind::Unknown => false,
+    }
+}
+
+/// The entry `key` (any letter case) of the section of this kind in the canonical text of `eds`, as
+/// that text writes it: the key in canonical spelling and its value. Module sections are not looked in.
+pub fn model_entry<'a>(eds: &'a Eds, kind: SectionKind, key: &str) -> Option<(&'a str, &'a str)> {
+    if !model_has_section(eds, kind) {
+        return None;
+    }
+    let find =
+        |entries: Vec<(&'a str, &'a str)>| entries.into_iter().find(|(k, _)| k.eq_ignore_ascii_case(key));
+    let property = |p: Option<&'a Properties>| {
+        p?.0.iter()
+            .find(|p| p.key.eq_ignore_ascii_case(key))
+            .map(|p| (p.key.as_str(), p.value.as_str()))
+    };
+    match kind {
+        SectionKind::FileInfo => find(eds.file_info.entries()),
+        SectionKind::DeviceInfo => find(eds.device_info.entries()),
+        SectionKind::Commissioning(_) => find(eds.commissioning.as_ref()?.entries()),
+        SectionKind::Object(index) => find(eds.objects.get(&index)?.attributes.entries()),
+        SectionKind::Sub(index, sub) => find(eds.objects.get(&index)?.subs.get(&sub)?.attributes.entries()),
+        SectionKind::Companion(index, companion) => {
+            property(companion_of(eds.objects.get(&index)?, companion))
+        }
+        SectionKind::ObjectList(list) => property(eds.object_lists.get(&list).map(|l| &l.0)),
+        SectionKind::DummyUsage => property(eds.dummy_usage.as_ref()),
+        SectionKind::Comments => property(eds.comments.as_ref()),
+        SectionKind::Tools => property(eds.tools.as_ref()),
+        SectionKind::Tool(n) => property(eds.tool_sections.get(&n)),
+        SectionKind::DynamicChannels => property(eds.dynamic_channels.as_ref()),
+        SectionKind::SupportedModules => property(eds.supported_modules.as_ref()),
+        SectionKind::ConnectedModules => property(eds.connected_modules.as_ref()),
+        SectionKind::Module(..) | SectionKind::Unknown => None,
+    }
+}
+
+fn companion_of(object: &Object, companion: section_name::Companion) -> Option<&Properties> {
+    match companion {
+        section_name::Companion::Name => object.names.as_ref(),
+        section_name::Companion::Value => object.values.as_ref(),
+        section_name::Companion::Denotation => object.denotations.as_ref(),
+        section_name::Companion::ObjectLinks => object.object_links.as_ref(),
+    }
+}
+
 /// Canonical CiA 306 text of a model. With the source `document`, its comment lines are kept, each
 /// in the section it was in (those before the first section stay at the top).
 pub fn to_canonical(eds: &Eds, document: Option<&Document>) -> String {
@@ -314,6 +393,44 @@ mod tests {
         [1000]\r\nParameterName=Device type\r\nDataType=0x0007\r\nAccessType=ro\r\n; profile 401\r\nDefaultValue=0x191\r\n\
         [MandatoryObjects]\r\nSupportedObjects=1\r\n1=0x1000\r\n[2000]\r\nParameterName=Arr\r\nObjectType=0x8\r\n\
         DataType=0x0005\r\nAccessType=rw\r\nCompactSubObj=2\r\n";
+
+    /// What the model says it writes is what its canonical text has: every section of
+    /// [`model_sections`] exists for [`model_has_section`], and [`model_entry`] finds its entries.
+    #[test]
+    fn model_lookups_agree_with_the_canonical_text() {
+        let text = format!(
+            "{SAMPLE}[DummyUsage]\r\nDummy0005=1\r\n[2000Name]\r\nNrOfEntries=1\r\n1=first\r\n\
+             [DeviceComissioning]\r\nNodeID=5\r\n[1018]\r\nParameterName=Identity\r\nObjectType=0x9\r\n\
+             SubNumber=2\r\n[1018sub0]\r\nParameterName=n\r\nDataType=0x0005\r\nAccessType=ro\r\n\
+             DefaultValue=1\r\n[1018sub1]\r\nParameterName=Vendor\r\nDataType=0x0007\r\nAccessType=ro\r\n"
+        );
+        let eds = load(text.as_bytes()).eds;
+        let sections = model_sections(&eds);
+        assert!(sections.len() > 8);
+        for section in &sections {
+            let kind = section_name::classify(&section.name);
+            assert!(model_has_section(&eds, kind), "{}", section.name);
+            for (key, value) in &section.entries {
+                let upper = key.to_ascii_uppercase();
+                assert_eq!(
+                    model_entry(&eds, kind, &upper),
+                    Some((key.as_str(), value.as_str())),
+                    "[{}] {key}",
+                    section.name
+                );
+            }
+        }
+        // CompactSubObj sub-objects are generated, not written; absent sections are absent.
+        for kind in [
+            SectionKind::Sub(0x2000, 1),
+            SectionKind::Object(0x6000),
+            SectionKind::DynamicChannels,
+            SectionKind::Comments,
+        ] {
+            assert!(!model_has_section(&eds, kind), "{kind:?}");
+        }
+        assert_eq!(model_entry(&eds, SectionKind::Object(0x1000), "Nope"), None);
+    }
 
     #[test]
     fn unchanged_model_writes_back_identically() {

@@ -16,9 +16,10 @@ fn test_data(name: &str) -> PathBuf {
         .join(name)
 }
 
-const GRAPHML: [&str; 8] = [
+const GRAPHML: [&str; 9] = [
     "line.graphml",
     "trunk.graphml",
+    "trunk-num-of-nets-default.graphml",
     "hub.graphml",
     "gateway.graphml",
     "supply.graphml",
@@ -86,6 +87,23 @@ fn every_graphml_fixture_reads_without_errors_and_writes_back_to_the_same_model(
             "{name}: not a fixed point"
         );
     }
+}
+
+/// A `<key>`'s default NumOfNets counts for the devices on a network, not for junctions on none: the
+/// file reads as trunk.graphml, which writes NumOfNets=1 on each device and nothing on the junctions.
+#[test]
+fn a_num_of_nets_default_applies_to_the_devices_only() {
+    let read = |name: &str| {
+        let bytes = fixture::read(test_data(name)).expect("fixture");
+        let loaded = canopener_network::load(&bytes);
+        assert!(loaded.diagnostics.is_empty(), "{name}: {:?}", loaded.diagnostics);
+        unspanned(loaded.topology)
+    };
+    let explicit = read("trunk.graphml");
+    let by_default = read("trunk-num-of-nets-default.graphml");
+    let nets = |t: &Topology| -> Vec<Option<i64>> { t.vertices.iter().map(|v| v.num_of_nets).collect() };
+    assert_eq!(nets(&by_default), nets(&explicit));
+    assert!(nets(&explicit).contains(&None) && nets(&explicit).contains(&Some(1)));
 }
 
 #[test]

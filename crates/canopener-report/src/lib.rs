@@ -24,6 +24,7 @@ use std::collections::BTreeMap;
 
 use canopener_check::{CheckDescription, Finding};
 use canopener_eds::Severity;
+use canopener_eds::lines::LineIndex;
 use canopener_eds::syntax::Document;
 
 pub use html::html;
@@ -78,16 +79,16 @@ impl FileReport {
         }
     }
 
-    /// The report of a checked file, taking the lines the findings point at from its decoded text
-    /// (lines end at `\n`; a `\r` before it is dropped).
+    /// The report of a checked file, taking the lines the findings point at from its decoded text,
+    /// counted as every position is ([`canopener_eds::lines`]: LF, CR LF and a lone CR end a line).
     pub fn from_text(path: impl Into<String>, findings: Vec<Finding>, text: &str) -> Self {
-        let wanted: std::collections::BTreeSet<u32> =
-            findings.iter().map(|f| f.diagnostic.span.line).collect();
-        let source = text
-            .split('\n')
-            .zip(1u32..)
-            .filter(|(_, number)| wanted.contains(number))
-            .map(|(line, number)| (number, line.strip_suffix('\r').unwrap_or(line).to_owned()))
+        let lines = LineIndex::new(text);
+        let source = findings
+            .iter()
+            .filter_map(|f| {
+                let number = f.diagnostic.span.line;
+                Some((number, lines.line(number)?.to_owned()))
+            })
             .collect();
         Self {
             path: path.into(),
@@ -133,5 +134,37 @@ impl Report {
             .iter()
             .find(|c| c.code == code)
             .or_else(|| self.checks.iter().find(|c| c.code.eq_ignore_ascii_case(code)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use canopener_eds::{Diagnostic, Span};
+
+    use super::*;
+
+    fn finding(line: u32) -> Finding {
+        Finding {
+            diagnostic: Diagnostic::from_parts(
+                "N001".to_owned(),
+                Severity::Error,
+                Span::new(line, 1, 0),
+                "m",
+            ),
+            fixable: false,
+        }
+    }
+
+    /// The source lines come from the text by the rule positions are counted by: a lone CR ends a line.
+    #[test]
+    fn source_lines_are_counted_as_positions_are() {
+        let text = "<a>\r<b/>\r\n<c/>\n";
+        let report = FileReport::from_text(
+            "n.graphml",
+            vec![finding(2), finding(3), finding(4), finding(9)],
+            text,
+        );
+        let source: Vec<(u32, &str)> = report.source.iter().map(|(n, l)| (*n, l.as_str())).collect();
+        assert_eq!(source, [(2, "<b/>"), (3, "<c/>"), (4, "")]);
     }
 }

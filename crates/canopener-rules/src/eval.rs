@@ -19,13 +19,6 @@ use crate::template::{Part, Template, show};
 /// The code of a finding that says a rule could not be evaluated on a file.
 pub const EVALUATION_ERROR_CODE: &str = "R000";
 
-/// Where a finding points when nothing more precise exists: the start of the file.
-const FILE_START: Span = Span {
-    line: 1,
-    column: 1,
-    len: 0,
-};
-
 /// What running the rules on one file produced.
 #[derive(Debug, Default)]
 pub(crate) struct Output {
@@ -334,7 +327,7 @@ fn locate(cx: &Context<'_>, rule: &Rule, item: Option<&Item>, key: Option<&str>)
     };
     let Some(kind) = place_kind else {
         return Location {
-            span: FILE_START,
+            span: cx.file_span(),
             section: None,
             key: None,
             target: None,
@@ -350,7 +343,7 @@ fn locate(cx: &Context<'_>, rule: &Rule, item: Option<&Item>, key: Option<&str>)
                 .as_ref()
                 .map_or_else(|| cx.display_name(kind), |p| p.name.clone()),
         });
-    let has_section = cx.section(kind).is_some();
+    let has_section = cx.has_section(kind);
     let span = if has_section {
         match key {
             Some(k) => cx.value_span(kind, k),
@@ -360,7 +353,7 @@ fn locate(cx: &Context<'_>, rule: &Rule, item: Option<&Item>, key: Option<&str>)
         // A generated sub-object has no section of its own: point at its object's.
         match item {
             Some(i) => cx.section_span(SectionKind::Object(i.index)),
-            None => FILE_START,
+            None => cx.file_span(),
         }
     };
     let written_key = key.map(|k| cx.entry(kind, k).map_or(k, |(written, _)| written).to_owned());

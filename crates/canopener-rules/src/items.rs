@@ -175,7 +175,7 @@ impl<'a> FileItems<'a> {
             let object_name = object.name();
             let kind = SectionKind::Object(object_index);
             let section = cx.sections_of(kind).first().copied();
-            let written = object.origin.is_written() && section.is_some();
+            let written = object.origin.is_written() && cx.has_section(kind);
             let subs: Vec<u8> = object.subs.keys().copied().collect();
             index.positions.insert((object_index, None), values.len());
             values.push(item_value(
@@ -203,7 +203,7 @@ impl<'a> FileItems<'a> {
             for (&sub_index, sub) in &object.subs {
                 let kind = SectionKind::Sub(object_index, sub_index);
                 let section = cx.sections_of(kind).first().copied();
-                let written = sub.origin.is_written() && section.is_some();
+                let written = sub.origin.is_written() && cx.has_section(kind);
                 index
                     .positions
                     .insert((object_index, Some(sub_index)), values.len());

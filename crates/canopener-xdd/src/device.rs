@@ -53,9 +53,12 @@ pub(crate) struct XmlDevice {
     pub commissioning: Option<Commissioning>,
 }
 
-/// `CANopenGeneralFeatures`; `None` fields were not written (schema defaults apply).
+/// `CANopenGeneralFeatures`; `None` fields were not written (schema defaults apply) or could not be
+/// read (named in `unreadable`: their keys are left out, no default stands in for them).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct GeneralFeatures {
+    /// Attributes whose value is not of their schema type and could not be read.
+    pub unreadable: Vec<&'static str>,
     pub granularity: Option<u64>,
     pub nr_of_rx_pdo: Option<u64>,
     pub nr_of_tx_pdo: Option<u64>,
@@ -75,6 +78,8 @@ pub(crate) struct GeneralFeatures {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct MasterFeatures {
     pub boot_up_master: Option<bool>,
+    /// `bootUpMaster` is there but not an xsd:boolean: SimpleBootUpMaster is left out.
+    pub boot_up_master_unreadable: bool,
 }
 
 /// `dynamicChannel` (CiA 311 §7.1) ↔ `[DynamicChannels]` segment (CiA 306-3).
@@ -161,13 +166,17 @@ pub(crate) fn to_eds(d: &XmlDevice, notes: &mut Vec<Note>) -> Header {
         }
     }
     if let Some(g) = &d.general {
-        di.simple_boot_up_slave = Some(flag(g.boot_up_slave.unwrap_or(false)));
+        // An attribute that is absent takes its schema default; one that could not be read, none.
+        let read = |name: &str| !g.unreadable.contains(&name);
+        let boolean = |name, v: Option<bool>| read(name).then(|| flag(v.unwrap_or(false)));
+        let count = |name, v: Option<u64>| read(name).then(|| v.unwrap_or(0).to_string());
+        di.simple_boot_up_slave = boolean("bootUpSlave", g.boot_up_slave);
         di.granularity = g.granularity.map(|n| n.to_string());
-        di.dynamic_channels_supported = Some(g.dynamic_channels.unwrap_or(0).to_string());
-        di.group_messaging = Some(flag(g.group_messaging.unwrap_or(false)));
-        di.nr_of_rx_pdo = Some(g.nr_of_rx_pdo.unwrap_or(0).to_string());
-        di.nr_of_tx_pdo = Some(g.nr_of_tx_pdo.unwrap_or(0).to_string());
-        di.lss_supported = Some(flag(g.layer_setting_service_slave.unwrap_or(false)));
+        di.dynamic_channels_supported = count("dynamicChannels", g.dynamic_channels);
+        di.group_messaging = boolean("groupMessaging", g.group_messaging);
+        di.nr_of_rx_pdo = count("nrOfRxPDO", g.nr_of_rx_pdo);
+        di.nr_of_tx_pdo = count("nrOfTxPDO", g.nr_of_tx_pdo);
+        di.lss_supported = boolean("layerSettingServiceSlave", g.layer_setting_service_slave);
         if let Some(v) = g.ng_slave {
             di.set("NG_Slave", flag(v));
         }
@@ -178,7 +187,7 @@ pub(crate) fn to_eds(d: &XmlDevice, notes: &mut Vec<Note>) -> Header {
             di.set("NrOfNG_MonitoredNodes", v.to_string());
         }
     }
-    if d.network_management {
+    if d.network_management && !d.master.as_ref().is_some_and(|m| m.boot_up_master_unreadable) {
         let master = d.master.as_ref().and_then(|m| m.boot_up_master).unwrap_or(false);
         di.simple_boot_up_master = Some(flag(master));
     }
@@ -288,6 +297,7 @@ pub(crate) fn from_eds(eds: &Eds, file_name: &str, with_values: bool) -> XmlDevi
     });
     d.master = Some(MasterFeatures {
         boot_up_master: set(&di.simple_boot_up_master),
+        boot_up_master_unreadable: false,
     });
     d.dummies = eds.dummy_usage.as_ref().map(|p| {
         p.0.iter()

@@ -28,7 +28,8 @@ canopener_eds::diagnostic_codes! {
     InvalidIndex = "X010", "invalid-index", Error;
     /// The same index or sub-index twice; the first one is used.
     DuplicateEntry = "X011", "duplicate-entry", Error;
-    /// A hexBinary value with `0x`, an odd number of digits or an unusual width; read leniently.
+    /// A hexBinary value with an unusual number of digits (`0000` for a subIndex, 8 digits for
+    /// objFlags): valid xsd:hexBinary, but not the width CiA 311 writes.
     HexNotation = "X012", "hex-notation", Info;
     /// `subNumber` disagrees with the `CANopenSubObject` children; the children count. (The slug says
     /// `xml-` because the checker's registry already has P045 `sub-number-mismatch`.)
@@ -37,14 +38,19 @@ canopener_eds::diagnostic_codes! {
     MissingName = "X014", "missing-name", Warning;
     /// A missing or unreadable `objectType`.
     InvalidObjectType = "X015", "invalid-object-type", Error;
+    /// A number, hexBinary or ID attribute whose value is not of its CiA 311 schema type
+    /// (xsd:hexBinary with `0x` or an odd number of digits, an unsignedByte written in hex or out of
+    /// range, an ID that is no NCName). Read when the number is clear, else left out; never a default.
+    SchemaType = "X016", "schema-type", Error;
     /// A `dataType` that is not a hex number, or an object whose data type cannot be determined.
     InvalidDataType = "X020", "invalid-data-type", Error;
     /// The object attribute and the referenced parameter say different things; the attribute is used.
     ConflictingValues = "X021", "conflicting-values", Warning;
     /// `access="noAccess"` has no CiA 306 access type; `AccessType` is left out.
     NoAccess = "X022", "no-access", Info;
-    /// A token outside its CiA 311 vocabulary (access, PDOmapping, boolean, baud rate, ...).
-    UnknownToken = "X023", "unknown-token", Warning;
+    /// A token outside its CiA 311 vocabulary (accessType, access, PDOmapping, boolean, baud rate, ...):
+    /// read when its meaning is clear (`rwr`, `TRUE`), else left out; never the schema default.
+    UnknownToken = "X023", "unknown-token", Error;
     /// A `BITSTRING` parameter without an inline `dataType`: read as OCTET_STRING, or DOMAIN when it
     /// has no default value (the CANopenEditor convention).
     AmbiguousBitstring = "X024", "ambiguous-bitstring", Info;
@@ -54,8 +60,9 @@ canopener_eds::diagnostic_codes! {
     /// An OCTET_STRING or DOMAIN value written as space-separated bytes (`C8 3D BB`); joined as CiA
     /// 306 writes it (`C83DBB`).
     SpacedOctets = "X026", "spaced-octets", Info;
-    /// A `fileCreationDate`/`Time` or modification date/time that is not xsd:date/xsd:time.
-    DateTimeNotation = "X030", "date-time-notation", Warning;
+    /// A `fileCreationDate`/`Time` or modification date/time that is not xsd:date/xsd:time: a schema
+    /// type broken, so an error like X016; a time whose meaning is clear (`9:48:42 PM`) is read.
+    DateTimeNotation = "X030", "date-time-notation", Error;
     /// A vendor or product ID in a questionable notation, or two sources that disagree.
     IdNotation = "X031", "id-notation", Warning;
     /// A baud rate that has no CiA 306 key (`100 Kbps`, `auto-baudRate`).
@@ -64,8 +71,9 @@ canopener_eds::diagnostic_codes! {
     NonStandardAttribute = "X034", "non-standard-attribute", Info;
     /// A `deviceCommissioning` value that is not usable as written (node-ID outside 1..=127, ...).
     Commissioning = "X035", "commissioning", Warning;
-    /// A `dummy@entry` outside `Dummy0001=0` ... `Dummy0007=1`.
-    InvalidDummy = "X036", "invalid-dummy", Warning;
+    /// A `dummy@entry` outside `Dummy0001=0` ... `Dummy0007=1`, the schema's enumeration: an error
+    /// like X023.
+    InvalidDummy = "X036", "invalid-dummy", Error;
     /// `key=value|...` pairs in `productText` (a Faulhaber/libedssharp convention) mapped to EDS keys.
     PackedDescription = "X037", "packed-description", Info;
     /// Text with line breaks, which an EDS value cannot hold; joined with spaces.

@@ -25,6 +25,8 @@ pub(crate) struct XmlEntry {
     pub data_type: Option<u16>,
     /// `@accessType` (inline style).
     pub access: Option<AccessType>,
+    /// `@accessType` is there but names no access type: the object's access is not known.
+    pub access_unreadable: bool,
     /// `@defaultValue`.
     pub default_value: Option<String>,
     /// `@lowLimit`.
@@ -46,8 +48,10 @@ pub(crate) struct XmlEntry {
 /// What an ApplicationProcess `parameter` says.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct Param {
-    /// `@access` as written; `None` means the schema default `read`.
+    /// `@access` as read; `None` means the schema default `read`, unless `access_unreadable`.
     pub access: Option<ParamAccess>,
+    /// `@access` is there but names no access: no default stands in for it.
+    pub access_unreadable: bool,
     /// The first `label` (or `description` when there is no label).
     pub label: Option<String>,
     /// The IEC element, also when reached through `dataTypeIDRef` (enum, derived).
@@ -425,17 +429,38 @@ fn data_type(entry: &XmlEntry, has_default: bool, notes: &mut Vec<Note>) -> Opti
     }
 }
 
+/// The CiA 306 access type: [`stated_access`] with the direction an `rw` entry's PDOmapping gives it
+/// (TPDO: rwr, RPDO: rww; libedssharp #128), whether the rw comes from the object's accessType or its
+/// parameter's readWrite. CiA 311 says the PDO direction of read/write entries there, CiA 306 in the
+/// access type.
 fn access(entry: &XmlEntry, notes: &mut Vec<Note>) -> Option<AccessType> {
+    stated_access(entry, notes).map(|t| match (t, entry.pdo_mapping) {
+        (AccessType::Rw, Some(PdoMapping::Tpdo)) => AccessType::Rwr,
+        (AccessType::Rw, Some(PdoMapping::Rpdo)) => AccessType::Rww,
+        (t, _) => t,
+    })
+}
+
+/// The access the object's accessType or its parameter's access states.
+fn stated_access(entry: &XmlEntry, notes: &mut Vec<Note>) -> Option<AccessType> {
     let inline = entry.access.map(|t| match (t, entry.pdo_mapping) {
         (AccessType::Rw, Some(PdoMapping::Tpdo)) => AccessType::Rwr,
         (AccessType::Rw, Some(PdoMapping::Rpdo)) => AccessType::Rww,
         (t, _) => t,
     });
     let explicit = entry.param.as_ref().and_then(|p| p.access);
+    // A parameter without `access` is `read` (P2); one whose access cannot be read is nothing, and an
+    // object whose own accessType cannot be read leaves only what its parameter states.
     let from_param = entry
         .param
         .as_ref()
+        .filter(|p| !p.access_unreadable)
         .map(|p| p.access.unwrap_or(ParamAccess::Read));
+    let from_param = if entry.access_unreadable {
+        explicit
+    } else {
+        from_param
+    };
     match (inline, from_param) {
         (None, None) => None,
         (Some(t), None) => Some(t),
@@ -628,6 +653,25 @@ mod tests {
         assert_eq!(
             to_eds(&entry, &mut Vec::new()).attributes.access_type.as_deref(),
             Some("rww")
+        );
+        // A parameter's readWrite gets its direction from the object's PDOmapping as well (reference
+        // style, where the object carries no accessType).
+        let reference = XmlEntry {
+            object_type: Some(7),
+            pdo_mapping: Some(PdoMapping::Tpdo),
+            param: Some(Param {
+                access: Some(ParamAccess::ReadWrite),
+                simple_type: Some(Iec::Uint),
+                ..Param::default()
+            }),
+            ..XmlEntry::default()
+        };
+        assert_eq!(
+            to_eds(&reference, &mut Vec::new())
+                .attributes
+                .access_type
+                .as_deref(),
+            Some("rwr")
         );
     }
 

@@ -35,22 +35,29 @@
 //!   the value inline, the object wins and a disagreement is reported (`X021`, P18).
 //! - **Schema defaults are applied explicitly** (P2): a parameter without `access` is `read` (`ro`);
 //!   with a `CANopenGeneralFeatures` element every general-feature key is written (`0` for absent
-//!   booleans and counts); with `NetworkManagement`, `SimpleBootUpMaster` is written.
-//! - **Numbers** are read leniently: hexBinary with or without `0x`, 2/4/8 digits, odd widths (`X012`).
+//!   booleans and counts); with `NetworkManagement`, `SimpleBootUpMaster` is written. A default
+//!   stands in only for an absent attribute, never for one that is there but unreadable.
+//! - **Schema types.** Every attribute the reader interprets is read by its CiA 311 type
+//!   (xsd:hexBinary, unsignedByte/Short/Long, boolean, ID, the enumerations). A value outside its type
+//!   is an error naming element and attribute: `X016` for numbers, hexBinary and IDs, `X023` for
+//!   tokens. A clear value is read and the message says as what (`0x2000` and `201` as hexBinary,
+//!   `rw` as the parameter access readWrite, `rwr` as an inline accessType); any other leaves its key
+//!   out of the model. A valid hexBinary of an unusual width (`0000` for a subIndex) is `X012`.
 //!   `objectType` decimal becomes `0x7`, `dataType` becomes `0x0007`. Vendor and product IDs follow
 //!   CiA 306: `0x…` is hex, bare digits are decimal (Faulhaber's `327`), bare hex with letters gets a
 //!   `0x` (`X031`, P9).
 //! - **Access and PDO mapping.** `read`/`write`/`readWrite`/`const` → ro/wo/rw/const,
 //!   `readWriteInput` → rwr, `readWriteOutput` → rww, `noAccess` → no AccessType (`X022`). An inline
-//!   `rw` with PDOmapping `TPDO`/`RPDO` is rwr/rww (libedssharp #128). PDOmapping `no` → 0, every other
-//!   token → 1.
+//!   `rw` with PDOmapping `TPDO`/`RPDO` is rwr/rww (libedssharp #128). PDOmapping `no` → 0, the other
+//!   four tokens → 1.
 //! - **BITSTRING** without an inline `dataType` is OCTET_STRING, or DOMAIN when the parameter has no
 //!   default (CANopenEditor's convention, `X024`); OCTET_STRING values written as `C8 3D BB` become
 //!   `C83DBB` (`X026`, P7). CHAR is read as VISIBLE_STRING (the schema's one-character string).
 //! - **ARRAY/RECORD objects** keep name, object type, ObjFlags and configured values; a data type,
 //!   access, default, limits or PDO mapping on the object itself describe its sub-objects in CiA 306
-//!   and are not carried (`X025`, P21). `SubNumber` is the number of `CANopenSubObject` children; a
-//!   different `subNumber` is reported (`X013`, P13).
+//!   and are not carried (`X025`, P21). `SubNumber` is the number of `CANopenSubObject` children
+//!   other than sub-index FFh (which holds the structure, CiA 306 §4.6.3.2); a different `subNumber`
+//!   is reported (`X013`, P13).
 //! - **Object lists** are rebuilt by index (CiA 306 §4.6.3.1: 1000h, 1001h, 1018h mandatory;
 //!   2000h–5FFFh manufacturer; the rest optional, P15).
 //! - **Device level.** File attributes → `[FileInfo]` (xsd:date/time converted to `MM-DD-YYYY` and

@@ -40,31 +40,124 @@ pub(crate) fn parse_hex(text: &str) -> Option<Hex> {
     })
 }
 
-/// Why a hexBinary is not in the expected form, if it is not (`expected` lists allowed widths).
-pub(crate) fn hex_remark(what: &str, text: &str, hex: Hex, expected: &[usize]) -> Option<String> {
+/// What reading an attribute by its CiA 311 schema type gave.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum Reading<T> {
+    /// The value, written as its schema type has it.
+    Valid(T),
+    /// A value whose meaning is clear though it is not written as its schema type has it, and why
+    /// not, ending with what it was read as (`has a 0x prefix, ...; read as 2000h`).
+    Lenient(T, String),
+    /// No value of the type, and why not (`is not a hex number`).
+    Unreadable(String),
+}
+
+/// Reads an xsd:hexBinary number up to `max`: a `0x` prefix or an odd number of digits is lenient (the
+/// number is clear, the schema type is broken).
+pub(crate) fn read_hex(text: &str, max: u64) -> Reading<u64> {
+    let Some(hex) = parse_hex(text) else {
+        return Reading::Unreadable("is not a hex number".to_owned());
+    };
+    if hex.value > max {
+        return Reading::Unreadable(format!("is above {max:X}h"));
+    }
+    let broken = if hex.prefixed {
+        "has a `0x` prefix"
+    } else if hex.digits % 2 == 1 {
+        "has an odd number of digits"
+    } else {
+        return Reading::Valid(hex.value);
+    };
+    Reading::Lenient(
+        hex.value,
+        format!(
+            "{broken}, which xsd:hexBinary does not allow; read as {:X}h",
+            hex.value
+        ),
+    )
+}
+
+/// The remark on a valid hexBinary of an unusual width (`expected` lists the widths CiA 311 writes).
+pub(crate) fn hex_width_remark(what: &str, text: &str, expected: &[usize]) -> Option<String> {
+    let hex = parse_hex(text).filter(|h| !h.prefixed && h.digits % 2 == 0)?;
+    if expected.contains(&hex.digits) {
+        return None;
+    }
     let widths = expected
         .iter()
         .map(|w| w.to_string())
         .collect::<Vec<_>>()
         .join(" or ");
-    if hex.prefixed {
-        Some(format!(
-            "{what} `{text}` has a `0x` prefix, which xsd:hexBinary does not allow; read as 0x{:X}",
-            hex.value
-        ))
-    } else if hex.digits % 2 == 1 {
-        Some(format!(
-            "{what} `{text}` has an odd number of digits, which xsd:hexBinary does not allow; read as 0x{:X}",
-            hex.value
-        ))
-    } else if !expected.contains(&hex.digits) {
-        Some(format!(
-            "{what} `{text}` has {} hex digits where CiA 311 writes {widths}; read as 0x{:X}",
-            hex.digits, hex.value
-        ))
-    } else {
-        None
+    Some(format!(
+        "{what} `{text}` has {} hex digits where CiA 311 writes {widths}; read as 0x{:X}",
+        hex.digits, hex.value
+    ))
+}
+
+/// An XML Schema unsigned integer type CiA 311 gives attributes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Unsigned {
+    /// The schema's name for it.
+    pub name: &'static str,
+    /// The largest value.
+    pub max: u64,
+}
+
+/// xsd:unsignedByte (objectType, subNumber, granularity, nodeID, ...).
+pub(crate) const UNSIGNED_BYTE: Unsigned = Unsigned {
+    name: "unsignedByte",
+    max: 0xFF,
+};
+/// xsd:unsignedShort (nrOfRxPDO, nrOfTxPDO).
+pub(crate) const UNSIGNED_SHORT: Unsigned = Unsigned {
+    name: "unsignedShort",
+    max: 0xFFFF,
+};
+/// xsd:unsignedLong (networkNumber).
+pub(crate) const UNSIGNED_LONG: Unsigned = Unsigned {
+    name: "unsignedLong",
+    max: u64::MAX,
+};
+
+/// Reads an unsigned integer of `ty`: decimal digits with an optional `+` as the schema has it; `0x` hex
+/// is lenient (clear, but not the schema type); out of range or not a number is unreadable.
+pub(crate) fn read_unsigned(text: &str, ty: Unsigned) -> Reading<u64> {
+    let Some((value, hex)) = parse_unsigned(text.trim().strip_prefix('+').unwrap_or(text)) else {
+        return Reading::Unreadable(format!("is not an xsd:{} (a decimal number)", ty.name));
+    };
+    if value > ty.max {
+        return Reading::Unreadable(format!("is above {}, the largest xsd:{}", ty.max, ty.name));
     }
+    if hex {
+        Reading::Lenient(
+            value,
+            format!("is hexadecimal where xsd:{} is decimal; read as {value}", ty.name),
+        )
+    } else {
+        Reading::Valid(value)
+    }
+}
+
+/// Reads an xsd:boolean (`true`, `false`, `1`, `0`); another letter case is lenient.
+pub(crate) fn read_bool(text: &str) -> Reading<bool> {
+    match parse_bool(text) {
+        Some((value, false)) => Reading::Valid(value),
+        Some((value, true)) => Reading::Lenient(
+            value,
+            format!("is not an xsd:boolean (true, false, 1, 0); read as {value}"),
+        ),
+        None => Reading::Unreadable("is not an xsd:boolean (true, false, 1, 0)".to_owned()),
+    }
+}
+
+/// Whether a text is an xsd:NCName, the lexical form of xsd:ID and xsd:IDREF: a letter or `_`, then
+/// letters, digits, `.`, `-` and `_` (XML Namespaces 1.0 §3; non-ASCII letters and digits included).
+pub(crate) fn is_ncname(text: &str) -> bool {
+    let mut chars = text.chars();
+    chars
+        .next()
+        .is_some_and(|first| first == '_' || first.is_alphabetic())
+        && chars.all(|c| c.is_alphanumeric() || matches!(c, '.' | '-' | '_' | '\u{B7}'))
 }
 
 /// Reads an unsigned decimal; `0x` hex is accepted too (the flag says so).
@@ -223,6 +316,10 @@ impl Iec {
     }
 }
 
+/// Why a `parameter@access` is not one: the schema's tokens.
+const ACCESS_TOKENS: &str = "is not a CiA 311 parameter access (const, read, write, readWrite, readWriteInput, \
+     readWriteOutput, noAccess)";
+
 /// `parameter@access` (CiA 311 `ag_parameter`; default `read`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum ParamAccess {
@@ -236,6 +333,16 @@ pub(crate) enum ParamAccess {
 }
 
 impl ParamAccess {
+    const ALL: [ParamAccess; 7] = [
+        Self::Const,
+        Self::Read,
+        Self::Write,
+        Self::ReadWrite,
+        Self::ReadWriteInput,
+        Self::ReadWriteOutput,
+        Self::NoAccess,
+    ];
+
     pub(crate) fn parse(token: &str) -> Option<Self> {
         Some(match token.trim() {
             "const" => Self::Const,
@@ -247,6 +354,22 @@ impl ParamAccess {
             "noAccess" => Self::NoAccess,
             _ => return None,
         })
+    }
+
+    /// Reads `parameter@access`. Another letter case of a CiA 311 token, or the CANopenObject
+    /// accessType token of the same access (`rw` for readWrite, `rwr` for readWriteInput), is lenient:
+    /// the meaning is clear but the schema has only its own tokens.
+    pub(crate) fn read(token: &str) -> Reading<Self> {
+        if let Some(access) = Self::parse(token) {
+            return Reading::Valid(access);
+        }
+        let t = token.trim();
+        let by_case = Self::ALL.into_iter().find(|a| a.as_str().eq_ignore_ascii_case(t));
+        let by_eds = AccessType::parse(t).map(Self::from_access_type);
+        match by_case.or(by_eds) {
+            Some(access) => Reading::Lenient(access, format!("{ACCESS_TOKENS}; read as {}", access.as_str())),
+            None => Reading::Unreadable(ACCESS_TOKENS.to_owned()),
+        }
     }
 
     pub(crate) fn as_str(self) -> &'static str {
@@ -287,6 +410,18 @@ impl ParamAccess {
     }
 }
 
+/// Reads `CANopenObject@accessType` (ro, wo, rw, const); another CiA 306 access type or letter case
+/// (`rwr`, `RW`) is lenient.
+pub(crate) fn read_access_type(token: &str) -> Reading<AccessType> {
+    const TOKENS: &str = "is not a CiA 311 accessType (ro, wo, rw, const)";
+    let t = token.trim();
+    match AccessType::parse(t) {
+        Some(access) if matches!(t, "ro" | "wo" | "rw" | "const") => Reading::Valid(access),
+        Some(access) => Reading::Lenient(access, format!("{TOKENS}; read as {access}")),
+        None => Reading::Unreadable(TOKENS.to_owned()),
+    }
+}
+
 /// `CANopenObject@PDOmapping`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum PdoMapping {
@@ -307,6 +442,22 @@ impl PdoMapping {
             "RPDO" => Self::Rpdo,
             _ => return None,
         })
+    }
+
+    /// Reads `PDOmapping`; another letter case of a token (`tpdo`) is lenient.
+    pub(crate) fn read(token: &str) -> Reading<Self> {
+        const TOKENS: &str = "is not a CiA 311 PDOmapping (no, default, optional, TPDO, RPDO)";
+        if let Some(mapping) = Self::parse(token) {
+            return Reading::Valid(mapping);
+        }
+        let t = token.trim();
+        match [Self::No, Self::Default, Self::Optional, Self::Tpdo, Self::Rpdo]
+            .into_iter()
+            .find(|m| m.as_str().eq_ignore_ascii_case(t))
+        {
+            Some(mapping) => Reading::Lenient(mapping, format!("{TOKENS}; read as {}", mapping.as_str())),
+            None => Reading::Unreadable(TOKENS.to_owned()),
+        }
     }
 
     pub(crate) fn as_str(self) -> &'static str {
@@ -499,23 +650,58 @@ mod tests {
         assert_eq!(parse_hex("12G4"), None);
         assert_eq!(parse_hex(""), None);
         assert_eq!(parse_hex("0x"), None);
-        let h = |t| parse_hex(t).unwrap();
-        assert_eq!(hex_remark("subIndex", "01", h("01"), &[2]), None);
-        assert!(
-            hex_remark("subIndex", "0001", h("0001"), &[2])
-                .unwrap()
-                .contains("4 hex digits")
+        assert_eq!(hex_width_remark("subIndex", "01", &[2]), None);
+        assert!(hex_width_remark("subIndex", "0001", &[2]).is_some_and(|r| r.contains("4 hex digits")));
+        assert_eq!(
+            hex_width_remark("objFlags", "3", &[4]),
+            None,
+            "not hexBinary: read_hex says so"
         );
+    }
+
+    #[test]
+    fn hex_binary_breaks_are_lenient_and_junk_is_unreadable() {
+        assert_eq!(read_hex("1018", 0xFFFF), Reading::Valid(0x1018));
+        let lenient = |text, max| match read_hex(text, max) {
+            Reading::Lenient(value, why) => Some((value, why)),
+            _ => None,
+        };
+        assert!(lenient("201", 0xFFFF).is_some_and(|(v, why)| v == 0x201 && why.contains("odd number")));
+        assert!(lenient("0x2000", 0xFFFF).is_some_and(|(v, why)| v == 0x2000 && why.contains("`0x` prefix")));
+        assert!(matches!(read_hex("20G0", 0xFFFF), Reading::Unreadable(_)));
+        assert!(matches!(read_hex("0100", 0xFF), Reading::Unreadable(why) if why.contains("above FFh")));
+        assert!(matches!(read_hex("", 0xFF), Reading::Unreadable(_)));
+    }
+
+    #[test]
+    fn unsigned_types_booleans_and_ids() {
+        assert_eq!(read_unsigned("7", UNSIGNED_BYTE), Reading::Valid(7));
+        assert_eq!(read_unsigned(" +7 ", UNSIGNED_BYTE), Reading::Valid(7));
+        assert!(matches!(
+            read_unsigned("0x7", UNSIGNED_BYTE),
+            Reading::Lenient(7, _)
+        ));
+        assert!(matches!(
+            read_unsigned("256", UNSIGNED_BYTE),
+            Reading::Unreadable(_)
+        ));
+        assert_eq!(read_unsigned("65535", UNSIGNED_SHORT), Reading::Valid(65535));
         assert!(
-            hex_remark("objFlags", "3", h("3"), &[4])
-                .unwrap()
-                .contains("odd number")
+            matches!(read_unsigned("VAR", UNSIGNED_BYTE), Reading::Unreadable(why) if why.contains("unsignedByte"))
         );
-        assert!(
-            hex_remark("index", "0x1000", h("0x1000"), &[4])
-                .unwrap()
-                .contains("`0x` prefix")
-        );
+        assert!(matches!(
+            read_unsigned("-1", UNSIGNED_LONG),
+            Reading::Unreadable(_)
+        ));
+        assert_eq!(read_bool("1"), Reading::Valid(true));
+        assert!(matches!(read_bool("TRUE"), Reading::Lenient(true, _)));
+        assert!(matches!(read_bool("yes"), Reading::Unreadable(_)));
+        for id in ["UID_OBJ_1000", "_x", "p.1-a", "Größe"] {
+            assert!(is_ncname(id), "{id}");
+        }
+        for id in ["", "1000", "a b", "x:y", "-a"] {
+            assert!(!is_ncname(id), "{id}");
+        }
     }
 
     #[test]

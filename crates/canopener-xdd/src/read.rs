@@ -7,9 +7,10 @@
 use std::collections::{BTreeMap, HashMap};
 
 use canopener_eds::dcf::BITRATES_KBIT;
+use canopener_eds::lines::LineIndex;
 use canopener_eds::model::{Properties, int_of};
-use canopener_eds::{AccessType, Eds, Object, Origin, Span, SubObject};
-use roxmltree::{Document, Node};
+use canopener_eds::{Eds, Object, Origin, Span, SubObject};
+use roxmltree::{Attribute, Document, Node};
 
 use crate::device::{
     self, Commissioning, DynamicChannel, GeneralFeatures, MasterFeatures, XmlDevice, dummy_number,
@@ -19,11 +20,11 @@ use crate::entry::{self, Param, XmlEntry};
 use crate::error::XddError;
 use crate::locations::{Locations, SectionLocation};
 use crate::notation::{
-    BaudRate, Hex, Iec, ParamAccess, PdoMapping, hex_remark, parse_baud_rate, parse_bool, parse_hex,
-    parse_unsigned,
+    BaudRate, Iec, ParamAccess, PdoMapping, Reading, UNSIGNED_BYTE, UNSIGNED_LONG, UNSIGNED_SHORT, Unsigned,
+    hex_width_remark, is_ncname, parse_baud_rate, parse_hex, parse_unsigned, read_access_type, read_bool,
+    read_hex, read_unsigned,
 };
 use crate::side_channel::{FILE_PARAMETER_ID, is_side_channel};
-use crate::xml::Positions;
 use crate::{XddKind, XddLoaded, XddVersion};
 
 const XSI: &str = "http://www.w3.org/2001/XMLSchema-instance";
@@ -31,6 +32,8 @@ const CANOPEN_1_0: &str = "http://www.canopen.org/xml/1.0";
 const CANOPEN_1_1: &str = "http://www.canopen.org/xml/1.1";
 /// CANopenEditor's project wrappers (P20): `.nxdd` of CiA 311 v1.1 and the libedssharp v1.0 one.
 const PROJECT_WRAPPERS: [&str; 2] = ["CanOpenProject_1_1", "OpenEDSProject"];
+/// What happens to a key whose attribute could not be read: nothing stands in for it.
+const LEFT_OUT: &str = "its key is left out (no default stands in for a value that cannot be read)";
 /// How deep `dataTypeIDRef` chains are followed (a loop must not hang the reader).
 const MAX_TYPE_DEPTH: usize = 8;
 /// CANopenObject/CANopenSubObject attributes and the CiA 306 keys read from them.
@@ -96,7 +99,7 @@ const COMMISSIONING_KEYS: &[(&str, &str)] = &[
 pub(crate) fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
     let text = decode(bytes)?;
     let doc = parse(&text)?;
-    let positions = Positions::new(&text);
+    let positions = LineIndex::new(&text);
     let Containers {
         devices: containers,
         wrapper,
@@ -105,7 +108,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
         [only] => {
             let mut loaded = read_container(*only, &positions)?;
             if let Some(root) = wrapper {
-                let (line, column) = positions.at(doc.root_element().range().start);
+                let (line, column) = positions.position(doc.root_element().range().start);
                 loaded.diagnostics.insert(
                     0,
                     XddDiagnostic::new(
@@ -133,7 +136,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<XddLoaded, XddError> {
 pub(crate) fn read_project(bytes: &[u8]) -> Result<Vec<XddLoaded>, XddError> {
     let text = decode(bytes)?;
     let doc = parse(&text)?;
-    let positions = Positions::new(&text);
+    let positions = LineIndex::new(&text);
     let Containers {
         devices: containers,
         wrapper,
@@ -196,7 +199,7 @@ fn utf8(bytes: &[u8], encoding: &str) -> Result<String, XddError> {
         Err(e) => {
             let valid =
                 String::from_utf8_lossy(bytes.get(..e.valid_up_to()).unwrap_or_default()).into_owned();
-            let (line, column) = Positions::new(&valid).at(valid.len());
+            let (line, column) = LineIndex::new(&valid).position(valid.len());
             Err(XddError::Encoding {
                 encoding: encoding.to_owned(),
                 line,
@@ -212,10 +215,12 @@ fn parse(text: &str) -> Result<Document<'_>, XddError> {
         let message = e.to_string();
         let suffix = format!(" at {}:{}", pos.row, pos.col);
         let message = message.strip_suffix(&suffix).unwrap_or(&message).to_owned();
+        // roxmltree counts only LF as a line break; every other position of the file counts a lone CR too.
+        let (line, column) = LineIndex::new(text).position_of_lf_counted(pos.row, pos.col);
         XddError::Xml {
             message,
-            line: pos.row,
-            column: pos.col,
+            line,
+            column,
         }
     })
 }
@@ -228,7 +233,7 @@ struct Containers<'a, 'input> {
 
 fn containers<'a, 'input>(
     doc: &'a Document<'input>,
-    positions: &Positions<'_>,
+    positions: &LineIndex<'_>,
 ) -> Result<Containers<'a, 'input>, XddError> {
     let root = doc.root_element();
     let name = root.tag_name().name();
@@ -253,7 +258,7 @@ fn containers<'a, 'input>(
             wrapper: Some(name.to_owned()),
         });
     }
-    let (line, column) = positions.at(root.range().start);
+    let (line, column) = positions.position(root.range().start);
     Err(XddError::NotXdd {
         root: name.to_owned(),
         line,
@@ -274,7 +279,7 @@ struct Bodies<'a, 'input> {
 }
 
 struct Reader<'a, 'input> {
-    positions: &'a Positions<'a>,
+    positions: &'a LineIndex<'a>,
     ids: HashMap<&'a str, Node<'a, 'input>>,
     diagnostics: Vec<XddDiagnostic>,
     /// Attributes CiA 311 does not define, by (element, attribute): count and first offset.
@@ -285,7 +290,7 @@ struct Reader<'a, 'input> {
     locations: Locations,
 }
 
-fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<XddLoaded, XddError> {
+fn read_container(container: Node<'_, '_>, positions: &LineIndex<'_>) -> Result<XddLoaded, XddError> {
     let version = match container.tag_name().namespace() {
         Some(ns) if ns.contains("ethernet-powerlink") => {
             return Err(XddError::Powerlink {
@@ -377,7 +382,7 @@ fn read_container(container: Node<'_, '_>, positions: &Positions<'_>) -> Result<
 
 impl<'a, 'input> Reader<'a, 'input> {
     fn span(&self, offset: usize) -> Span {
-        let (line, column) = self.positions.at(offset);
+        let (line, column) = self.positions.position(offset);
         Span::new(line, column, 0)
     }
 
@@ -397,7 +402,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     fn push(&mut self, offset: usize, code: XddCode, message: String) {
-        let (line, column) = self.positions.at(offset);
+        let (line, column) = self.positions.position(offset);
         self.diagnostics
             .push(XddDiagnostic::new(code, Span::new(line, column, 0), message));
     }
@@ -425,7 +430,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     });
                 }
                 if !technology.is_empty() && !technology.eq_ignore_ascii_case("CANopen") {
-                    let (line, column) = self.positions.at(tech.range().start);
+                    let (line, column) = self.positions.position(tech.range().start);
                     return Err(XddError::NotCanopen {
                         technology: technology.to_owned(),
                         line,
@@ -448,7 +453,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 Some("ProfileBody_Device_CANopen") => Some(Role::Device),
                 Some("ProfileBody_CommunicationNetwork_CANopen") => Some(Role::Network),
                 Some(other) => {
-                    let (line, column) = self.positions.at(body.range().start);
+                    let (line, column) = self.positions.position(body.range().start);
                     return Err(XddError::NotCanopen {
                         technology: other.to_owned(),
                         line,
@@ -504,9 +509,21 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     fn index_ids(&mut self, container: Node<'a, 'input>) {
         for node in container.descendants().filter(Node::is_element) {
-            let Some(id) = node.attribute("uniqueID") else {
+            let Some(attr) = node.attribute_node("uniqueID") else {
                 continue;
             };
+            let id = attr.value();
+            if !is_ncname(id) {
+                self.push(
+                    attr.range().start,
+                    XddCode::SchemaType,
+                    format!(
+                        "{}: uniqueID `{id}` is not an xsd:ID (a name starting with a letter or `_`, \
+                         without spaces or colons); references to it are resolved anyway",
+                        node.tag_name().name()
+                    ),
+                );
+            }
             if self.ids.contains_key(id) {
                 self.push(
                     node.range().start,
@@ -631,8 +648,12 @@ impl<'a, 'input> Reader<'a, 'input> {
                     "NetworkManagement without CANopenGeneralFeatures".into(),
                 ),
             }
-            d.master = child(management, "CANopenMasterFeatures").map(|m| MasterFeatures {
-                boot_up_master: self.boolean(m, "bootUpMaster"),
+            d.master = child(management, "CANopenMasterFeatures").map(|m| {
+                let boot_up_master = self.boolean("CANopenMasterFeatures", m, "bootUpMaster");
+                MasterFeatures {
+                    boot_up_master: boot_up_master.flatten(),
+                    boot_up_master_unreadable: boot_up_master == Some(None),
+                }
             });
             if let Some(m) = child(management, "CANopenMasterFeatures") {
                 self.locate_section("deviceinfo", m, &[("bootUpMaster", "SimpleBootUpMaster")]);
@@ -803,7 +824,19 @@ impl<'a, 'input> Reader<'a, 'input> {
                 );
             }
         }
-        let granularity = self.number(g, "granularity");
+        let mut unreadable = Vec::new();
+        let mut number = |reader: &mut Self, name: &'static str, ty: Unsigned| {
+            let read = reader.number("CANopenGeneralFeatures", g, name, ty);
+            if read == Some(None) {
+                unreadable.push(name);
+            }
+            read.flatten()
+        };
+        let granularity = number(self, "granularity", UNSIGNED_BYTE);
+        let nr_of_rx_pdo = number(self, "nrOfRxPDO", UNSIGNED_SHORT);
+        let nr_of_tx_pdo = number(self, "nrOfTxPDO", UNSIGNED_SHORT);
+        let dynamic_channels = number(self, "dynamicChannels", UNSIGNED_BYTE);
+        let nr_of_ng_monitored_nodes = number(self, "NrOfNG_MonitoredNodes", UNSIGNED_BYTE);
         if g.attribute("granularity").is_none() {
             self.push(
                 g.range().start,
@@ -811,17 +844,30 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "CANopenGeneralFeatures lacks the required granularity; Granularity is left out".into(),
             );
         }
+        let mut boolean = |reader: &mut Self, name: &'static str| {
+            let read = reader.boolean("CANopenGeneralFeatures", g, name);
+            if read == Some(None) {
+                unreadable.push(name);
+            }
+            read.flatten()
+        };
+        let boot_up_slave = boolean(self, "bootUpSlave");
+        let layer_setting_service_slave = boolean(self, "layerSettingServiceSlave");
+        let group_messaging = boolean(self, "groupMessaging");
+        let ng_slave = boolean(self, "ngSlave");
+        let ng_master = boolean(self, "ngMaster");
         GeneralFeatures {
+            unreadable,
             granularity,
-            nr_of_rx_pdo: self.number(g, "nrOfRxPDO"),
-            nr_of_tx_pdo: self.number(g, "nrOfTxPDO"),
-            boot_up_slave: self.boolean(g, "bootUpSlave"),
-            layer_setting_service_slave: self.boolean(g, "layerSettingServiceSlave"),
-            group_messaging: self.boolean(g, "groupMessaging"),
-            dynamic_channels: self.number(g, "dynamicChannels"),
-            ng_slave: self.boolean(g, "ngSlave"),
-            ng_master: self.boolean(g, "ngMaster"),
-            nr_of_ng_monitored_nodes: self.number(g, "NrOfNG_MonitoredNodes"),
+            nr_of_rx_pdo,
+            nr_of_tx_pdo,
+            boot_up_slave,
+            layer_setting_service_slave,
+            group_messaging,
+            dynamic_channels,
+            ng_slave,
+            ng_master,
+            nr_of_ng_monitored_nodes,
         }
     }
 
@@ -851,17 +897,32 @@ impl<'a, 'input> Reader<'a, 'input> {
             (None, None) => None,
         };
         if let Some(a) = node_id {
-            match parse_unsigned(a.value()) {
-                Some((id, _)) if (1..=127).contains(&id) => {}
-                _ => self.push(
+            // A clear number written otherwise than as an xsd:unsignedByte breaks the schema (X016); whether
+            // the value is a node-ID at all is X035, which `eds check` leaves to C802, the DCF rule.
+            let id = match read_unsigned(a.value(), UNSIGNED_BYTE) {
+                Reading::Valid(id) => Some(id),
+                Reading::Lenient(id, why) => {
+                    let message = format!("deviceCommissioning: {} `{}` {why}", a.name(), a.value());
+                    self.push(a.range().start, XddCode::SchemaType, message);
+                    Some(id)
+                }
+                Reading::Unreadable(_) => None,
+            };
+            if !id.is_some_and(|id| (1..=127).contains(&id)) {
+                self.push(
                     a.range().start,
                     XddCode::Commissioning,
                     format!(
                         "nodeID `{}` is not a CANopen node-ID (1..=127); kept as written",
                         a.value()
                     ),
-                ),
+                );
             }
+        }
+        if let Some(a) = c.attribute_node("networkNumber") {
+            let reading = read_unsigned(a.value(), UNSIGNED_LONG);
+            let codes = (XddCode::SchemaType, XddCode::SchemaType);
+            self.typed("deviceCommissioning", a, reading, codes, "kept as written");
         }
         if let Some(a) = c.attribute_node("actualBaudRate") {
             let usable = matches!(parse_baud_rate(a.value()), Some((BaudRate::Kbps(k), _)) if k > 0);
@@ -882,54 +943,56 @@ impl<'a, 'input> Reader<'a, 'input> {
             actual_baud_rate: c.attribute("actualBaudRate").map(str::to_owned),
             network_number: c.attribute("networkNumber").map(str::to_owned),
             network_name: c.attribute("networkName").map(str::to_owned),
-            canopen_manager: self.boolean(c, "CANopenManager"),
+            canopen_manager: self.boolean("deviceCommissioning", c, "CANopenManager").flatten(),
         }
     }
 
-    fn boolean(&mut self, node: Node<'a, 'input>, name: &str) -> Option<bool> {
-        self.lenient_attribute(
-            node,
-            name,
-            parse_bool,
-            "is not an xsd:boolean (true, false)",
-            "is not a boolean",
-        )
+    /// An xsd:boolean attribute of an `element`: `None` when it is absent, `Some(None)` when it is
+    /// not a boolean (X023; its key is left out, the schema default does not stand in for it).
+    fn boolean(&mut self, element: &str, node: Node<'a, 'input>, name: &str) -> Option<Option<bool>> {
+        let attr = node.attribute_node(name)?;
+        let codes = (XddCode::UnknownToken, XddCode::UnknownToken);
+        Some(self.typed(element, attr, read_bool(attr.value()), codes, LEFT_OUT))
     }
 
-    fn number(&mut self, node: Node<'a, 'input>, name: &str) -> Option<u64> {
-        self.lenient_attribute(
-            node,
-            name,
-            parse_unsigned,
-            "is hexadecimal where CiA 311 has a decimal number",
-            "is not a number",
-        )
-    }
-
-    /// Reads an attribute with `parse`, which also says whether it had to be lenient; lenient and
-    /// unreadable values are reported (the latter fall back to the schema default).
-    fn lenient_attribute<T: std::fmt::Display>(
+    /// An unsigned integer attribute of an `element`, of the schema type `ty`: `None` when it is
+    /// absent, `Some(None)` when it is not a number of the type (X016; its key is left out).
+    fn number(
         &mut self,
+        element: &str,
         node: Node<'a, 'input>,
         name: &str,
-        parse: fn(&str) -> Option<(T, bool)>,
-        lenient: &str,
-        unreadable: &str,
-    ) -> Option<T> {
+        ty: Unsigned,
+    ) -> Option<Option<u64>> {
         let attr = node.attribute_node(name)?;
-        let (message, value) = match parse(attr.value()) {
-            Some((value, false)) => return Some(value),
-            Some((value, true)) => (
-                format!("{name} `{}` {lenient}; read as {value}", attr.value()),
-                Some(value),
-            ),
-            None => (
-                format!("{name} `{}` {unreadable}; the default applies", attr.value()),
-                None,
-            ),
-        };
-        self.push(attr.range().start, XddCode::UnknownToken, message);
-        value
+        let codes = (XddCode::SchemaType, XddCode::SchemaType);
+        Some(self.typed(element, attr, read_unsigned(attr.value(), ty), codes, LEFT_OUT))
+    }
+
+    /// Reports how an attribute of `subject` (the element, as messages name it) departs from its schema
+    /// type: a value read leniently is `codes.0`, saying what it was read as; an unreadable one is
+    /// `codes.1` with its `consequence`. The value, if one could be read.
+    fn typed<T>(
+        &mut self,
+        subject: &str,
+        attr: Attribute<'a, 'input>,
+        reading: Reading<T>,
+        codes: (XddCode, XddCode),
+        consequence: &str,
+    ) -> Option<T> {
+        let (name, value, at) = (attr.name(), attr.value(), attr.range().start);
+        match reading {
+            Reading::Valid(v) => Some(v),
+            Reading::Lenient(v, why) => {
+                self.push(at, codes.0, format!("{subject}: {name} `{value}` {why}"));
+                Some(v)
+            }
+            Reading::Unreadable(why) => {
+                let message = format!("{subject}: {name} `{value}` {why}; {consequence}");
+                self.push(at, codes.1, message);
+                None
+            }
+        }
     }
 
     /// Records attributes CiA 311 does not define for an element (reported once per kind).
@@ -982,7 +1045,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             );
             for node in elements(list, "CANopenObject") {
                 let index = self
-                    .index(node, "index", 0xFFFF, &[4])
+                    .index(node, "CANopenObject", "index", 0xFFFF, &[4])
                     .and_then(|i| u16::try_from(i).ok());
                 let Some(index) = index else { continue };
                 if objects.contains_key(&index) {
@@ -1020,7 +1083,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         ];
         self.note_attributes(node, &KNOWN);
         self.locate_entry((index, None), node);
-        let xml = self.entry(node, &format!("{index:04X}"));
+        let xml = self.entry(node, &format!("CANopenObject {index:04X}"));
         let disabled = xml.param.as_ref().is_some_and(|p| {
             p.properties
                 .iter()
@@ -1056,7 +1119,13 @@ impl<'a, 'input> Reader<'a, 'input> {
             ];
             self.note_attributes(sub_node, &SUB_KNOWN);
             let sub = self
-                .index(sub_node, "subIndex", 0xFF, &[2])
+                .index(
+                    sub_node,
+                    &format!("CANopenSubObject of {index:04X}"),
+                    "subIndex",
+                    0xFF,
+                    &[2],
+                )
                 .and_then(|s| u8::try_from(s).ok());
             let Some(sub) = sub else { continue };
             if subs.contains_key(&sub) {
@@ -1068,7 +1137,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 continue;
             }
             self.locate_entry((index, Some(sub)), sub_node);
-            let xml = self.entry(sub_node, &format!("{index:04X}sub{sub:X}"));
+            let xml = self.entry(sub_node, &format!("CANopenSubObject {index:04X}sub{sub:X}"));
             let mut notes = Vec::new();
             let mapped = entry::to_eds(&xml, &mut notes);
             self.place(sub_node.range().start, notes);
@@ -1080,20 +1149,29 @@ impl<'a, 'input> Reader<'a, 'input> {
                 },
             );
         }
+        // SubNumber counts the sub-objects without FFh, which holds the object's structure (CiA 306
+        // §4.6.3.2); subNumber is read as that count.
+        let counted = subs.keys().filter(|&&s| s != 0xFF).count();
         if let Some(attr) = node.attribute_node("subNumber") {
-            match parse_unsigned(attr.value()) {
-                Some((n, _)) if usize::try_from(n).is_ok_and(|n| n == subs.len()) => {}
-                Some((n, _)) => self.push(
+            let subject = format!("CANopenObject {index:04X}");
+            let reading = read_unsigned(attr.value(), UNSIGNED_BYTE);
+            let codes = (XddCode::SchemaType, XddCode::SchemaType);
+            match self.typed(&subject, attr, reading, codes, "ignored; the elements count") {
+                Some(n) if usize::try_from(n).is_ok_and(|n| n == counted) => {}
+                Some(n) => self.push(
                     attr.range().start,
                     XddCode::SubNumberMismatch,
-                    format!("subNumber {n} but object {index:04X} has {} CANopenSubObject elements; the elements count", subs.len()),
+                    format!(
+                        "subNumber {n} but object {index:04X} has {counted} CANopenSubObject elements{}; the elements count",
+                        if counted == subs.len() { "" } else { " besides sub-index FFh" }
+                    ),
                 ),
-                None => self.push(attr.range().start, XddCode::UnknownToken, format!("subNumber `{}` is not a number; ignored", attr.value())),
+                None => {}
             }
         }
         let mut attributes = mapped.attributes;
         if !subs.is_empty() {
-            attributes.sub_number = Some(subs.len().to_string());
+            attributes.sub_number = Some(counted.to_string());
         }
         Object {
             attributes,
@@ -1154,38 +1232,38 @@ impl<'a, 'input> Reader<'a, 'input> {
         self.locations.entries.insert(at, location);
     }
 
-    /// Reads an `index`/`subIndex` hexBinary; `None` (reported) when missing or out of range.
-    fn index(&mut self, node: Node<'a, 'input>, name: &str, max: u64, widths: &[usize]) -> Option<u64> {
+    /// Reads the `index`/`subIndex` hexBinary of `subject`; `None` (X010) when it is missing, not a hex
+    /// number or out of range. A clear number that is not xsd:hexBinary is read (X016).
+    fn index(
+        &mut self,
+        node: Node<'a, 'input>,
+        subject: &str,
+        name: &str,
+        max: u64,
+        widths: &[usize],
+    ) -> Option<u64> {
         let Some(attr) = node.attribute_node(name) else {
             self.push(
                 node.range().start,
                 XddCode::InvalidIndex,
-                format!("{} without {name}; skipped", node.tag_name().name()),
+                format!("{subject} without {name}; skipped"),
             );
             return None;
         };
-        match parse_hex(attr.value()) {
-            Some(h) if h.value <= max => {
-                self.hex_remark(name, attr.value(), h, widths, attr.range().start);
-                Some(h.value)
-            }
-            _ => {
-                self.push(
-                    attr.range().start,
-                    XddCode::InvalidIndex,
-                    format!(
-                        "{name} `{}` is not a hex number up to {max:X}; skipped",
-                        attr.value()
-                    ),
-                );
-                None
-            }
-        }
+        let codes = (XddCode::SchemaType, XddCode::InvalidIndex);
+        let value = self.typed(subject, attr, read_hex(attr.value(), max), codes, "skipped")?;
+        self.hex_width(subject, attr, widths);
+        Some(value)
     }
 
-    fn hex_remark(&mut self, name: &str, text: &str, hex: Hex, widths: &[usize], offset: usize) {
-        if let Some(message) = hex_remark(name, text, hex, widths) {
-            self.push(offset, XddCode::HexNotation, message);
+    /// X012 for a valid hexBinary of another width than CiA 311 writes.
+    fn hex_width(&mut self, subject: &str, attr: Attribute<'a, 'input>, widths: &[usize]) {
+        if let Some(remark) = hex_width_remark(attr.name(), attr.value(), widths) {
+            self.push(
+                attr.range().start,
+                XddCode::HexNotation,
+                format!("{subject}: {remark}"),
+            );
         }
     }
 
@@ -1210,105 +1288,44 @@ impl<'a, 'input> Reader<'a, 'input> {
                 format!("{what} has no objectType; ObjectType is left out"),
             ),
             Some(attr) => {
-                match parse_unsigned(attr.value()).and_then(|(v, hex)| Some((u8::try_from(v).ok()?, hex))) {
-                    Some((code, hex)) => {
-                        if hex {
-                            self.push(
-                                attr.range().start,
-                                XddCode::HexNotation,
-                                format!(
-                                    "objectType `{}` is hex where CiA 311 writes decimal; read as {code}",
-                                    attr.value()
-                                ),
-                            );
-                        }
-                        e.object_type = Some(code);
-                    }
-                    None => self.push(
-                        attr.range().start,
-                        XddCode::InvalidObjectType,
-                        format!(
-                            "objectType `{}` of {what} is not a number; ObjectType is left out",
-                            attr.value()
-                        ),
-                    ),
-                }
+                let reading = read_unsigned(attr.value(), UNSIGNED_BYTE);
+                let codes = (XddCode::SchemaType, XddCode::InvalidObjectType);
+                e.object_type = self
+                    .typed(what, attr, reading, codes, "ObjectType is left out")
+                    .and_then(|code| u8::try_from(code).ok());
             }
         }
-        if let Some(attr) = node
-            .attribute_node("dataType")
-            .filter(|a| !a.value().trim().is_empty())
-        {
-            match parse_hex(attr.value()).filter(|h| h.value <= 0xFFFF) {
-                Some(h) => {
-                    self.hex_remark("dataType", attr.value(), h, &[2, 4], attr.range().start);
-                    e.data_type = u16::try_from(h.value).ok();
-                }
-                None => self.push(
-                    attr.range().start,
-                    XddCode::InvalidDataType,
-                    format!(
-                        "dataType `{}` of {what} is not a hex data type index; ignored",
-                        attr.value()
-                    ),
-                ),
+        // Empty dataType, accessType and objFlags are libedssharp's way of saying "not set" (P12).
+        let stated = |name: &str| node.attribute_node(name).filter(|a| !a.value().trim().is_empty());
+        if let Some(attr) = stated("dataType") {
+            let codes = (XddCode::SchemaType, XddCode::InvalidDataType);
+            let reading = read_hex(attr.value(), 0xFFFF);
+            e.data_type = self
+                .typed(what, attr, reading, codes, "ignored")
+                .and_then(|t| u16::try_from(t).ok());
+            if e.data_type.is_some() {
+                self.hex_width(what, attr, &[2, 4]);
             }
         }
-        if let Some(attr) = node
-            .attribute_node("accessType")
-            .filter(|a| !a.value().trim().is_empty())
-        {
-            let value = attr.value().trim();
-            match AccessType::parse(value) {
-                Some(t) => {
-                    if !matches!(value, "ro" | "wo" | "rw" | "const") {
-                        self.push(
-                            attr.range().start,
-                            XddCode::UnknownToken,
-                            format!(
-                                "accessType `{value}` is not one of CiA 311's ro, wo, rw, const; read as {t}"
-                            ),
-                        );
-                    }
-                    e.access = Some(t);
-                }
-                None => self.push(
-                    attr.range().start,
-                    XddCode::UnknownToken,
-                    format!("accessType `{value}` of {what} is not an access type; ignored"),
-                ),
-            }
+        if let Some(attr) = stated("accessType") {
+            let codes = (XddCode::UnknownToken, XddCode::UnknownToken);
+            let reading = read_access_type(attr.value());
+            e.access = self.typed(what, attr, reading, codes, "the object's access is not known");
+            e.access_unreadable = e.access.is_none();
         }
         if let Some(attr) = node.attribute_node("PDOmapping") {
-            match PdoMapping::parse(attr.value()) {
-                Some(m) => e.pdo_mapping = Some(m),
-                None => self.push(
-                    attr.range().start,
-                    XddCode::UnknownToken,
-                    format!(
-                        "PDOmapping `{}` of {what} is not no, default, optional, TPDO or RPDO; ignored",
-                        attr.value()
-                    ),
-                ),
-            }
+            let codes = (XddCode::UnknownToken, XddCode::UnknownToken);
+            let reading = PdoMapping::read(attr.value());
+            e.pdo_mapping = self.typed(what, attr, reading, codes, "PDOMapping is left out");
         }
-        if let Some(attr) = node
-            .attribute_node("objFlags")
-            .filter(|a| !a.value().trim().is_empty())
-        {
-            match parse_hex(attr.value()).and_then(|h| Some((h, u32::try_from(h.value).ok()?))) {
-                Some((h, flags)) => {
-                    self.hex_remark("objFlags", attr.value(), h, &[4], attr.range().start);
-                    e.obj_flags = Some(flags);
-                }
-                None => self.push(
-                    attr.range().start,
-                    XddCode::UnknownToken,
-                    format!(
-                        "objFlags `{}` of {what} is not a 32-bit hex number; ignored",
-                        attr.value()
-                    ),
-                ),
+        if let Some(attr) = stated("objFlags") {
+            let codes = (XddCode::SchemaType, XddCode::SchemaType);
+            let reading = read_hex(attr.value(), u64::from(u32::MAX));
+            e.obj_flags = self
+                .typed(what, attr, reading, codes, "ObjFlags is left out")
+                .and_then(|f| u32::try_from(f).ok());
+            if e.obj_flags.is_some() {
+                self.hex_width(what, attr, &[4]);
             }
         }
         let value = |name: &str| node.attribute(name).map(str::to_owned);
@@ -1328,14 +1345,14 @@ impl<'a, 'input> Reader<'a, 'input> {
                     attr.range().start,
                     XddCode::UnresolvedReference,
                     format!(
-                        "uniqueIDRef `{id}` of {what} names a {}, not a parameter; ignored",
+                        "{what}: uniqueIDRef `{id}` names a {}, not a parameter; ignored",
                         other.tag_name().name()
                     ),
                 ),
                 None => self.push(
                     attr.range().start,
                     XddCode::UnresolvedReference,
-                    format!("uniqueIDRef `{id}` of {what} names no parameter; its data is missing"),
+                    format!("{what}: uniqueIDRef `{id}` names no parameter; its data is missing"),
                 ),
             }
         }
@@ -1398,27 +1415,35 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     fn parameter(&mut self, node: Node<'a, 'input>) -> Param {
         let mut p = Param::default();
+        let subject = format!("parameter {}", node.attribute("uniqueID").unwrap_or_default());
         if let Some(attr) = node.attribute_node("access") {
-            match ParamAccess::parse(attr.value()) {
-                Some(a) => p.access = Some(a),
-                None => self.push(
-                    attr.range().start,
-                    XddCode::UnknownToken,
-                    format!(
-                        "access `{}` is not a CiA 311 access; `read` applies",
-                        attr.value()
-                    ),
-                ),
-            }
+            let codes = (XddCode::UnknownToken, XddCode::UnknownToken);
+            let consequence = "AccessType is left out (the default `read` does not stand in for it)";
+            p.access = self.typed(
+                &subject,
+                attr,
+                ParamAccess::read(attr.value()),
+                codes,
+                consequence,
+            );
+            p.access_unreadable = p.access.is_none();
         }
         p.label = label(node);
         for c in node.children().filter(Node::is_element) {
             let name = c.tag_name().name();
             if let Some(iec) = Iec::from_name(name) {
                 p.simple_type.get_or_insert(iec);
-            } else if name == "dataTypeIDRef"
-                && let Some(id) = c.attribute("uniqueIDRef")
-            {
+            } else if name == "dataTypeIDRef" {
+                let Some(id) = c.attribute("uniqueIDRef") else {
+                    self.push(
+                        c.range().start,
+                        XddCode::UnresolvedReference,
+                        format!(
+                            "{subject}: dataTypeIDRef without the required uniqueIDRef names no data type"
+                        ),
+                    );
+                    continue;
+                };
                 let resolved = self.resolve_type(id, c, 0);
                 if p.simple_type.is_none() {
                     p.simple_type = resolved;
@@ -1426,12 +1451,8 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
         }
         p.denotation = child(node, "denotation").and_then(label);
-        p.actual_value = child(node, "actualValue")
-            .and_then(|v| v.attribute("value"))
-            .map(str::to_owned);
-        p.default_value = child(node, "defaultValue")
-            .and_then(|v| v.attribute("value"))
-            .map(str::to_owned);
+        p.actual_value = self.value_of(&subject, node, "actualValue");
+        p.default_value = self.value_of(&subject, node, "defaultValue");
         if let Some(allowed) = child(node, "allowedValues") {
             (p.min, p.max) = limits(allowed);
         }
@@ -1447,6 +1468,21 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
         }
         p
+    }
+
+    /// The required `value` attribute of a parameter's `defaultValue` or `actualValue` element; an
+    /// element without it is X003 and gives no value.
+    fn value_of(&mut self, subject: &str, node: Node<'a, 'input>, element: &str) -> Option<String> {
+        let e = child(node, element)?;
+        let value = e.attribute("value");
+        if value.is_none() {
+            self.push(
+                e.range().start,
+                XddCode::MissingPart,
+                format!("{subject}: {element} without the required value attribute; no value is read"),
+            );
+        }
+        value.map(str::to_owned)
     }
 
     fn report_unmapped_properties(&mut self) {
@@ -1748,6 +1784,21 @@ mod tests {
             }
             other => panic!("expected a malformed-XML error, got {other:?}"),
         }
+        // A lone CR ends a line here as everywhere (canopener_eds::lines), though the XML parser
+        // counts only LF.
+        let old_mac = text.replace('\n', "\r");
+        assert!(
+            matches!(
+                read(old_mac.as_bytes()),
+                Err(XddError::Xml {
+                    line: 3,
+                    column: 1,
+                    ..
+                })
+            ),
+            "{:?}",
+            read(old_mac.as_bytes()).err()
+        );
         assert!(matches!(read(b""), Err(XddError::Xml { .. })));
         assert!(matches!(
             read(&[0xFF, 0x00, 0x41]),
@@ -1828,9 +1879,83 @@ mod tests {
         assert_eq!(identity.subs[&1].attributes.data_type.as_deref(), Some("0x0007"));
         assert_eq!(identity.subs[&1].attributes.obj_flags.as_deref(), Some("0x3"));
         let count = |code| loaded.diagnostics.iter().filter(|d| d.code == code).count();
-        assert_eq!(count(XddCode::HexNotation), 5, "{:#?}", loaded.diagnostics);
+        // `0x1018`, sub `1`, `0x0007` and objFlags `3` are not xsd:hexBinary; `0000` is, of an odd width.
+        assert_eq!(count(XddCode::SchemaType), 4, "{:#?}", loaded.diagnostics);
+        assert_eq!(count(XddCode::HexNotation), 1, "{:#?}", loaded.diagnostics);
         assert_eq!(count(XddCode::SubNumberMismatch), 1);
         assert!(loaded.eds.commissioning.is_none());
+    }
+
+    /// Issue 22: a value outside its schema type is an error naming element and attribute; the model
+    /// gets the value when it is clear and nothing otherwise, never the schema default.
+    #[test]
+    fn values_outside_their_schema_type_are_errors_and_never_defaults() {
+        let read_with = |from: &str, to: &str| {
+            assert!(V11.contains(from), "{from}");
+            read_ok(&V11.replace(from, to))
+        };
+        let errors = |loaded: &XddLoaded| -> Vec<(XddCode, String)> {
+            loaded
+                .diagnostics
+                .iter()
+                .filter(|d| d.severity == canopener_eds::Severity::Error)
+                .map(|d| (d.code, d.message.clone()))
+                .collect()
+        };
+        let hb = r#"uniqueID="UID_OBJ_1017" access="readWrite""#;
+        let rw = read_with(hb, r#"uniqueID="UID_OBJ_1017" access="rw""#);
+        assert_eq!(
+            rw.eds.objects[&0x1017].attributes.access_type.as_deref(),
+            Some("rw")
+        );
+        assert_eq!(
+            errors(&rw),
+            [(
+                XddCode::UnknownToken,
+                "parameter UID_OBJ_1017: access `rw` is not a CiA 311 parameter access (const, read, write, \
+                 readWrite, readWriteInput, readWriteOutput, noAccess); read as readWrite"
+                    .to_owned()
+            )]
+        );
+        let bogus = read_with(hb, r#"uniqueID="UID_OBJ_1017" access="full""#);
+        assert_eq!(
+            bogus.eds.objects[&0x1017].attributes.access_type, None,
+            "not `read`"
+        );
+        assert_eq!(errors(&bogus).len(), 1);
+        let yes = read_with(r#"PDOmapping="no""#, r#"PDOmapping="yes""#);
+        assert_eq!(
+            yes.eds.objects[&0x1017].attributes.pdo_mapping, None,
+            "neither 0 nor 1"
+        );
+        assert!(
+            errors(&yes)[0]
+                .1
+                .starts_with("CANopenObject 1017: PDOmapping `yes` is not")
+        );
+        let odd = read_with(r#"index="1017""#, r#"index="201""#);
+        assert!(odd.eds.objects.contains_key(&0x0201));
+        assert_eq!(errors(&odd)[0].0, XddCode::SchemaType);
+        let wide = read_with(
+            r#"index="1017" name="Producer heartbeat time" objectType="7""#,
+            r#"index="1017" name="Producer heartbeat time" objectType="300""#,
+        );
+        assert_eq!(wide.eds.objects[&0x1017].attributes.object_type, None);
+        assert_eq!(errors(&wide)[0].0, XddCode::InvalidObjectType);
+        let slave = read_with(
+            r#"granularity="8""#,
+            r#"granularity="8" bootUpSlave="yes" nrOfRxPDO="0x2""#,
+        );
+        let info = &slave.eds.device_info;
+        assert_eq!(info.simple_boot_up_slave, None, "not the default 0");
+        assert_eq!(info.nr_of_rx_pdo.as_deref(), Some("2"));
+        assert_eq!(
+            info.group_messaging.as_deref(),
+            Some("0"),
+            "absent: the schema default"
+        );
+        let codes: Vec<XddCode> = errors(&slave).into_iter().map(|(c, _)| c).collect();
+        assert_eq!(codes, [XddCode::UnknownToken, XddCode::SchemaType]);
     }
 
     #[test]

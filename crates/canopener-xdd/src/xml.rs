@@ -1,5 +1,5 @@
 //! The small amount of XML text handling the crate needs: escaping for the writer, characters XML 1.0
-//! cannot carry, line/column positions for the reader, and an indenting element writer.
+//! cannot carry, and an indenting element writer.
 //!
 //! The writer emits a fixed, known set of names, so a full XML serialiser would add a dependency for
 //! little gain; escaping is the only delicate part and is tested here (XML 1.0 §2.2, §2.4, §3.3.3).
@@ -61,46 +61,6 @@ pub(crate) fn percent_decode(text: &str) -> Option<String> {
 /// Whether text needs [`percent_encode`] to survive as an attribute value.
 pub(crate) fn needs_encoding(text: &str) -> bool {
     text.chars().any(|c| !is_xml_char(c))
-}
-
-/// Maps byte offsets of a text to 1-based line and character column.
-#[derive(Debug)]
-pub(crate) struct Positions<'a> {
-    text: &'a str,
-    line_starts: Vec<usize>,
-}
-
-impl<'a> Positions<'a> {
-    /// Indexes the line starts of `text` (LF, CR LF and bare CR end a line).
-    pub(crate) fn new(text: &'a str) -> Self {
-        let bytes = text.as_bytes();
-        let mut line_starts = vec![0];
-        for (i, &b) in bytes.iter().enumerate() {
-            let ends_line = b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n'));
-            if ends_line {
-                line_starts.push(i + 1);
-            }
-        }
-        Self { text, line_starts }
-    }
-
-    /// The 1-based line and column of a byte offset (clamped to the text).
-    pub(crate) fn at(&self, offset: usize) -> (u32, u32) {
-        let offset = offset.min(self.text.len());
-        let line = self
-            .line_starts
-            .partition_point(|&s| s <= offset)
-            .saturating_sub(1);
-        let start = self.line_starts.get(line).copied().unwrap_or(0);
-        let column = self
-            .text
-            .get(start..offset)
-            .map_or(offset - start, |s| s.chars().count());
-        (
-            u32::try_from(line + 1).unwrap_or(u32::MAX),
-            u32::try_from(column + 1).unwrap_or(u32::MAX),
-        )
-    }
 }
 
 /// An indenting writer of elements with escaped attributes.
@@ -196,19 +156,6 @@ mod tests {
         assert_eq!(percent_decode(&encoded).as_deref(), Some(original));
         assert_eq!(percent_decode("bad %zz12"), None);
         assert_eq!(percent_decode("short %12"), None);
-    }
-
-    #[test]
-    fn positions_count_lines_and_characters() {
-        let text = "ab\nµc\r\nd\re";
-        let p = Positions::new(text);
-        assert_eq!(p.at(0), (1, 1));
-        assert_eq!(p.at(1), (1, 2));
-        assert_eq!(p.at(3), (2, 1));
-        assert_eq!(p.at(5), (2, 2), "µ is one character of two bytes");
-        assert_eq!(p.at(8), (3, 1));
-        assert_eq!(p.at(10), (4, 1));
-        assert_eq!(p.at(999), (4, 2));
     }
 
     #[test]

@@ -480,6 +480,34 @@ Fix: describe the missing [xxxxsubN] sections or lower sub 0.",
     fixable: false,
 };
 
+const MAPPED_DIRECTION_UNCLEAR: CheckInfo = CheckInfo {
+    code: "C727",
+    slug: "mapped-direction-unclear",
+    severity: Severity::Warning,
+    group: Group::Cia301,
+    title: "Default PDO mappings map entries whose access says the direction",
+    reference: &[57],
+    spec: "CiA 306 V1.3 §4.6.3.2 (AccessType rwr, rww); CiA 301 PDO mapping; CANchkEDS warning 5",
+    explanation: "\
+An active default mapping entry (1..n of 1600h-17FFh or 1A00h-1BFFh, n = sub 0) maps an entry whose \
+AccessType is rw: the PDO gives it a direction (an RPDO writes it, so it is an output and should be \
+rww; a TPDO reads it, an input, rwr) that its own description does not state. CANchkEDS reports it \
+as warning 5 (\"Access type in section [6411sub1] has no clear mapping direction concerning PDO \
+section [1601sub1]\"), 6 times on CANopenNode's demoDevice.eds, the same 6 pairs canopener \
+reports; the mapped entry itself is C518. In the corpus: 104 mapping entries in 28 of the 148 EDS/DCF \
+files.
+
+A tool that reads the direction from the access type (rwr/rww) and one that reads it from the \
+default mapping describe the same object differently, and a CiA 311 export cannot say which PDO \
+the object belongs to.
+
+It is a warning: rw entries may be mapped in either direction, so the mapping is valid; the file \
+only fails to say what its own default mapping shows.
+
+Fix: give the mapped entry the access its PDO implies: rww for an RPDO, rwr for a TPDO.",
+    fixable: false,
+};
+
 const SDO_SERVER: CheckInfo = CheckInfo {
     code: "C730",
     slug: "sdo-server-cob-id",
@@ -525,6 +553,7 @@ pub(crate) const CHECKS: &[CheckInfo] = &[
     MAPPING_TOO_LONG,
     MAPPING_GRANULARITY,
     MAPPING_UNDESCRIBED,
+    MAPPED_DIRECTION_UNCLEAR,
     SDO_SERVER,
 ];
 
@@ -753,7 +782,7 @@ fn error_control(cx: &Context<'_>, out: &mut Vec<Finding>) {
         "neither 1017h (producer heartbeat time) nor 100Ch and 100Dh (node guarding) are described{guarding}"
     );
     let list = SectionKind::ObjectList(ObjectListKind::Optional);
-    let finding = if cx.section(list).is_some() {
+    let finding = if cx.has_section(list) {
         cx.finding(&ERROR_CONTROL, list, None, message)
     } else {
         cx.file_finding(&ERROR_CONTROL, message)
@@ -1481,6 +1510,20 @@ fn check_mapping_entry(at: &EntryAt<'_, '_>, out: &mut Vec<Finding>, direction: 
                     }
                 ),
                 "correct the AccessType or map the object into a PDO of the other direction",
+            ));
+        }
+        if access == AccessType::Rw && attributes.pdo_mapping() {
+            let (meant, role) = match direction {
+                Direction::Receive => ("rww", "an output: an RPDO writes it"),
+                Direction::Transmit => ("rwr", "an input: a TPDO reads it"),
+            };
+            out.push(at.finding(
+                &MAPPED_DIRECTION_UNCLEAR,
+                format!(
+                    "maps {name}, whose AccessType rw has no clear mapping direction; this PDO makes it \
+                     {role} ({meant})"
+                ),
+                &format!("write AccessType={meant} in [{}]", name.trim_end_matches('h')),
             ));
         }
     }

@@ -313,7 +313,7 @@ const NAME_KEYS: [&str; 3] = ["VendorName", "ProductName", "OrderCode"];
 /// Runs the checks of this group.
 pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     // A missing [DeviceInfo] is P029; its keys are not reported again one by one.
-    if cx.section(SectionKind::DeviceInfo).is_none() {
+    if !cx.has_section(SectionKind::DeviceInfo) {
         return;
     }
     let info = &cx.eds.device_info;
@@ -550,7 +550,7 @@ fn check_pdo_counts(cx: &Context<'_>, out: &mut Vec<Finding>, info: &DeviceInfo)
 fn check_dynamic_channels(cx: &Context<'_>, out: &mut Vec<Finding>, info: &DeviceInfo) {
     let text = present(info.dynamic_channels_supported.as_deref());
     let announced = text.and_then(strict_int).is_some_and(|n| n != 0);
-    let described = cx.section(SectionKind::DynamicChannels).is_some();
+    let described = cx.has_section(SectionKind::DynamicChannels);
     if announced && !described {
         out.push(
             cx.finding(

@@ -290,7 +290,7 @@ const KNOWN_EDS_VERSIONS: [&str; 2] = ["3.0", "4.0"];
 /// Runs the checks of this group.
 pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     // A missing [FileInfo] is P029; reporting each of its keys again would only repeat it.
-    if cx.section(SectionKind::FileInfo).is_none() {
+    if !cx.has_section(SectionKind::FileInfo) {
         return;
     }
     let info = &cx.eds.file_info;

@@ -280,7 +280,7 @@ pub(crate) fn run(cx: &Context<'_>, out: &mut Vec<Finding>) {
     }
     for (&x, module) in &cx.eds.modules {
         let info_kind = SectionKind::Module(x, ModulePart::Info);
-        if cx.section(info_kind).is_some() {
+        if cx.has_section(info_kind) {
             check_module_info(cx, out, x, module);
         }
         check_lists(cx, out, x, module);
@@ -311,7 +311,7 @@ fn check_supported(cx: &Context<'_>, out: &mut Vec<Finding>, supported: &Propert
     };
     // `count` is at most 0xFFFF, checked above.
     let missing: Vec<u32> = (1..=u32::try_from(count).unwrap_or(0))
-        .filter(|&x| cx.section(SectionKind::Module(x, ModulePart::Info)).is_none())
+        .filter(|&x| !cx.has_section(SectionKind::Module(x, ModulePart::Info)))
         .collect();
     // A count far above the modules described would give thousands of findings; a few name the
     // problem, one more sums up the rest.

@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 
 use canopener_eds::model::{Attributes, Object, Properties, int_of};
 use canopener_eds::section_name::{Companion, SectionKind};
-use canopener_eds::{DataType, ObjectType, Origin, Severity, TypeKind};
+use canopener_eds::{AccessType, DataType, ObjectType, Origin, Severity, TypeKind};
 
 use crate::check_info::{CheckInfo, Group};
 use crate::context::{Context, object_kind};
@@ -158,6 +158,36 @@ It is a warning, not an error: CiA 301 does not forbid mapping a fixed-length st
 cannot say which length is meant.
 
 Fix: set PDOMapping=0, or map the data through fixed-size integer objects.",
+    fixable: false,
+};
+
+const MAPPING_DIRECTION_UNCLEAR: CheckInfo = CheckInfo {
+    code: "C518",
+    slug: "mapping-direction-unclear",
+    severity: Severity::Warning,
+    group: Group::Objects,
+    title: "PDO-mappable read/write entries say their direction (rww or rwr, not rw)",
+    reference: &[33],
+    spec: "CiA 306 V1.3 §4.6.3.2 (AccessType rwr, rww); CANchkEDS warning 4",
+    explanation: "\
+CiA 306 gives read/write entries three access types: rw, rwr (\"read/write on process input\", \
+which a TPDO transmits) and rww (\"read/write on process output\", which an RPDO writes). This check \
+reports an entry with AccessType=rw and PDOMapping=1: it may be mapped, but the file does not say \
+whether it is process input or output. CiA's EDS checker CANchkEDS, which the conformance test runs \
+as its first case, reports the same as warning 4 (\"Access type in section [6200sub1] has no clear \
+mapping direction\"): on CANopenNode's demoDevice.eds it is 36 of its 43 warnings, and canopener \
+reports the same 36 entries. In the corpus it fires on 1398 entries of 65 of the 148 EDS/DCF files \
+(`tests/mapping_direction_corpus.rs` keeps the count per file), every one an rw entry with \
+PDOMapping=1: servo drives' parameters (516 in one ASDA-A3 file), CANopenNode's outputs, test files.
+
+Configuration tools that lay out process data from the EDS cannot tell whether to offer the entry \
+for a TPDO or an RPDO, and a CiA 311 export loses the direction (CANopenEditor writes PDOmapping \
+`optional`).
+
+It is a warning, not an error: rw entries may be mapped in both directions (CiA 301), and a device \
+is right to accept that; the file only leaves the direction unsaid.
+
+Fix: write AccessType=rww for outputs an RPDO writes (6200h, 6411h), rwr for inputs a TPDO reads.",
     fixable: false,
 };
 
@@ -453,6 +483,7 @@ pub(crate) const CHECKS: &[CheckInfo] = &[
     PDO_MAPPING_NOT_BOOLEAN,
     PDO_MAPPING_ON_DOMAIN,
     PDO_MAPPING_ON_STRING,
+    MAPPING_DIRECTION_UNCLEAR,
     SUB_OF_SIMPLE_OBJECT,
     SUB0_MISSING,
     SUB0_NOT_UNSIGNED8,
@@ -640,7 +671,8 @@ fn check_pdo_mapping(cx: &Context<'_>, out: &mut Vec<Finding>, kind: SectionKind
     }
     let data_type = a.data_type().map(|t| cx.eds.resolve_data_type(t));
     let kind_of = data_type.and_then(DataType::kind);
-    if object_type == Some(ObjectType::Domain) || kind_of == Some(TypeKind::Domain) {
+    let domain = object_type == Some(ObjectType::Domain) || kind_of == Some(TypeKind::Domain);
+    if domain {
         out.push(
             cx.finding(
                 &PDO_MAPPING_ON_DOMAIN,
@@ -661,6 +693,19 @@ fn check_pdo_mapping(cx: &Context<'_>, out: &mut Vec<Finding>, kind: SectionKind
                 format!("PDOMapping=1 on a {t}, whose mapped length the EDS cannot state"),
             )
             .with_help("set PDOMapping=0 unless the device maps a fixed length of this string"),
+        );
+    }
+    // A DOMAIN cannot be mapped at all (C505): its direction is beside the point.
+    if a.access_type() == Some(AccessType::Rw) && !domain {
+        out.push(
+            cx.finding(
+                &MAPPING_DIRECTION_UNCLEAR,
+                kind,
+                Some("AccessType"),
+                "AccessType=rw with PDOMapping=1 has no clear mapping direction: rww would say an RPDO \
+                 writes it, rwr that a TPDO reads it",
+            )
+            .with_help("write AccessType=rww for an output, AccessType=rwr for an input"),
         );
     }
 }

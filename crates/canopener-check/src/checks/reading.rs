@@ -164,7 +164,7 @@ pub(crate) fn object_finding(
     }
     if let Some(s) = sub {
         let kind = SectionKind::Sub(index, s);
-        if cx.section(kind).is_some() {
+        if cx.has_section(kind) {
             return cx.finding(info, kind, key, message);
         }
         if origin == Some(Origin::CompactSubObj) {
@@ -177,7 +177,7 @@ pub(crate) fn object_finding(
         }
     }
     let kind = SectionKind::Object(index);
-    if cx.section(kind).is_some() {
+    if cx.has_section(kind) {
         return cx.finding(info, kind, if sub.is_none() { key } else { None }, message);
     }
     cx.file_finding(info, message)

@@ -148,15 +148,15 @@ Fix: remove or renumber the duplicate.",
         slug: "hex-notation",
         severity: Severity::Info,
         group: Group::Xml,
-        title: "hexBinary values are written as CiA 311 writes them",
+        title: "hexBinary values have the width CiA 311 writes",
         reference: &[],
         spec: "CiA 311 V1.1 Annex A.1.4 (hexBinary)",
         explanation: "\
-A hexBinary value (index, subIndex, dataType, objFlags) has a `0x` prefix, an odd number of digits or an unusual width, or objectType is written in hex; canopener read it leniently.
+A hexBinary value (index, subIndex, dataType, objFlags) is valid xsd:hexBinary but not of the width CiA 311's annotations give: `0000` for a subIndex (old libedssharp), eight digits for objFlags (Faulhaber). canopener read the number.
 
-Only a hint: xsd:hexBinary has no `0x` and an even number of digits, so a validating reader rejects the file, but the intent is clear.
+Only a hint: the schema type is xsd:hexBinary, which any even number of digits satisfies; only readers that insist on the width (CANopenEditor reads a subIndex of exactly one byte) differ. A `0x` prefix or an odd number of digits is not xsd:hexBinary at all: that is X016.
 
-Fix: write `1018`, `01`, `0007`, `0001` without prefix.",
+Fix: write the index with four digits (`1018`), the sub-index and an inline dataType with two (`01`, `07`), objFlags with four (`0001`).",
         fixable: false,
     },
     CheckInfo {
@@ -205,6 +205,22 @@ An object or sub-object has no `objectType` or one that is not a number; ObjectT
 An error because the attribute is required and the object code decides how the entry is read (VAR, ARRAY, RECORD).
 
 Fix: write the CiA 301 object code in decimal: 7 VAR, 8 ARRAY, 9 RECORD.",
+        fixable: false,
+    },
+    CheckInfo {
+        code: "X016",
+        slug: "schema-type",
+        severity: Severity::Error,
+        group: Group::Xml,
+        title: "numbers, hexBinary values and IDs have their CiA 311 schema type",
+        reference: &[],
+        spec: "CiA 311 V1.1 Annex A.1.2-A.1.4 (xsd:hexBinary, xsd:unsignedByte/Short/Long, xsd:ID)",
+        explanation: "\
+An attribute the reader interprets holds a value that is not of its CiA 311 schema type: an `index`, `subIndex`, `dataType` or `objFlags` that is not xsd:hexBinary (`0x2000` with a prefix, `201` with an odd number of digits, or no hex number at all for objFlags); an `objectType`, `subNumber`, `granularity`, `dynamicChannels` (xsd:unsignedByte), `nrOfRxPDO`/`nrOfTxPDO` (xsd:unsignedShort) or `networkNumber` (xsd:unsignedLong) written in hex, out of range or not a number; a commissioning `nodeID` written in hex; a `uniqueID` that is no xsd:ID (NCName). The message names the element and the attribute.
+
+An error because the file is not valid against the CiA 311 schema, and tools read it differently: CANopenEditor's reader, which deserialises against the schema, refuses the whole file on an odd-length hexBinary, and others guess (`201` is 0201h to one reader and skipped by another). canopener never guesses: when the number is clear (`0x2000`, `201`) it is read and the message says as what; when it is not, the key is left out of the model. No schema default ever stands in for a value that is there but unreadable.
+
+Fix: write hexBinary without prefix and with an even number of digits (`2000`, `0201`), unsigned numbers in decimal within their type's range, IDs as names (`UID_OBJ_2000`).",
         fixable: false,
     },
     CheckInfo {
@@ -258,17 +274,17 @@ Fix: nothing, unless the file will be converted to EDS.",
     CheckInfo {
         code: "X023",
         slug: "unknown-token",
-        severity: Severity::Warning,
+        severity: Severity::Error,
         group: Group::Xml,
-        title: "enumerated attributes use CiA 311's tokens (accessType, PDOmapping, access, booleans, baud rates)",
+        title: "enumerated attributes and booleans use CiA 311's tokens (accessType, access, PDOmapping, booleans, baud rates)",
         reference: &[],
-        spec: "CiA 311 V1.1 Annex A.1.3, A.1.4 (enumerations)",
+        spec: "CiA 311 V1.1 Annex A.1.3, A.1.4 (enumerations, xsd:boolean)",
         explanation: "\
-An enumerated attribute holds a token outside its CiA 311 vocabulary: accessType other than ro, wo, rw, const; PDOmapping other than no, default, optional, TPDO, RPDO; access other than the parameter access values; a boolean, count or baud rate spelt otherwise. canopener reads what it can and says how.
+An enumerated attribute holds a token outside its CiA 311 vocabulary: a CANopenObject accessType other than ro, wo, rw, const; a parameter access other than const, read, write, readWrite, readWriteInput, readWriteOutput, noAccess; a PDOmapping other than no, default, optional, TPDO, RPDO; a boolean other than true, false, 1, 0; a baud rate or dynamic channel spelt otherwise. The message names the element and the attribute.
 
-A warning because the file is not schema-valid and readers disagree on the meaning.
+An error because the file is not valid against the CiA 311 schema and tools disagree on the meaning: CANopenEditor refuses the file, others fall back to a default. canopener reads a token whose meaning is clear and says as what (`rwr` as an accessType, `rw` as the parameter access readWrite, `TRUE`); any other token leaves its key out of the model. It never falls back to the schema default: a parameter with `access=\"rw\"` is not read-only, and `PDOmapping=\"yes\"` is neither mapped nor unmapped.
 
-Fix: use the exact CiA 311 token (`rw`, `optional`, `250 Kbps`, `true`).",
+Fix: use the exact CiA 311 token (`readWrite`, `optional`, `250 Kbps`, `true`).",
         fixable: false,
     },
     CheckInfo {
@@ -322,7 +338,7 @@ Fix: write the bytes without spaces.",
     CheckInfo {
         code: "X030",
         slug: "date-time-notation",
-        severity: Severity::Warning,
+        severity: Severity::Error,
         group: Group::Xml,
         title: "file dates and times are xsd:date and xsd:time",
         reference: &[],
@@ -330,7 +346,7 @@ Fix: write the bytes without spaces.",
         explanation: "\
 fileCreationDate/Time or fileModificationDate/Time are not xsd:date (`2024-03-01`) or xsd:time (`13:05:00`).
 
-A warning because the file is not schema-valid and tools show no or a wrong date.
+An error, as every value outside its CiA 311 schema type is (X016, X023): the file is not schema-valid, a validating reader refuses it and other tools show no or a wrong date. A time whose meaning is clear (`9:48:42 PM`) is read as that time; anything else is kept as written, never replaced by another date.
 
 Fix: write the dates and times in XML Schema notation.",
         fixable: false,
@@ -402,7 +418,7 @@ Fix: write the node-ID and bit rate the device runs with.",
     CheckInfo {
         code: "X036",
         slug: "invalid-dummy",
-        severity: Severity::Warning,
+        severity: Severity::Error,
         group: Group::Xml,
         title: "dummyUsage entries are Dummy0001..Dummy0007",
         reference: &[],
@@ -410,7 +426,7 @@ Fix: write the node-ID and bit rate the device runs with.",
         explanation: "\
 A `dummy@entry` is not one of the 14 strings `Dummy0001=0` ... `Dummy0007=1` the schema allows.
 
-A warning because the entry is ignored by validating readers.
+An error, as every value outside its CiA 311 schema type is (X023): a validating reader refuses the file, and readers that are not strict disagree on the entry.
 
 Fix: use the schema's spelling.",
         fixable: false,

@@ -325,7 +325,7 @@
             <q1:actualValue value="1" />
             <q1:defaultValue value="1" />
           </q1:parameter>
-          <q1:parameter uniqueID="UID_SUB_620001" access="readWrite">
+          <q1:parameter uniqueID="UID_SUB_620001" access="readWriteOutput">
             <label lang="en">Write output 1h to 8h</label>
             <USINT />
             <q1:denotation>
@@ -408,7 +408,7 @@
           </CANopenObject>
           <CANopenObject index="6200" name="Write output 8-bit" objectType="8" uniqueIDRef="UID_OBJ_6200" subNumber="2">
             <CANopenSubObject subIndex="00" name="Number of output 8-bit" objectType="7" PDOmapping="no" uniqueIDRef="UID_SUB_620000" />
-            <CANopenSubObject subIndex="01" name="Write output 1h to 8h" objectType="7" PDOmapping="optional" uniqueIDRef="UID_SUB_620001" />
+            <CANopenSubObject subIndex="01" name="Write output 1h to 8h" objectType="7" PDOmapping="RPDO" uniqueIDRef="UID_SUB_620001" />
           </CANopenObject>
         </q2:CANopenObjectList>
         <dummyUsage>

@@ -49,8 +49,9 @@ pub(crate) struct SimArgs {
     /// udp-multicast://GROUP:PORT
     #[arg(long = "bus", value_name = "SPEC")]
     pub(crate) buses: Vec<String>,
-    /// Node-ID of devices whose file is not a DCF with a node-ID (several files: N, N+1, ... in order).
-    /// Without it such devices start LSS-unconfigured (node-ID FFh) and wait for an LSS master.
+    /// Node-ID of the devices (several files: N, N+1, ... in order); it wins over a DCF's own
+    /// [DeviceComissioning] NodeID. Without it a DCF runs at its own node-ID and other devices start
+    /// LSS-unconfigured (node-ID FFh) and wait for an LSS master. The start line says which applies.
     #[arg(long, value_parser = parse_node_id, value_name = "N")]
     pub(crate) node_id: Option<u8>,
     /// Serial number 1018h:04 of the devices (several files: S, S+1, ... in order), so that devices from

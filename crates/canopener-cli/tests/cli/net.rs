@@ -36,13 +36,17 @@ fn codes(file: &Value) -> Vec<String> {
 
 #[test]
 fn clean_systems_exit_0_and_the_papers_example_only_warns() {
+    // trunk-num-of-nets-default.graphml gives NumOfNets only by its <key>'s <default> (issue 22: every
+    // junction got N032).
     let (code, json) = check_json(&[
         &test_data("gateway.graphml"),
         &test_data("paper/Nodelist.graphml"),
+        &test_data("trunk-num-of-nets-default.graphml"),
     ]);
     assert_eq!(code, Some(0), "{json:#}");
     assert_eq!(json["version"], 1);
     assert!(codes(&json["files"][0]).is_empty(), "{json:#}");
+    assert!(codes(&json["files"][2]).is_empty(), "{json:#}");
     let paper = codes(&json["files"][1]);
     assert_eq!(paper.iter().filter(|c| *c == "N011").count(), 1, "{paper:?}");
     assert_eq!(paper.iter().filter(|c| *c == "N012").count(), 8, "{paper:?}");

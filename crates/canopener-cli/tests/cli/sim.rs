@@ -49,6 +49,70 @@ fn sim_boots_answers_sdo_runs_nmt_and_heartbeat_and_stops_cleanly() {
     );
 }
 
+/// Issue 22: python canopen's sample.eds configures node 0x10 and 500 kbit/s in [DeviceComissioning];
+/// `--node-id 5` used to run node 16 without a word. The flag wins, and the start line says where the
+/// node-ID and the bit rate come from.
+#[test]
+fn sim_node_id_asked_for_wins_over_the_files_and_the_start_line_says_so() {
+    let hub = HubProc::start();
+    let dir = temp_dir("sim-node-id");
+    let mut bus = client(&hub);
+    let eds = corpus_eds("canopen-python__canopen__test__sample.eds");
+    let mut sim = Background::sim(
+        &hub,
+        &dir,
+        "sim",
+        &[eds.to_str().unwrap(), "--node-id", "5", "--format", "json"],
+    );
+    let context = || sim.report();
+    assert_eq!(expect_frame(&mut *bus, "705#", &context), "705#00");
+    send(&mut *bus, "605#4018100100000000");
+    assert_eq!(expect_frame(&mut *bus, "585#", &context), "585#4318100101000000");
+    assert_eq!(sim.terminate().code(), Some(0), "{}", sim.stderr());
+    let events = json_lines(&sim.stdout());
+    let started = events
+        .iter()
+        .find(|e| e["event"] == "started")
+        .unwrap_or_else(|| panic!("no started event in {events:?}"));
+    assert_eq!(started["node"], 5);
+    assert_eq!(started["node_id_from"], "asked");
+    assert_eq!(
+        (started["bitrate_from"].as_str(), started["file_bitrate"].as_u64()),
+        (Some("bus"), Some(500))
+    );
+    let text = started["text"].as_str().unwrap_or_default();
+    assert!(
+        text.contains(
+            "; node-ID 5 as asked (the file's [DeviceComissioning] NodeID=16 is not used); bit rate: \
+                       the bus's (the file's [DeviceComissioning] Baudrate=500 kbit/s is not applied)"
+        ),
+        "{text}"
+    );
+
+    // Without --node-id the file's node-ID is used, and the line says so.
+    let mut sim = Background::sim(
+        &hub,
+        &dir,
+        "sim-own",
+        &[eds.to_str().unwrap(), "--format", "json"],
+    );
+    let context = || sim.report();
+    assert_eq!(expect_frame(&mut *bus, "710#", &context), "710#00");
+    assert_eq!(sim.terminate().code(), Some(0), "{}", sim.stderr());
+    let events = json_lines(&sim.stdout());
+    let started = events.iter().find(|e| e["event"] == "started").expect("started");
+    assert_eq!(
+        (started["node"].as_u64(), started["node_id_from"].as_str()),
+        (Some(16), Some("file"))
+    );
+    assert!(
+        started["text"]
+            .as_str()
+            .is_some_and(|t| t.contains("; node-ID 16 from the file's [DeviceComissioning] NodeID")),
+        "{started}"
+    );
+}
+
 #[test]
 fn sim_keeps_saved_parameters_in_the_state_dir_across_restarts() {
     let hub = HubProc::start();

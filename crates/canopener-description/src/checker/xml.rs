@@ -2,15 +2,16 @@
 //! model-level check of the EDS checker run on the model read from the XML, each finding placed at
 //! the XML element or attribute that produced the value it is about.
 //!
-//! The model-level checks run on the model written as canonical CiA 306 text and loaded again: the
-//! checks and rule packs see exactly the model an EDS with the same content would give, and every
-//! finding names a section and key of that text, which [`canopener_xdd::Locations`] maps back into
-//! the XML. Checks whose subject CiA 311 has no place for are not reported ([`applies_to_xml`]).
+//! The model-level checks and rule packs run on the reader's model directly
+//! ([`Context::for_model`]): its sections are those its canonical CiA 306 text would have, and every
+//! place a check asks for, a section and a key, is looked up in the reader's
+//! [`canopener_xdd::Locations`], so no CiA 306 text is written and read again. The object diagnostics
+//! loading gives EDS text come from the model the same way ([`canopener_eds::model_diagnostics`]).
+//! Checks whose subject CiA 311 has no place for are not reported ([`applies_to_xml`]).
 
-use std::collections::{BTreeMap, BTreeSet, HashSet};
+use std::collections::{BTreeMap, HashSet};
 
 use canopener_check::{Context, Finding, Selection, registry};
-use canopener_eds::Span;
 use canopener_report::FileReport;
 use canopener_rules::RulePack;
 use canopener_xdd::{XddKind, XddLoaded};
@@ -86,33 +87,20 @@ pub(super) fn check(
         ));
     }
     canopener_check::sort_by_position(&mut findings);
+    // The reader's positions count lines by canopener_eds::lines; the source lines shown are taken
+    // from the same text by the same rule.
     let text = canopener_xdd::decode(bytes).unwrap_or_default();
-    let lines: Vec<&str> = text.lines().collect();
-    let wanted: BTreeSet<u32> = findings.iter().map(|f| f.diagnostic.span.line).collect();
-    let source = wanted
-        .into_iter()
-        .map(|line| {
-            let index = usize::try_from(line).ok().and_then(|l| l.checked_sub(1));
-            let text = index.and_then(|i| lines.get(i)).copied().unwrap_or("");
-            (line, text.trim_end_matches('\r').to_owned())
-        })
-        .collect();
-    FileReport {
-        path: path.to_owned(),
-        findings,
-        source,
-        problem: None,
-    }
+    FileReport::from_text(path, findings, &text)
 }
 
 /// Whether a built-in check is about something CiA 311 XML has (so it runs on XML files too).
 ///
 /// Not reported on XML (`docs/xdd-check.md` gives the reason for each): group A syntax (`C1xx`),
 /// the portability lint (`T`, which predicts how tools misread CiA 306 text; `X102` says what they
-/// do with XML), the loader's `P` series except its value and object checks (the loader reads
-/// canopener's own canonical text here, so what it says about notation and layout is not about the
-/// user's file; the XML reader's `X0xx` say that), and the checks listed here, whose subject the
-/// XML has no place for or which the reader fills in itself.
+/// do with XML), the loader's `P` series except its value and object checks (what it says about
+/// notation and layout is about CiA 306 text, which an XML file has none of; the XML reader's `X0xx`
+/// say that), and the checks listed here, whose subject the XML has no place for or which the
+/// reader fills in itself.
 pub fn applies_to_xml(code: &str) -> bool {
     /// Loader codes about the model rather than the text: values readable for their type, object codes,
     /// data types, PDO pairs (P073, the keys an object type requires, would repeat X014, X015,
@@ -152,21 +140,26 @@ fn model_findings(
     selection: &Selection,
     file_name: Option<&str>,
 ) -> Vec<Finding> {
-    let text = canopener_eds::write::to_canonical(&loaded.eds, None);
-    let model = canopener_eds::load(text.as_bytes());
-    let mut findings: Vec<Finding> = canopener_check::check(&model, file_name, selection)
+    let place = |section: Option<&str>, key: Option<&str>| loaded.locations.find(section, key);
+    let diagnostics =
+        canopener_eds::model_diagnostics(&loaded.eds, &|section, key| place(Some(section), key));
+    let cx = Context::for_model(&loaded.eds, &diagnostics, file_name, &place);
+    let mut findings: Vec<Finding> = canopener_check::check_context(&cx, selection)
         .findings
         .into_iter()
         .filter(|f| applies_to_xml(&f.diagnostic.code))
         .collect();
-    let cx = Context::new(&model, file_name);
     for pack in packs {
         findings.extend(pack.check(&cx, selection));
     }
-    let places = Places::new(&text);
     for finding in &mut findings {
-        let (section, key) = places.of(&finding.diagnostic);
-        finding.diagnostic.span = loaded.locations.find(section.as_deref(), key.as_deref());
+        // A finding about the file as a whole that names a section points at that section's element
+        // when the XML has one (`no [DeviceComissioning]`: the file).
+        if finding.diagnostic.span == cx.file_span()
+            && let Some(section) = finding.diagnostic.section.as_deref()
+        {
+            finding.diagnostic.span = place(Some(section), finding.diagnostic.key.as_deref());
+        }
         // The checks' advice names CiA 306 sections and keys (`set DefaultValue=2 in [1400sub0]`);
         // say so, since the position is the XML's.
         if let Some(help) = finding.diagnostic.help.take() {
@@ -174,57 +167,6 @@ fn model_findings(
         }
     }
     findings
-}
-
-/// The section and key each line of the canonical text belongs to.
-struct Places {
-    lines: Vec<(Option<String>, Option<String>)>,
-}
-
-impl Places {
-    fn new(text: &str) -> Self {
-        let mut section: Option<String> = None;
-        let lines = text
-            .lines()
-            .map(|line| {
-                let line = line.trim();
-                if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
-                    section = Some(name.to_owned());
-                    return (section.clone(), None);
-                }
-                let key = line
-                    .split_once('=')
-                    .map(|(key, _)| key.trim().to_owned())
-                    .filter(|_| !line.starts_with(';'));
-                (section.clone(), key)
-            })
-            .collect();
-        Self { lines }
-    }
-
-    /// What a finding is about: the section and key it names, else those of its line.
-    fn of(&self, diagnostic: &canopener_eds::Diagnostic<String>) -> (Option<String>, Option<String>) {
-        let Span { line, .. } = diagnostic.span;
-        let (line_section, line_key) = usize::try_from(line)
-            .ok()
-            .and_then(|l| l.checked_sub(1))
-            .and_then(|i| self.lines.get(i))
-            .cloned()
-            .unwrap_or_default();
-        match &diagnostic.section {
-            Some(section) => {
-                let key = diagnostic.key.clone().or_else(|| {
-                    line_section
-                        .as_deref()
-                        .is_some_and(|s| s.eq_ignore_ascii_case(section))
-                        .then_some(line_key)
-                        .flatten()
-                });
-                (Some(section.clone()), key)
-            }
-            None => (line_section, diagnostic.key.clone().or(line_key)),
-        }
-    }
 }
 
 #[cfg(test)]
@@ -392,30 +334,5 @@ mod tests {
         ] {
             assert!(applies_to_xml(code), "{code}");
         }
-    }
-
-    #[test]
-    fn places_follow_sections_and_keys() {
-        let places = Places::new("[FileInfo]\nFileName=a\n; note=1\n[1018sub1]\nDefaultValue=0x5\n");
-        let at = |line: u32, section: Option<&str>, key: Option<&str>| {
-            let d = canopener_eds::Diagnostic::from_parts(
-                "C000".to_owned(),
-                Severity::Info,
-                Span::new(line, 1, 0),
-                "m",
-            )
-            .at(section, key);
-            places.of(&d)
-        };
-        let owned = |s: &str, k: Option<&str>| (Some(s.to_owned()), k.map(str::to_owned));
-        assert_eq!(at(2, None, None), owned("FileInfo", Some("FileName")));
-        assert_eq!(at(3, None, None), owned("FileInfo", None));
-        assert_eq!(at(5, None, None), owned("1018sub1", Some("DefaultValue")));
-        assert_eq!(
-            at(5, Some("1018SUB1"), None),
-            owned("1018SUB1", Some("DefaultValue"))
-        );
-        assert_eq!(at(5, Some("1000"), None), owned("1000", None));
-        assert_eq!(at(99, None, Some("K")), (None, Some("K".to_owned())));
     }
 }

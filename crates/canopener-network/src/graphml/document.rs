@@ -8,6 +8,7 @@
 //! verbatim, with the root's namespace declarations they rely on.
 
 use canopener_eds::Span;
+use canopener_eds::lines::LineIndex;
 use canopener_eds::xml_text::{XmlPlace, XmlStyle, escape};
 
 use crate::codes::{NetCode, NetDiagnostic};
@@ -192,10 +193,12 @@ impl GraphMl {
             Ok(document) => document,
             Err(err) => {
                 let pos = err.pos();
+                // roxmltree counts only LF as a line break; positions count a lone CR too.
+                let (line, column) = LineIndex::new(text).position_of_lf_counted(pos.row, pos.col);
                 diagnostics.push(
                     NetDiagnostic::new(
                         NetCode::MalformedXml,
-                        Span::new(pos.row, pos.col, 0),
+                        Span::new(line, column, 0),
                         format!("the file is not well-formed XML: {err}"),
                     )
                     .with_help("fix the XML at this position; nothing after it was read"),
@@ -205,6 +208,7 @@ impl GraphMl {
         };
         let reader = Reader {
             text,
+            lines: LineIndex::new(text),
             document: &document,
         };
         let graphml = reader.read(&mut diagnostics);
@@ -383,6 +387,7 @@ fn content(text: &str) -> String {
 
 struct Reader<'a, 'input> {
     text: &'a str,
+    lines: LineIndex<'a>,
     document: &'a roxmltree::Document<'input>,
 }
 
@@ -608,10 +613,10 @@ impl Reader<'_, '_> {
     }
 
     fn span(&self, node: roxmltree::Node<'_, '_>) -> Span {
-        let pos = self.document.text_pos_at(node.range().start);
+        let (line, column) = self.lines.position(node.range().start);
         let name = node.tag_name().name();
         let len = u32::try_from(name.chars().count() + 1).unwrap_or(u32::MAX);
-        Span::new(pos.row, pos.col, len)
+        Span::new(line, column, len)
     }
 }
 
@@ -672,6 +677,18 @@ mod tests {
         assert_eq!(diagnostics.len(), 1);
         assert_eq!(diagnostics[0].code, NetCode::MalformedXml);
         assert_eq!((diagnostics[0].span.line, diagnostics[0].span.column), (3, 3));
+        // A lone CR ends a line as everywhere (canopener_eds::lines), though the parser counts only LF.
+        let (_, diagnostics) = GraphMl::parse("<graphml>\r  <graph>\r  </grph>\n</graphml>");
+        assert_eq!((diagnostics[0].span.line, diagnostics[0].span.column), (3, 3));
+    }
+
+    #[test]
+    fn element_positions_count_a_lone_cr_as_a_line_break() {
+        let (doc, _) = GraphMl::parse(&YED.replace('\n', "\r"));
+        assert_eq!(
+            (doc.graph.nodes[0].span.line, doc.graph.nodes[0].span.column),
+            (6, 5)
+        );
     }
 
     #[test]

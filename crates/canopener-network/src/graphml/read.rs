@@ -38,6 +38,7 @@ pub fn topology(doc: &GraphMl, diagnostics: &mut Vec<NetDiagnostic>) -> Topology
         };
         let defaults = keys.defaults("node");
         let mut slots: BTreeMap<u32, Attachment> = BTreeMap::new();
+        let mut nets_by_default = false;
         for (name, data, value) in keys.values("node", &node.data, &defaults, diagnostics) {
             let span = data.map_or(node.span, |d| d.span);
             match name.as_str() {
@@ -46,7 +47,10 @@ pub fn topology(doc: &GraphMl, diagnostics: &mut Vec<NetDiagnostic>) -> Topology
                 "NodeFig" => vertex.fig = Some(value),
                 "X" => vertex.x = real(&name, &value, span, diagnostics),
                 "Y" => vertex.y = real(&name, &value, span, diagnostics),
-                "NumOfNets" => vertex.num_of_nets = integer(&name, &value, span, diagnostics),
+                "NumOfNets" => {
+                    nets_by_default = data.is_none();
+                    vertex.num_of_nets = integer(&name, &value, span, diagnostics);
+                }
                 _ => match split_attachment_key(&name) {
                     Some((base, slot)) => {
                         let attachment = slots.entry(slot).or_insert_with(|| Attachment {
@@ -89,6 +93,12 @@ pub fn topology(doc: &GraphMl, diagnostics: &mut Vec<NetDiagnostic>) -> Topology
             }
         }
         vertex.attachments = slots.into_values().collect();
+        // A `<key>`'s default NumOfNets is the file's common case for the devices on its networks; it
+        // says nothing about a junction, T-piece or terminator, which is on no network (issue 22: such
+        // a file got N032 on every junction).
+        if nets_by_default && vertex.attachments.is_empty() {
+            vertex.num_of_nets = None;
+        }
         topology.vertices.push(vertex);
     }
     for edge in &graph.edges {

@@ -16,7 +16,7 @@ use canopener_od::ObjectKey;
 use canopener_wire::TimeOfDay;
 
 use crate::simulator::error::SimError;
-use crate::simulator::plan::Plan;
+use crate::simulator::plan::{NodeIdFrom, Plan};
 use crate::state_store::{FileStore, LssFile};
 
 /// How often a TIME producer sends the time. CiA 301 §7.2.6 leaves the rate to the application; once a
@@ -92,6 +92,11 @@ pub struct SimulatedDevice {
     /// Whether that was decided from the description (`--app auto`).
     application_auto: bool,
     store: Option<PathBuf>,
+    /// Where its node-ID at start comes from.
+    node_id_from: NodeIdFrom,
+    /// The bit rate in kbit/s the file configures (`[DeviceComissioning] Baudrate`), which a simulated
+    /// device does not apply: it runs at its bus's rate.
+    file_bitrate: Option<u32>,
     /// When a TIME producer (1012h bit 30) next sends the time; `None` while it is no producer.
     next_time: Option<Instant>,
     /// The Unix time in milliseconds of [`Instant::ZERO`] on the clock the device runs on.
@@ -103,7 +108,18 @@ impl SimulatedDevice {
     /// which numbers its serial number. With a state directory, a device that starts LSS-unconfigured
     /// starts with the node-ID it stored last time instead, as a real device does after power-on.
     pub fn build(plan: Plan, position: usize, options: &DeviceOptions) -> Result<SimulatedDevice, SimError> {
-        let Plan { name, eds, node_id } = plan;
+        let Plan {
+            name,
+            eds,
+            node_id,
+            mut node_id_from,
+        } = plan;
+        let file_bitrate = eds
+            .commissioning
+            .as_ref()
+            .and_then(|c| c.baudrate.as_deref())
+            .and_then(canopener_eds::model::int_of)
+            .and_then(|b| u32::try_from(b).ok());
         let application = options.application.resolve(&eds);
         let serial = options
             .first_serial
@@ -151,6 +167,7 @@ impl SimulatedDevice {
                     let lss = LssFile::open(dir, &address)?;
                     if let Some(stored) = lss.node_id() {
                         device = make(stored.get())?;
+                        node_id_from = NodeIdFrom::Stored;
                     }
                     device = device.with_lss_storage(Box::new(lss));
                     FileStore::open_lss(dir, &address)?
@@ -171,6 +188,8 @@ impl SimulatedDevice {
             application,
             application_auto: options.application == ApplicationKind::Auto,
             store,
+            node_id_from,
+            file_bitrate,
             next_time: None,
             unix_millis_at_zero: 0,
         })
@@ -214,6 +233,17 @@ impl SimulatedDevice {
     /// ([`ApplicationKind::Auto`]) rather than asked for.
     pub fn application_is_auto(&self) -> bool {
         self.application_auto
+    }
+
+    /// Where its node-ID at start came from.
+    pub fn node_id_from(&self) -> NodeIdFrom {
+        self.node_id_from
+    }
+
+    /// The bit rate in kbit/s its file configures, which the simulation does not apply (the bus sets
+    /// the rate); `None` when the file configures none.
+    pub fn file_bitrate(&self) -> Option<u32> {
+        self.file_bitrate
     }
 
     /// The file its saved parameters go to, with a state directory.

@@ -16,6 +16,7 @@ use canopener_device::time_stamp::TimeEvent;
 use canopener_wire::abort::abort_code_text;
 
 use crate::simulator::device::{ApplicationKind, SimulatedDevice};
+use crate::simulator::plan::NodeIdFrom;
 
 /// One notable thing a simulation did.
 #[derive(Debug, Clone, PartialEq)]
@@ -124,6 +125,33 @@ impl LogEntry {
             let _ = write!(text, ", saved parameters in {}", store.display());
         }
         text.push(')');
+        // Where the node-ID and the bit rate come from: what was asked for wins over the file.
+        let node = sim.node_label();
+        let _ = match sim.node_id_from() {
+            NodeIdFrom::Asked { file: Some(own) } if own != node => write!(
+                text,
+                "; node-ID {node} as asked (the file's [DeviceComissioning] NodeID={own} is not used)"
+            ),
+            NodeIdFrom::Asked { .. } => write!(text, "; node-ID {node} as asked"),
+            NodeIdFrom::File => write!(
+                text,
+                "; node-ID {node} from the file's [DeviceComissioning] NodeID"
+            ),
+            NodeIdFrom::Stored => write!(text, "; node-ID {node} stored by LSS in the state directory"),
+            NodeIdFrom::Unconfigured => {
+                write!(
+                    text,
+                    "; no node-ID (none asked for, none in the file): LSS-unconfigured"
+                )
+            }
+        };
+        let _ = match sim.file_bitrate() {
+            Some(kbit) => write!(
+                text,
+                "; bit rate: the bus's (the file's [DeviceComissioning] Baudrate={kbit} kbit/s is not applied)"
+            ),
+            None => write!(text, "; bit rate: the bus's"),
+        };
         let notes = device.notes();
         if let Some(first) = notes.first() {
             let _ = write!(
@@ -139,6 +167,13 @@ impl LogEntry {
             .with("entries", device.od().len())
             .with("application", sim.application().name())
             .with("build_notes", notes.len())
+            .with("node_id_from", sim.node_id_from().name())
+            .with("bitrate_from", "bus")
+            .with(
+                "file_bitrate",
+                sim.file_bitrate()
+                    .map_or(FieldValue::Null, |kbit| FieldValue::Number(kbit.into())),
+            )
     }
 
     /// The simulation ended, on request (`clean`) or by an error.
@@ -383,6 +418,14 @@ mod tests {
             started.text.contains(" on simulated bus (ideal timing) ("),
             "{started:?}"
         );
+        assert!(
+            started.text.ends_with(
+                "; no node-ID (none asked for, none in the file): LSS-unconfigured; bit rate: the bus's"
+            ),
+            "{started:?}"
+        );
+        assert!(started.fields.contains(&("node_id_from", "unconfigured".into())));
+        assert!(started.fields.contains(&("file_bitrate", FieldValue::Null)));
         assert!(
             started
                 .fields

@@ -1,9 +1,11 @@
 //! Which descriptions become which devices: loading EDS/DCF files and giving every device its node-ID.
 //!
-//! The rules (those of `canopener sim`): a node-ID given for one device wins; else a DCF's own node-ID
-//! (CiA 306-3 `[DeviceComissioning] NodeID`); else the next of a counter started at the first node-ID the
-//! caller gave (N, N+1, ... in order); else none: the device starts LSS-unconfigured (node-ID FFh, CiA 305)
+//! The rules (those of `canopener sim`): what the caller asks for wins over what a file says. A node-ID
+//! given for one device wins; else the next of a counter started at the first node-ID the caller gave
+//! (N, N+1, ... in order: `--node-id`), whatever the file says; else a DCF's own node-ID (CiA 306-3
+//! `[DeviceComissioning] NodeID`); else none: the device starts LSS-unconfigured (node-ID FFh, CiA 305)
 //! and waits for an LSS master. Node-IDs above 127 and two devices on one node-ID are refused.
+//! [`NodeIdFrom`] records which rule gave the node-ID, for the line a simulation starts with.
 
 use std::path::{Path, PathBuf};
 
@@ -95,6 +97,35 @@ impl From<&Eds> for Description {
     }
 }
 
+/// Where a device's node-ID comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeIdFrom {
+    /// Asked for by the caller (for this device, or counted from the first node-ID given), winning
+    /// over the node-ID the file configures, if it has one (`file`).
+    Asked {
+        /// The file's own `[DeviceComissioning] NodeID`, not used.
+        file: Option<u8>,
+    },
+    /// The file's `[DeviceComissioning] NodeID`.
+    File,
+    /// None asked for and none in the file: LSS-unconfigured.
+    Unconfigured,
+    /// The node-ID an LSS master configured and stored in the state directory before.
+    Stored,
+}
+
+impl NodeIdFrom {
+    /// The short name a JSON log gives it: `asked`, `file`, `unconfigured`, `stored`.
+    pub fn name(self) -> &'static str {
+        match self {
+            NodeIdFrom::Asked { .. } => "asked",
+            NodeIdFrom::File => "file",
+            NodeIdFrom::Unconfigured => "unconfigured",
+            NodeIdFrom::Stored => "stored",
+        }
+    }
+}
+
 /// One device to simulate: its description, loaded, and the node-ID it starts with.
 #[derive(Debug, Clone)]
 pub struct Plan {
@@ -104,6 +135,8 @@ pub struct Plan {
     pub eds: Eds,
     /// The node-ID it starts with; [`UNCONFIGURED`] (FFh) for an LSS-unconfigured start.
     pub node_id: u8,
+    /// Which rule gave it.
+    pub node_id_from: NodeIdFrom,
 }
 
 /// Loads every description and gives each device its node-ID by the [module's rules](self):
@@ -118,27 +151,28 @@ pub fn plan(
     for (description, fixed) in descriptions {
         let name = description.name();
         let eds = description.load()?;
-        let node_id = match (fixed, eds.node_id()) {
-            (Some(node_id), _) => {
+        let file = eds.node_id();
+        let asked = NodeIdFrom::Asked { file };
+        let (node_id, node_id_from) = match (fixed, next, file) {
+            (Some(node_id), _, _) => {
                 if !(1..=127).contains(&node_id) && node_id != UNCONFIGURED {
                     return Err(SimError::InvalidNodeId { name, node_id });
                 }
-                node_id
+                (node_id, asked)
             }
-            (None, Some(node_id)) => node_id,
-            (None, None) => match next {
-                Some(node_id) => {
-                    next = Some(node_id + 1);
-                    u8::try_from(node_id)
-                        .ok()
-                        .filter(|id| *id <= 127)
-                        .ok_or_else(|| SimError::NodeIdAbove127 {
-                            name: name.clone(),
-                            node_id,
-                        })?
-                }
-                None => UNCONFIGURED,
-            },
+            (None, Some(node_id), _) => {
+                next = Some(node_id + 1);
+                let node_id = u8::try_from(node_id)
+                    .ok()
+                    .filter(|id| *id <= 127)
+                    .ok_or_else(|| SimError::NodeIdAbove127 {
+                        name: name.clone(),
+                        node_id,
+                    })?;
+                (node_id, asked)
+            }
+            (None, None, Some(node_id)) => (node_id, NodeIdFrom::File),
+            (None, None, None) => (UNCONFIGURED, NodeIdFrom::Unconfigured),
         };
         if node_id != UNCONFIGURED
             && let Some(other) = plans.iter().find(|p| p.node_id == node_id)
@@ -149,7 +183,12 @@ pub fn plan(
                 node_id,
             });
         }
-        plans.push(Plan { name, eds, node_id });
+        plans.push(Plan {
+            name,
+            eds,
+            node_id,
+            node_id_from,
+        });
     }
     Ok(plans)
 }
@@ -213,14 +252,35 @@ mod tests {
         assert!(high.to_string().contains("above 127"), "{high}");
     }
 
+    /// Issue 22: `sim FILE --node-id 5` ran node 16 when FILE configured 16. What is asked for wins.
     #[test]
-    fn a_dcf_node_id_wins_and_a_clash_is_refused() {
+    fn a_node_id_asked_for_wins_over_the_dcf_and_a_clash_is_refused() {
         let dcf = test_data("base.dcf");
         let own = load(&dcf).unwrap().node_id().expect("base.dcf has a node-ID");
-        let plans = plan(files(&[dcf.clone(), test_data("base.eds")]), Some(own.max(2) - 1)).unwrap();
-        assert_eq!(plans[0].node_id, own);
-        assert_ne!(plans[1].node_id, own);
-        let clash = plan(files(&[test_data("base.eds"), dcf]), Some(own)).unwrap_err();
+        let asked = if own == 100 { 101 } else { 100 };
+        let plans = plan(files(&[dcf.clone(), test_data("base.eds")]), Some(asked)).unwrap();
+        let got: Vec<(u8, NodeIdFrom)> = plans.iter().map(|p| (p.node_id, p.node_id_from)).collect();
+        assert_eq!(
+            got,
+            [
+                (asked, NodeIdFrom::Asked { file: Some(own) }),
+                (asked + 1, NodeIdFrom::Asked { file: None })
+            ]
+        );
+        let plans = plan(files(&[dcf.clone(), test_data("base.eds")]), None).unwrap();
+        let got: Vec<(u8, NodeIdFrom)> = plans.iter().map(|p| (p.node_id, p.node_id_from)).collect();
+        assert_eq!(
+            got,
+            [(own, NodeIdFrom::File), (UNCONFIGURED, NodeIdFrom::Unconfigured)]
+        );
+        let clash = plan(
+            [
+                (Description::from(&dcf), None),
+                (Description::from(&test_data("base.eds")), Some(own)),
+            ],
+            None,
+        )
+        .unwrap_err();
         assert!(matches!(clash, SimError::NodeIdClash { node_id, .. } if node_id == own));
         assert!(clash.to_string().contains("both be node"), "{clash}");
     }

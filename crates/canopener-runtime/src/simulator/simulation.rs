@@ -93,7 +93,8 @@ impl Simulation {
     }
 
     /// One more device from an EDS/DCF file whose node-ID is planned as `canopener sim FILE` plans it:
-    /// the DCF's own, else the next of [`Simulation::first_node_id`], else LSS-unconfigured.
+    /// the next of [`Simulation::first_node_id`] when one is given, else the DCF's own, else
+    /// LSS-unconfigured.
     pub fn file(mut self, path: impl AsRef<Path>) -> Simulation {
         self.descriptions
             .push((Description::File(path.as_ref().to_owned()), None));
@@ -105,8 +106,9 @@ impl Simulation {
         paths.into_iter().fold(self, Simulation::file)
     }
 
-    /// The node-ID of the first device added with [`Simulation::file`] that has none of its own; the
-    /// next ones count up (N, N+1, ...). Without it such devices start LSS-unconfigured.
+    /// The node-ID of the first device added with [`Simulation::file`]; the next ones count up (N, N+1,
+    /// ...), whatever node-ID their files configure. Without it a DCF runs at its own node-ID and the
+    /// other devices start LSS-unconfigured.
     pub fn first_node_id(mut self, node_id: Option<u8>) -> Simulation {
         self.first_node_id = node_id;
         self
