@@ -168,3 +168,59 @@ fn the_nmt_model_reports_that_a_bare_local_node_sends_no_boot_up() {
     );
     eprintln!("bare LocalNode: {reason}; allowed {}", json["allowed"]);
 }
+
+/// Issue 23's composition `nmt heartbeat sdo` through the hub against LocalNode: every failure is one
+/// of LocalNode's known gaps (an SDO answer in Stopped), never one the composition makes up.
+#[test]
+fn the_composition_nmt_heartbeat_sdo_fails_local_node_only_on_its_known_gap() {
+    let Some(python) = python() else { return };
+    let Some(eds) = corpus::extended_file(Kind::Eds, EDS) else {
+        eprintln!("skipped: {EDS} is in the extended corpus, which this checkout does not have");
+        return;
+    };
+    let hub = HubProc::start();
+    let _peer = local_node(&python, &hub, NODE, &eds, &[]);
+    let mut verdicts = Vec::new();
+    for seed in 1..=5u64 {
+        let mut command: Command = canopener();
+        command.args([
+            "mbt",
+            "run",
+            "nmt",
+            "heartbeat",
+            "sdo",
+            "--node",
+            NODE,
+            "--steps",
+            "60",
+        ]);
+        command.args(["--tolerance", "50ms", "--format", "json", "--set", "SDO_T=1s"]);
+        command.args([
+            "--eds",
+            eds.to_str().expect("UTF-8 path"),
+            "--seed",
+            &seed.to_string(),
+        ]);
+        command.args(["--bus", &hub.spec("can0"), "--time-limit", "60s"]);
+        let output = command.output().expect("run canopener");
+        let json: Value = serde_json::from_slice(&output.stdout)
+            .unwrap_or_else(|_| panic!("no JSON: {}", String::from_utf8_lossy(&output.stderr)));
+        eprintln!(
+            "nmt heartbeat sdo seed {seed}: {} {}",
+            json["verdict"], json["reason"]
+        );
+        verdicts.push(json["verdict"].as_str().unwrap_or_default().to_owned());
+        if output.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(output.status.code(), Some(6), "seed {seed}: {json}");
+        // An SDO answer the composition refuses because nmt has the device Stopped.
+        let reason = json["reason"].as_str().unwrap_or_default();
+        assert!(
+            reason.starts_with("unexpected output 0x5a2#")
+                && reason.contains("nmt refuses it in nmt@Stopped"),
+            "seed {seed}: a failure that is not a known LocalNode gap: {json}"
+        );
+    }
+    eprintln!("nmt heartbeat sdo against LocalNode, seeds 1-5: {verdicts:?}");
+}
