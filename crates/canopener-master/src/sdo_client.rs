@@ -973,12 +973,12 @@ impl SdoClient {
     /// The response in `rx`, or why it is not one.
     fn parse(&self, rx: &Rx) -> Result<SdoResponse, String> {
         let response = SdoResponse::parse(&rx.data)
-            .map_err(|err| format!("the server sent {}: {err}", hex(&rx.data[..rx.len])))?;
+            .map_err(|err| format!("the server sent {}: {err}", hex(rx.received())))?;
         let needed = needed_len(&response);
         if rx.len < needed {
             return Err(format!(
                 "the server sent {} with DLC {}, but that frame needs {needed} bytes",
-                hex(&rx.data[..rx.len]),
+                hex(rx.received()),
                 rx.len
             ));
         }
@@ -1252,6 +1252,11 @@ struct Rx {
 }
 
 impl Rx {
+    /// The bytes the frame carried (`len` never exceeds 8).
+    fn received(&self) -> &[u8] {
+        self.data.get(..self.len).unwrap_or(&self.data)
+    }
+
     fn new(payload: &[u8]) -> Rx {
         let mut data = [0; 8];
         for (slot, byte) in data.iter_mut().zip(payload) {

@@ -16,6 +16,8 @@
 //! No IO: bytes and text in, models, text and events out.
 
 #![warn(missing_docs)]
+// A file or a frame must never panic this library: no unwrap or expect outside tests (as rustls does).
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod check;
 pub mod codes;
