@@ -159,6 +159,10 @@ const fn crc15_step(register: u16, bit: bool) -> u16 {
 /// `CRC15_TABLE[b]` is the register after shifting 8 zero bits through a register holding `b` in its
 /// top 8 bits. Because the CRC is linear, XOR-ing an input byte into the top of the register and
 /// applying this table handles 8 bits in one step.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "const evaluation: an index out of bounds fails the build, it cannot panic at run time"
+)]
 const CRC15_TABLE: [u16; 256] = {
     let mut table = [0u16; 256];
     let mut byte = 0;
@@ -186,7 +190,9 @@ fn crc15_of_register(reg: BitRegister) -> u16 {
     for byte_idx in (0..(reg.len - lead) / 8).rev() {
         let byte = ((reg.bits >> (8 * byte_idx)) & 0xFF) as u16;
         let top = (register >> 7) ^ byte;
-        register = ((register << 8) & 0x7FFF) ^ CRC15_TABLE[usize::from(top as u8)];
+        #[allow(clippy::indexing_slicing, reason = "a u8 indexes a table of 256 entries")]
+        let next = CRC15_TABLE[usize::from(top as u8)];
+        register = ((register << 8) & 0x7FFF) ^ next;
     }
     register
 }
@@ -197,6 +203,10 @@ const STUFF_STATES: usize = 10;
 
 /// `STUFF_TABLE[state][byte]` is the state after sending the 8 bits of `byte` (most significant first)
 /// in the low 4 bits, and the number of stuff bits inserted among them in the high 4 bits.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "const evaluation: an index out of bounds fails the build, it cannot panic at run time"
+)]
 const STUFF_TABLE: [[u8; 256]; STUFF_STATES] = {
     let mut table = [[0u8; 256]; STUFF_STATES];
     let mut state = 0;
@@ -239,6 +249,10 @@ fn count_stuff_bits(reg: BitRegister) -> u32 {
         let byte = ((reg.bits >> (8 * byte_idx)) & 0xFF) as usize;
         // `state` is always below STUFF_STATES: it comes from `Run::state` or the table's low nibble,
         // both of which encode a run of 0–4 bits.
+        #[allow(
+            clippy::indexing_slicing,
+            reason = "state < STUFF_STATES (see above) and byte is masked to 0..=255, the table's sizes"
+        )]
         let entry = STUFF_TABLE[state][byte];
         stuff_bits += u32::from(entry >> 4);
         state = usize::from(entry & 0x0F);

@@ -35,11 +35,10 @@ pub struct CanFrame {
 impl CanFrame {
     /// A data frame carrying `data` (0 to 8 bytes).
     pub fn new(id: impl Into<CanId>, data: &[u8]) -> Result<CanFrame, FrameError> {
-        if data.len() > MAX_CLASSIC_DATA_LEN {
-            return Err(FrameError::DataTooLong(data.len()));
-        }
         let mut buf = [0; MAX_CLASSIC_DATA_LEN];
-        buf[..data.len()].copy_from_slice(data);
+        buf.get_mut(..data.len())
+            .ok_or(FrameError::DataTooLong(data.len()))?
+            .copy_from_slice(data);
         Ok(CanFrame {
             id: id.into(),
             remote: false,
@@ -81,7 +80,8 @@ impl CanFrame {
         if self.remote {
             &[]
         } else {
-            &self.data[..usize::from(self.dlc)]
+            // The constructors keep dlc at 8 or below.
+            self.data.get(..usize::from(self.dlc)).unwrap_or(&[])
         }
     }
 

@@ -14,6 +14,12 @@
 //!   stuffing), which the bus simulator and the bus-load figures are built on.
 
 #![warn(missing_docs)]
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does); each exception names, where it stands, why it cannot fail.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
 
 mod bitrate;
 pub mod bits;

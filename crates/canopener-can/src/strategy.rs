@@ -3,6 +3,10 @@
 //! Enabled by the private `_proptest` feature (dev-dependencies only) and in this crate's own tests.
 //! Crates that want a bias (few ids so arbitration ties happen, CANopen ids so decoders get exercised)
 //! pass their own id strategy to [`frame_with_id`].
+#![allow(
+    clippy::expect_used,
+    reason = "test support only (the `_proptest` feature): the ranges keep every value valid, so nothing here can fail"
+)]
 
 use proptest::prelude::*;
 

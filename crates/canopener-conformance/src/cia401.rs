@@ -485,7 +485,11 @@ fn pdo_with(ctx: &mut Ctx<'_, '_>, direction: PdoDirection, object: u32) -> Prep
                 Err(failed) => return Ok(Err(failed)),
             }
         }
-        let Some(position) = entries.iter().position(|&e| e == object) else {
+        let Some(before) = entries
+            .iter()
+            .position(|&e| e == object)
+            .and_then(|position| entries.get(..position))
+        else {
             continue;
         };
         let cob_id = match read_described(ctx, pdo.comm, 1, "the PDO's COB-ID")? {
@@ -495,7 +499,7 @@ fn pdo_with(ctx: &mut Ctx<'_, '_>, direction: PdoDirection, object: u32) -> Prep
         let Some(cob_id) = cob_id.filter(|c| c & 0x8000_0000 == 0) else {
             continue;
         };
-        let offset = entries[..position].iter().map(|e| (e & 0xFF) as usize / 8).sum();
+        let offset = before.iter().map(|e| (e & 0xFF) as usize / 8).sum();
         let length = entries.iter().map(|e| (e & 0xFF) as usize / 8).sum();
         return Ok(Ok(Some(Mapped {
             comm: pdo.comm,
@@ -895,13 +899,18 @@ fn digital_outputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
         };
         data.extend(value);
     }
-    if data.len() != pdo.length || data.len() > 8 || pdo.offset >= data.len() {
+    let target = if data.len() != pdo.length || data.len() > 8 {
+        None
+    } else {
+        data.get_mut(pdo.offset)
+    };
+    let Some(target) = target else {
         return Ok(Finding::inconclusive(format!(
             "RPDO{}'s mapping could not be read back whole",
             pdo.number
         )));
-    }
-    data[pdo.offset] = 0xA5;
+    };
+    *target = 0xA5;
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     ctx.listen(Duration::from_millis(20), |_| false)?;
     ctx.send(pdo.cob, &data)?;
@@ -1018,7 +1027,8 @@ fn analog_inputs(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let id = ctx.id(pdo.cob);
     let value_of = |data: &[u8]| {
         data.get(pdo.offset..pdo.offset + 2)
-            .map(|b| i16::from_le_bytes([b[0], b[1]]))
+            .and_then(|b| <[u8; 2]>::try_from(b).ok())
+            .map(i16::from_le_bytes)
     };
     ctx.nmt(NmtCommand::StartRemoteNode, false)?;
     let period = Duration::from_millis(u64::from(ANALOG_PERIOD_MS));
@@ -1141,7 +1151,7 @@ fn sized(ctx: &Ctx<'_, '_>, index: u16, sub: u8, value: i64) -> Vec<u8> {
         .and_then(|e| e.size())
         .filter(|&n| (1..=8).contains(&n))
         .unwrap_or(4);
-    value.to_le_bytes()[..size].to_vec()
+    value.to_le_bytes().into_iter().take(size).collect()
 }
 
 fn analog_interrupts(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -1223,7 +1233,8 @@ fn analog_interrupts(ctx: &mut Ctx<'_, '_>) -> Outcome {
                     l.frame
                         .data()
                         .get(pdo.offset..pdo.offset + 2)
-                        .map(|b| i16::from_le_bytes([b[0], b[1]]))
+                        .and_then(|b| <[u8; 2]>::try_from(b).ok())
+                        .map(i16::from_le_bytes)
                 })
                 .collect();
             let seen = match carried.as_slice() {

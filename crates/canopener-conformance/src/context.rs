@@ -66,8 +66,8 @@ impl Reply {
     /// The answer to a raw SDO request ([`Ctx::raw_sdo`]): an abort frame is a refusal with its code.
     pub fn of_raw(answer: Option<Vec<u8>>) -> Reply {
         match answer {
-            Some(data) if data.len() == 8 && data[0] == 0x80 => {
-                Reply::Refused(u32::from_le_bytes([data[4], data[5], data[6], data[7]]))
+            Some(data) if let [0x80, _, _, _, c0, c1, c2, c3] = *data.as_slice() => {
+                Reply::Refused(u32::from_le_bytes([c0, c1, c2, c3]))
             }
             Some(data) => Reply::Frame(data),
             None => Reply::Silent,
@@ -84,6 +84,13 @@ pub fn hex(data: &[u8]) -> String {
         .map(|b| format!("{b:02X}"))
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+/// The bytes of the first of `frames`, as [`hex`] shows them; `(no frame)` when there is none.
+pub fn first_hex(frames: &[Logged]) -> String {
+    frames
+        .first()
+        .map_or_else(|| "(no frame)".to_owned(), |first| hex(first.frame.data()))
 }
 
 /// How often a value is written back while the answers break the SDO protocol.

@@ -252,8 +252,9 @@ impl DeviceModel {
     pub fn default_u32(&self, index: u16, sub: u8) -> Option<u32> {
         let bytes = self.entry(index, sub)?.default.as_ref()?;
         let mut wide = [0u8; 4];
-        let n = bytes.len().min(4);
-        wide[..n].copy_from_slice(&bytes[..n]);
+        for (slot, byte) in wide.iter_mut().zip(bytes) {
+            *slot = *byte;
+        }
         Some(u32::from_le_bytes(wide))
     }
 
@@ -369,7 +370,7 @@ pub fn encode(value: &Value, data_type: DataType, node: u8) -> Option<Vec<u8>> {
             if v < min || v > max {
                 return None;
             }
-            Some(v.to_le_bytes()[..data_type.byte_size()?].to_vec())
+            Some(v.to_le_bytes().get(..data_type.byte_size()?)?.to_vec())
         }
         (Value::Real { value, .. }, TypeKind::Real32) => Some((*value as f32).to_le_bytes().to_vec()),
         (Value::Real { value, .. }, TypeKind::Real64) => Some(value.to_le_bytes().to_vec()),
@@ -397,11 +398,12 @@ pub fn number_bytes(number: Number, data_type: DataType) -> Option<Vec<u8>> {
             let (min, max) = range_of(bits, true);
             (min..=max)
                 .contains(&i128::from(v))
-                .then(|| v.to_le_bytes()[..size].to_vec())
+                .then(|| v.to_le_bytes().get(..size).map(<[u8]>::to_vec))
+                .flatten()
         }
-        (Number::Unsigned(v), TypeKind::Unsigned(bits)) => {
-            (i128::from(v) <= range_of(bits, false).1).then(|| v.to_le_bytes()[..size].to_vec())
-        }
+        (Number::Unsigned(v), TypeKind::Unsigned(bits)) => (i128::from(v) <= range_of(bits, false).1)
+            .then(|| v.to_le_bytes().get(..size).map(<[u8]>::to_vec))
+            .flatten(),
         (Number::Unsigned(v), TypeKind::Boolean) => (v <= 1).then(|| vec![v as u8]),
         _ => None,
     }

@@ -102,16 +102,19 @@ impl Statistics {
         let rank = |p: f64| {
             // Nearest rank: the smallest sample with at least p of the samples at or below it.
             let index = ((p * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len()) - 1;
-            sorted[index]
+            sorted.get(index).copied().unwrap_or(f64::NAN)
+        };
+        let (Some(&min), Some(&max)) = (sorted.first(), sorted.last()) else {
+            return None;
         };
         Some(Statistics {
             count: sorted.len(),
-            min: sorted[0],
+            min,
             mean: sorted.iter().sum::<f64>() / sorted.len() as f64,
             p50: rank(0.5),
             p90: rank(0.9),
             p99: rank(0.99),
-            max: sorted[sorted.len() - 1],
+            max,
         })
     }
 }

@@ -41,7 +41,7 @@ fn layer(module: &str) -> Option<u8> {
 
 fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
     for path in fixture::list(dir).expect("the crate's sources are readable") {
-        if path.is_dir() {
+        if fixture::is_dir(&path) {
             sources(&path, out);
         } else if path.extension().is_some_and(|e| e == "rs") {
             out.push(path);

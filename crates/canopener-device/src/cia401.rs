@@ -534,11 +534,11 @@ impl Application for Cia401Io {
 
 fn read_uint(od: &DynamicOd, key: ObjectKey) -> Option<u64> {
     let value = od.get(key)?.value();
-    if value.is_empty() || value.len() > 8 {
+    if value.is_empty() {
         return None;
     }
     let mut buf = [0u8; 8];
-    buf[..value.len()].copy_from_slice(value);
+    buf.get_mut(..value.len())?.copy_from_slice(value);
     Some(u64::from_le_bytes(buf))
 }
 

@@ -588,16 +588,18 @@ impl Device {
             let d = frame.data();
             let dropped = self.faults.has(Fault::NoEmcy)
                 || (self.faults.has(Fault::EmcyNoErrorReset) && d.starts_with(&[0, 0]));
-            if d.len() == 8 && !dropped {
+            if let [c0, c1, reg, d3, d4, d5, d6, d7] = *d
+                && !dropped
+            {
                 let register = if self.faults.has(Fault::ErrorRegisterNotUpdated) {
                     0
                 } else {
-                    d[2]
+                    reg
                 };
                 self.events.push_back(DeviceEvent::EmcySent {
-                    code: u16::from_le_bytes([d[0], d[1]]),
+                    code: u16::from_le_bytes([c0, c1]),
                     register,
-                    data: [d[3], d[4], d[5], d[6], d[7]],
+                    data: [d3, d4, d5, d6, d7],
                 });
             }
             made.push((Source::Emcy, frame));

@@ -779,8 +779,10 @@ impl FaultLayer {
         }
         let raw = frame.id().as_raw();
         let data = frame.data();
-        if raw == u32::from(NMT_ID) && !frame.is_remote() && data.len() == 2 {
-            let (command, target) = (data[0], data[1]);
+        if raw == u32::from(NMT_ID)
+            && !frame.is_remote()
+            && let [command, target] = *data
+        {
             if self.has(Fault::NmtOtherNodeObeyed) && target != 0 && target != node.get() {
                 return CanFrame::new(frame.id(), &[command, node.get()]).ok();
             }
@@ -827,7 +829,9 @@ impl FaultLayer {
             let block_initiate = first & 0xE3 == 0xA0 || first & 0xE1 == 0xC0;
             if self.has(Fault::BlockCrcRequired) && block_initiate && first & 0x04 == 0 {
                 let mut bytes = data.to_vec();
-                bytes[0] = 0xE0;
+                if let Some(command) = bytes.first_mut() {
+                    *command = 0xE0;
+                }
                 return CanFrame::new(frame.id(), &bytes).ok();
             }
             if first & 0xE3 == 0xA0 {
@@ -842,7 +846,9 @@ impl FaultLayer {
                 && matches!(first >> 5, 0 | 3)
             {
                 let mut bytes = data.to_vec();
-                bytes[0] = (first & !0x10) | if toggle { 0x10 } else { 0 };
+                if let Some(command) = bytes.first_mut() {
+                    *command = (first & !0x10) | if toggle { 0x10 } else { 0 };
+                }
                 return CanFrame::new(frame.id(), &bytes).ok();
             }
         }
@@ -904,7 +910,7 @@ impl FaultLayer {
                 if self.has(Fault::NoEmcy) {
                     return;
                 }
-                if self.has(Fault::EmcyNoErrorReset) && bytes.len() >= 2 && bytes[..2] == [0, 0] {
+                if self.has(Fault::EmcyNoErrorReset) && bytes.starts_with(&[0, 0]) {
                     return;
                 }
                 if self.has(Fault::EmcyGenericBitClear)
@@ -912,8 +918,10 @@ impl FaultLayer {
                 {
                     *register &= !0x01;
                 }
-                if self.has(Fault::ErrorRegisterNotUpdated) && bytes.len() >= 3 {
-                    bytes[2] = 0;
+                if self.has(Fault::ErrorRegisterNotUpdated)
+                    && let Some(register) = bytes.get_mut(2)
+                {
+                    *register = 0;
                 }
             }
             // Under `rpdo-in-pre-operational` the PDO engine runs in pre-operational to take RPDOs;
@@ -975,38 +983,52 @@ impl FaultLayer {
             BlockUpload::Segments if first & 0x80 != 0 => self.block = BlockUpload::LastSent,
             BlockUpload::Ending if scs == 6 && first & 0x03 == 1 => {
                 self.block = BlockUpload::None;
-                if self.has(Fault::BlockCrcWrong) && bytes.len() >= 3 {
-                    bytes[1] = !bytes[1];
-                    bytes[2] = !bytes[2];
+                if self.has(Fault::BlockCrcWrong)
+                    && let Some([crc_lo, crc_hi]) = bytes.get_mut(1..3)
+                {
+                    *crc_lo = !*crc_lo;
+                    *crc_hi = !*crc_hi;
                 }
             }
             _ => {}
         }
-        if first == 0x80 && bytes.len() == 8 {
+        if let [0x80, _, _, _, code @ ..] = bytes
+            && let Ok(code_bytes) = <[u8; 4]>::try_from(&*code)
+        {
             self.block = BlockUpload::None;
-            let code = u32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]);
-            if self.has(Fault::SdoBadCommandSilent) && code == abort::COMMAND_SPECIFIER_INVALID {
+            if self.has(Fault::SdoBadCommandSilent)
+                && u32::from_le_bytes(code_bytes) == abort::COMMAND_SPECIFIER_INVALID
+            {
                 return false;
             }
             if self.has(Fault::WrongAbortCode) {
-                bytes[4..8].copy_from_slice(&abort::GENERAL_ERROR.to_le_bytes());
+                code.copy_from_slice(&abort::GENERAL_ERROR.to_le_bytes());
             }
         }
         // An expedited upload response (scs 2, e = 1) and the entry it answers.
-        if first & 0xE2 == 0x42 && bytes.len() == 8 {
-            if self.has(Fault::DeviceTypeByteOrder) && bytes[1..4] == [0x00, 0x10, 0x00] {
-                bytes[4..8].reverse();
+        if first & 0xE2 == 0x42
+            && let [_, index_lo, index_hi, sub, value @ ..] = bytes
+            && value.len() == 4
+        {
+            if self.has(Fault::DeviceTypeByteOrder) && [*index_lo, *index_hi, *sub] == [0x00, 0x10, 0x00] {
+                value.reverse();
             }
-            if self.has(Fault::StructureEntryWrong) && bytes[3] == 0xFF {
-                bytes.swap(4, 5);
+            if self.has(Fault::StructureEntryWrong)
+                && *sub == 0xFF
+                && let [low, high, ..] = value
+            {
+                std::mem::swap(low, high);
             }
         }
         // The last segment of a segmented upload (scs 0, c = 1), not a block upload's sub-block.
-        if self.has(Fault::SegmentUnusedWrong) && self.block == BlockUpload::None && first & 0xE1 == 0x01 {
-            bytes[0] = first & !0x0E;
-        }
-        if self.has(Fault::SdoExpeditedSizeWrong) && first & 0xE3 == 0x43 {
-            bytes[0] = 0x43;
+        if let Some(command) = bytes.first_mut() {
+            if self.has(Fault::SegmentUnusedWrong) && self.block == BlockUpload::None && first & 0xE1 == 0x01
+            {
+                *command = first & !0x0E;
+            }
+            if self.has(Fault::SdoExpeditedSizeWrong) && first & 0xE3 == 0x43 {
+                *command = 0x43;
+            }
         }
         true
     }

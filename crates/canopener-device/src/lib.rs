@@ -6,6 +6,12 @@
 //! touches a socket: time arrives as [`canopener_can::Instant`], so tests run on virtual time.
 
 #![warn(missing_docs)]
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does); each exception names, where it stands, why it cannot fail.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
 
 pub mod application;
 pub mod can_id;

@@ -521,7 +521,9 @@ impl LssSlave {
             LssAddressPart::RevisionNumber => 2,
             LssAddressPart::SerialNumber => 3,
         };
-        self.selective[slot] = Some(value);
+        if let Some(received) = self.selective.get_mut(slot) {
+            *received = Some(value);
+        }
         if part != LssAddressPart::SerialNumber {
             return;
         }
@@ -600,7 +602,9 @@ impl LssSlave {
             IdentifyField::SerialLow => 4,
             IdentifyField::SerialHigh => 5,
         };
-        self.identify[slot] = Some(value);
+        if let Some(received) = self.identify.get_mut(slot) {
+            *received = Some(value);
+        }
         if field != IdentifyField::SerialHigh {
             return;
         }

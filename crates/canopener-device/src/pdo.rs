@@ -1023,7 +1023,7 @@ impl PdoEngine {
         }
         let mut handled = false;
         for i in 0..self.rpdos.len() {
-            if self.rpdos[i].id == Some(frame.id()) {
+            if self.rpdos.get(i).is_some_and(|rpdo| rpdo.id == Some(frame.id())) {
                 handled = true;
                 self.receive(now, i, frame.data(), od);
             }
@@ -1047,7 +1047,8 @@ impl PdoEngine {
             };
             handled = true;
             if let Some(data) = data
-                && let Ok(frame) = CanFrame::new(id, &data[..tpdo.bytes])
+                && let Some(bytes) = data.get(..tpdo.bytes)
+                && let Ok(frame) = CanFrame::new(id, bytes)
             {
                 self.transmit.push_back(frame);
             }
@@ -1094,8 +1095,9 @@ impl PdoEngine {
             self.events.push_back(PdoEvent::RpdoResumed { number });
         }
         let mut buf = [0u8; 8];
-        let n = rpdo.bytes.min(8);
-        buf[..n].copy_from_slice(&data[..n]);
+        for (slot, byte) in buf.iter_mut().zip(data.iter().take(rpdo.bytes)) {
+            *slot = *byte;
+        }
         if rpdo.comm.transmission_type <= 240 {
             if self.window_closed {
                 self.events.push_back(PdoEvent::RpdoLate { number });
@@ -1157,7 +1159,10 @@ impl PdoEngine {
                 }
                 _ => false,
             };
-            if send && let Ok(frame) = CanFrame::new(id, &data[..tpdo.bytes]) {
+            if send
+                && let Some(bytes) = data.get(..tpdo.bytes)
+                && let Ok(frame) = CanFrame::new(id, bytes)
+            {
                 self.transmit.push_back(frame);
             }
         }
@@ -1195,7 +1200,9 @@ impl PdoEngine {
             let scheduled = tpdo.pending_since.max(tpdo.inhibit_until);
             if tpdo.event_pending && now >= scheduled {
                 let data = sample(od, &tpdo.map);
-                if let Ok(frame) = CanFrame::new(id, &data[..tpdo.bytes]) {
+                if let Some(bytes) = data.get(..tpdo.bytes)
+                    && let Ok(frame) = CanFrame::new(id, bytes)
+                {
                     self.transmit.push_back(frame);
                 }
                 tpdo.event_pending = false;
@@ -1319,8 +1326,9 @@ fn cob_can_id(cob_id: u32) -> Option<CanId> {
 /// Up to 8 little-endian bytes as a number.
 fn le_u64(bytes: &[u8]) -> u64 {
     let mut buf = [0u8; 8];
-    let n = bytes.len().min(8);
-    buf[..n].copy_from_slice(&bytes[..n]);
+    for (slot, byte) in buf.iter_mut().zip(bytes) {
+        *slot = *byte;
+    }
     u64::from_le_bytes(buf)
 }
 
@@ -1368,7 +1376,9 @@ fn write_mapped(od: &mut DynamicOd, map: &[Mapped], data: [u8; 8]) {
             let len = entry.value().len().min(8);
             let old = le_u64(entry.value());
             let new = (old & !m) | field;
-            let _ = entry.set_value(&new.to_le_bytes()[..len]);
+            if let Some(bytes) = new.to_le_bytes().get(..len) {
+                let _ = entry.set_value(bytes);
+            }
         }
         offset += u32::from(bits);
     }

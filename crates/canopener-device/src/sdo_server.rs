@@ -1188,6 +1188,28 @@ mod tests {
         }
     }
 
+    /// One request of a scripted exchange, at a virtual millisecond.
+    enum Step {
+        /// The client sends the request; the server answers exactly these frames.
+        Answers(u64, [u8; 8], Vec<[u8; 8]>),
+        /// The client sends the request; the server aborts the transfer of the entry with the code.
+        Aborts(u64, [u8; 8], ObjectKey, u32),
+    }
+
+    use Step::{Aborts, Answers};
+
+    impl Trace {
+        /// Plays the steps in order on this server, checking every answer and abort.
+        fn play(&mut self, steps: &[Step]) {
+            for step in steps {
+                match step {
+                    Answers(ms, request, out) => self.req(*ms, *request, out),
+                    Aborts(ms, request, key, code) => self.aborts(*ms, *request, *key, *code),
+                }
+            }
+        }
+    }
+
     fn frame(id: u16, data: &[u8]) -> CanFrame {
         let id = StandardId::new(id).unwrap_or(StandardId::ZERO);
         match CanFrame::new(id, data) {
@@ -1718,18 +1740,31 @@ mod tests {
     #[test]
     fn abort_0503_0000_toggle_in_download_and_upload() {
         let mut t = Trace::new();
-        t.req(0, mux(0x21, DOMAIN, [14, 0, 0, 0]), &[mux(0x60, DOMAIN, [0; 4])]);
-        t.aborts(1, segment(0x10, b"0123456"), DOMAIN, 0x0503_0000);
-        t.req(2, mux(0x21, DOMAIN, [14, 0, 0, 0]), &[mux(0x60, DOMAIN, [0; 4])]);
-        t.req(3, segment(0x00, b"0123456"), &[[0x20, 0, 0, 0, 0, 0, 0, 0]]);
-        t.aborts(4, segment(0x01, b"0123456"), DOMAIN, 0x0503_0000);
+        let toggle = 0x0503_0000;
+        t.play(&[
+            Answers(
+                0,
+                mux(0x21, DOMAIN, [14, 0, 0, 0]),
+                vec![mux(0x60, DOMAIN, [0; 4])],
+            ),
+            Aborts(1, segment(0x10, b"0123456"), DOMAIN, toggle),
+            Answers(
+                2,
+                mux(0x21, DOMAIN, [14, 0, 0, 0]),
+                vec![mux(0x60, DOMAIN, [0; 4])],
+            ),
+            Answers(3, segment(0x00, b"0123456"), vec![[0x20, 0, 0, 0, 0, 0, 0, 0]]),
+            Aborts(4, segment(0x01, b"0123456"), DOMAIN, toggle),
+        ]);
         assert_eq!(t.value(DOMAIN), b"");
-        t.req(
-            5,
-            mux(0x40, STRING_1008, [0; 4]),
-            &[mux(0x41, STRING_1008, [16, 0, 0, 0])],
-        );
-        t.aborts(6, [0x70, 0, 0, 0, 0, 0, 0, 0], STRING_1008, 0x0503_0000);
+        t.play(&[
+            Answers(
+                5,
+                mux(0x40, STRING_1008, [0; 4]),
+                vec![mux(0x41, STRING_1008, [16, 0, 0, 0])],
+            ),
+            Aborts(6, [0x70, 0, 0, 0, 0, 0, 0, 0], STRING_1008, toggle),
+        ]);
     }
 
     /// A request that starts a transfer, the answer, and the entry.
@@ -1799,62 +1834,69 @@ mod tests {
 
     #[test]
     fn abort_0504_0001_bad_command_specifier() {
-        let mut t = Trace::new();
-        // ccs 7 does not exist.
-        t.aborts(0, mux(0xE0, RO_U32, [0; 4]), RO_U32, 0x0504_0001);
-        // Segments, block sub-commands and end frames outside a transfer.
-        t.aborts(1, [0x60, 0x00, 0x10, 0, 0, 0, 0, 0], RO_U32, 0x0504_0001);
-        t.aborts(2, [0x00, 0x00, 0x10, 0, 0, 0, 0, 0], RO_U32, 0x0504_0001);
-        t.aborts(3, [0xA3, 0x00, 0x10, 0, 0, 0, 0, 0], RO_U32, 0x0504_0001);
-        t.aborts(4, [0xC1, 0x00, 0x10, 0, 0, 0, 0, 0], RO_U32, 0x0504_0001);
-        // A new initiate during a segmented transfer aborts the running one (CANopenNode, CCT).
-        t.req(5, mux(0x21, DOMAIN, [20, 0, 0, 0]), &[mux(0x60, DOMAIN, [0; 4])]);
-        t.aborts(6, mux(0x40, RO_U32, [0; 4]), DOMAIN, 0x0504_0001);
-        t.req(
-            7,
-            mux(0x40, STRING_1008, [0; 4]),
-            &[mux(0x41, STRING_1008, [16, 0, 0, 0])],
-        );
-        t.aborts(8, segment(0x00, b"x"), STRING_1008, 0x0504_0001);
-        // Wrong frames in the block states.
-        t.req(
-            9,
-            mux(0xA4, STRING_1008, [127, 0, 0, 0]),
-            &[mux(0xC6, STRING_1008, [16, 0, 0, 0])],
-        );
-        t.aborts(10, [0xA2, 0, 127, 0, 0, 0, 0, 0], STRING_1008, 0x0504_0001);
-        t.req(
-            11,
-            mux(0xC6, RW_U32, [4, 0, 0, 0]),
-            &[mux(0xA4, RW_U32, [127, 0, 0, 0])],
-        );
-        t.req(12, [0x81, 1, 2, 3, 4, 0, 0, 0], &[[0xA2, 1, 127, 0, 0, 0, 0, 0]]);
-        t.aborts(13, [0xA1, 0, 0, 0, 0, 0, 0, 0], RW_U32, 0x0504_0001);
+        let invalid = 0x0504_0001;
+        Trace::new().play(&[
+            // ccs 7 does not exist.
+            Aborts(0, mux(0xE0, RO_U32, [0; 4]), RO_U32, invalid),
+            // Segments, block sub-commands and end frames outside a transfer.
+            Aborts(1, [0x60, 0x00, 0x10, 0, 0, 0, 0, 0], RO_U32, invalid),
+            Aborts(2, [0x00, 0x00, 0x10, 0, 0, 0, 0, 0], RO_U32, invalid),
+            Aborts(3, [0xA3, 0x00, 0x10, 0, 0, 0, 0, 0], RO_U32, invalid),
+            Aborts(4, [0xC1, 0x00, 0x10, 0, 0, 0, 0, 0], RO_U32, invalid),
+            // A new initiate during a segmented transfer aborts the running one (CANopenNode, CCT).
+            Answers(
+                5,
+                mux(0x21, DOMAIN, [20, 0, 0, 0]),
+                vec![mux(0x60, DOMAIN, [0; 4])],
+            ),
+            Aborts(6, mux(0x40, RO_U32, [0; 4]), DOMAIN, invalid),
+            Answers(
+                7,
+                mux(0x40, STRING_1008, [0; 4]),
+                vec![mux(0x41, STRING_1008, [16, 0, 0, 0])],
+            ),
+            Aborts(8, segment(0x00, b"x"), STRING_1008, invalid),
+            // Wrong frames in the block states.
+            Answers(
+                9,
+                mux(0xA4, STRING_1008, [127, 0, 0, 0]),
+                vec![mux(0xC6, STRING_1008, [16, 0, 0, 0])],
+            ),
+            Aborts(10, [0xA2, 0, 127, 0, 0, 0, 0, 0], STRING_1008, invalid),
+            Answers(
+                11,
+                mux(0xC6, RW_U32, [4, 0, 0, 0]),
+                vec![mux(0xA4, RW_U32, [127, 0, 0, 0])],
+            ),
+            Answers(
+                12,
+                [0x81, 1, 2, 3, 4, 0, 0, 0],
+                vec![[0xA2, 1, 127, 0, 0, 0, 0, 0]],
+            ),
+            Aborts(13, [0xA1, 0, 0, 0, 0, 0, 0, 0], RW_U32, invalid),
+        ]);
     }
 
     #[test]
     fn abort_0504_0002_block_size() {
-        let mut t = Trace::new();
-        // CCT "SDO 26": blksize 128; and blksize 0.
-        t.aborts(
-            0,
-            mux(0xA4, STRING_1008, [128, 0, 0, 0]),
-            STRING_1008,
-            0x0504_0002,
-        );
-        t.aborts(1, mux(0xA4, STRING_1008, [0, 0, 0, 0]), STRING_1008, 0x0504_0002);
-        // A new block size of 0 in the acknowledge.
-        t.req(
-            2,
-            mux(0xA4, STRING_1008, [2, 0, 0, 0]),
-            &[mux(0xC6, STRING_1008, [16, 0, 0, 0])],
-        );
-        t.req(
-            3,
-            [0xA3, 0, 0, 0, 0, 0, 0, 0],
-            &[segment(1, b"CANopen"), segment(2, b"DemoPIC")],
-        );
-        t.aborts(4, [0xA2, 2, 0, 0, 0, 0, 0, 0], STRING_1008, 0x0504_0002);
+        let block_size = 0x0504_0002;
+        Trace::new().play(&[
+            // CCT "SDO 26": blksize 128; and blksize 0.
+            Aborts(0, mux(0xA4, STRING_1008, [128, 0, 0, 0]), STRING_1008, block_size),
+            Aborts(1, mux(0xA4, STRING_1008, [0, 0, 0, 0]), STRING_1008, block_size),
+            // A new block size of 0 in the acknowledge.
+            Answers(
+                2,
+                mux(0xA4, STRING_1008, [2, 0, 0, 0]),
+                vec![mux(0xC6, STRING_1008, [16, 0, 0, 0])],
+            ),
+            Answers(
+                3,
+                [0xA3, 0, 0, 0, 0, 0, 0, 0],
+                vec![segment(1, b"CANopen"), segment(2, b"DemoPIC")],
+            ),
+            Aborts(4, [0xA2, 2, 0, 0, 0, 0, 0, 0], STRING_1008, block_size),
+        ]);
         assert!(matches!(
             SdoServer::default_for_node(5).map(|s| s.with_block_size(0)),
             Ok(Err(SdoServerError::BlockSize(0)))
@@ -1867,32 +1909,34 @@ mod tests {
 
     #[test]
     fn abort_0504_0003_sequence_number() {
-        let mut t = Trace::with(|server| server.with_block_size(4).unwrap_or_else(|_| panic!()));
-        // Block download: seqno 0 and seqno above the block size.
-        t.req(
-            0,
-            mux(0xC6, DOMAIN, [20, 0, 0, 0]),
-            &[mux(0xA4, DOMAIN, [4, 0, 0, 0])],
-        );
-        t.aborts(1, segment(0x00, b"0123456"), DOMAIN, 0x0504_0003);
-        t.req(
-            2,
-            mux(0xC6, DOMAIN, [20, 0, 0, 0]),
-            &[mux(0xA4, DOMAIN, [4, 0, 0, 0])],
-        );
-        t.aborts(3, segment(0x05, b"0123456"), DOMAIN, 0x0504_0003);
-        // Block upload: CCT "SDO 27" acknowledges sequence number 80h.
-        t.req(
-            4,
-            mux(0xA4, RO_U32, [0x14, 0, 0, 0]),
-            &[mux(0xC6, RO_U32, [4, 0, 0, 0])],
-        );
-        t.req(
-            5,
-            [0xA3, 0, 0, 0, 0, 0, 0, 0],
-            &[[0x81, 0x91, 0x01, 0x0F, 0, 0, 0, 0]],
-        );
-        t.aborts(6, [0xA2, 0x80, 0x14, 0, 0, 0, 0, 0], RO_U32, 0x0504_0003);
+        let sequence = 0x0504_0003;
+        Trace::with(|server| server.with_block_size(4).unwrap_or_else(|_| panic!())).play(&[
+            // Block download: seqno 0 and seqno above the block size.
+            Answers(
+                0,
+                mux(0xC6, DOMAIN, [20, 0, 0, 0]),
+                vec![mux(0xA4, DOMAIN, [4, 0, 0, 0])],
+            ),
+            Aborts(1, segment(0x00, b"0123456"), DOMAIN, sequence),
+            Answers(
+                2,
+                mux(0xC6, DOMAIN, [20, 0, 0, 0]),
+                vec![mux(0xA4, DOMAIN, [4, 0, 0, 0])],
+            ),
+            Aborts(3, segment(0x05, b"0123456"), DOMAIN, sequence),
+            // Block upload: CCT "SDO 27" acknowledges sequence number 80h.
+            Answers(
+                4,
+                mux(0xA4, RO_U32, [0x14, 0, 0, 0]),
+                vec![mux(0xC6, RO_U32, [4, 0, 0, 0])],
+            ),
+            Answers(
+                5,
+                [0xA3, 0, 0, 0, 0, 0, 0, 0],
+                vec![[0x81, 0x91, 0x01, 0x0F, 0, 0, 0, 0]],
+            ),
+            Aborts(6, [0xA2, 0x80, 0x14, 0, 0, 0, 0, 0], RO_U32, sequence),
+        ]);
     }
 
     #[test]
@@ -1970,133 +2014,150 @@ mod tests {
 
     #[test]
     fn abort_0601_0001_and_0601_0002_access() {
-        let mut t = Trace::new();
-        t.aborts(0, mux(0x40, WO_U32, [0; 4]), WO_U32, 0x0601_0001);
-        t.aborts(1, mux(0xA4, WO_U32, [127, 0, 0, 0]), WO_U32, 0x0601_0001);
-        t.aborts(2, mux(0x23, RO_U32, [1, 2, 3, 4]), RO_U32, 0x0601_0002);
-        t.aborts(3, mux(0x21, STRING_1008, [3, 0, 0, 0]), STRING_1008, 0x0601_0002);
-        t.aborts(4, mux(0xC6, RO_U32, [4, 0, 0, 0]), RO_U32, 0x0601_0002);
-        // Writing a write-only entry works.
-        t.req(5, mux(0x23, WO_U32, [1, 0, 0, 0]), &[mux(0x60, WO_U32, [0; 4])]);
+        Trace::new().play(&[
+            Aborts(0, mux(0x40, WO_U32, [0; 4]), WO_U32, 0x0601_0001),
+            Aborts(1, mux(0xA4, WO_U32, [127, 0, 0, 0]), WO_U32, 0x0601_0001),
+            Aborts(2, mux(0x23, RO_U32, [1, 2, 3, 4]), RO_U32, 0x0601_0002),
+            Aborts(3, mux(0x21, STRING_1008, [3, 0, 0, 0]), STRING_1008, 0x0601_0002),
+            Aborts(4, mux(0xC6, RO_U32, [4, 0, 0, 0]), RO_U32, 0x0601_0002),
+            // Writing a write-only entry works.
+            Answers(
+                5,
+                mux(0x23, WO_U32, [1, 0, 0, 0]),
+                vec![mux(0x60, WO_U32, [0; 4])],
+            ),
+        ]);
     }
 
     #[test]
     fn abort_0602_0000_and_0609_0011_missing_object_or_sub_index() {
-        let mut t = Trace::new();
         let missing = ObjectKey::new(0x1004, 0);
         let missing_sub = ObjectKey::new(0x1018, 7);
-        t.aborts(0, mux(0x40, missing, [0; 4]), missing, 0x0602_0000);
-        t.aborts(1, mux(0x23, missing, [0; 4]), missing, 0x0602_0000);
-        t.aborts(2, mux(0xC6, missing, [0; 4]), missing, 0x0602_0000);
-        t.aborts(3, mux(0x40, missing_sub, [0; 4]), missing_sub, 0x0609_0011);
-        t.aborts(4, mux(0x21, missing_sub, [9, 0, 0, 0]), missing_sub, 0x0609_0011);
-        t.aborts(
-            5,
-            mux(0xA4, missing_sub, [127, 0, 0, 0]),
-            missing_sub,
-            0x0609_0011,
-        );
-        // The worked example of the reference: abort for 1004h:00 on 585h.
-        t.req(
-            6,
-            mux(0x40, missing, [0; 4]),
-            &[[0x80, 0x04, 0x10, 0x00, 0x00, 0x00, 0x02, 0x06]],
-        );
+        Trace::new().play(&[
+            Aborts(0, mux(0x40, missing, [0; 4]), missing, 0x0602_0000),
+            Aborts(1, mux(0x23, missing, [0; 4]), missing, 0x0602_0000),
+            Aborts(2, mux(0xC6, missing, [0; 4]), missing, 0x0602_0000),
+            Aborts(3, mux(0x40, missing_sub, [0; 4]), missing_sub, 0x0609_0011),
+            Aborts(4, mux(0x21, missing_sub, [9, 0, 0, 0]), missing_sub, 0x0609_0011),
+            Aborts(
+                5,
+                mux(0xA4, missing_sub, [127, 0, 0, 0]),
+                missing_sub,
+                0x0609_0011,
+            ),
+            // The worked example of the reference: abort for 1004h:00 on 585h.
+            Answers(
+                6,
+                mux(0x40, missing, [0; 4]),
+                vec![[0x80, 0x04, 0x10, 0x00, 0x00, 0x00, 0x02, 0x06]],
+            ),
+        ]);
     }
 
     #[test]
     fn abort_0607_0010_0012_0013_length() {
-        let mut t = Trace::new();
-        // 0607 0010: an odd number of bytes for a UNICODE_STRING.
-        t.aborts(0, mux(0x27, UNICODE, [0x41, 0, 0x42, 0]), UNICODE, 0x0607_0010);
-        // 0607 0012: too long, expedited, announced, and by the segments themselves.
-        t.aborts(1, mux(0x23, HEARTBEAT, [1, 2, 3, 4]), HEARTBEAT, 0x0607_0012);
-        t.aborts(2, mux(0x21, HEARTBEAT, [8, 0, 0, 0]), HEARTBEAT, 0x0607_0012);
-        t.aborts(
-            3,
-            mux(0xC6, SHORT_STRING, [11, 0, 0, 0]),
-            SHORT_STRING,
-            0x0607_0012,
-        );
-        t.req(4, mux(0x20, HEARTBEAT, [0; 4]), &[mux(0x60, HEARTBEAT, [0; 4])]);
-        t.aborts(5, segment(0x04, b"abcde"), HEARTBEAT, 0x0607_0012);
-        t.req(6, mux(0x21, DOMAIN, [3, 0, 0, 0]), &[mux(0x60, DOMAIN, [0; 4])]);
-        t.aborts(7, segment(0x06, b"abcd"), DOMAIN, 0x0607_0012);
-        t.req(
-            8,
-            mux(0xC4, SHORT_STRING, [0; 4]),
-            &[mux(0xA4, SHORT_STRING, [127, 0, 0, 0])],
-        );
-        t.req(9, segment(0x01, b"0123456"), &[]);
-        t.aborts(10, segment(0x02, b"789abcd"), SHORT_STRING, 0x0607_0012);
-        // 0607 0013: too short, expedited, announced, and a transfer shorter than announced.
-        t.aborts(11, mux(0x2B, RW_U32, [1, 2, 0, 0]), RW_U32, 0x0607_0013);
-        t.aborts(12, mux(0x21, RW_U32, [2, 0, 0, 0]), RW_U32, 0x0607_0013);
-        t.req(13, mux(0x21, DOMAIN, [9, 0, 0, 0]), &[mux(0x60, DOMAIN, [0; 4])]);
-        t.aborts(14, segment(0x05, b"abc"), DOMAIN, 0x0607_0013);
-        t.req(
-            15,
-            mux(0xC6, DOMAIN, [9, 0, 0, 0]),
-            &[mux(0xA4, DOMAIN, [127, 0, 0, 0])],
-        );
-        t.req(16, segment(0x81, b"abc"), &[[0xA2, 1, 127, 0, 0, 0, 0, 0]]);
+        let (too_long, too_short) = (0x0607_0012, 0x0607_0013);
         let [lo, hi] = crc16_ccitt(b"abc").to_le_bytes();
-        t.aborts(17, [0xC1 | (4 << 2), lo, hi, 0, 0, 0, 0, 0], DOMAIN, 0x0607_0013);
+        let mut t = Trace::new();
+        t.play(&[
+            // 0607 0010: an odd number of bytes for a UNICODE_STRING.
+            Aborts(0, mux(0x27, UNICODE, [0x41, 0, 0x42, 0]), UNICODE, 0x0607_0010),
+            // 0607 0012: too long, expedited, announced, and by the segments themselves.
+            Aborts(1, mux(0x23, HEARTBEAT, [1, 2, 3, 4]), HEARTBEAT, too_long),
+            Aborts(2, mux(0x21, HEARTBEAT, [8, 0, 0, 0]), HEARTBEAT, too_long),
+            Aborts(3, mux(0xC6, SHORT_STRING, [11, 0, 0, 0]), SHORT_STRING, too_long),
+            Answers(
+                4,
+                mux(0x20, HEARTBEAT, [0; 4]),
+                vec![mux(0x60, HEARTBEAT, [0; 4])],
+            ),
+            Aborts(5, segment(0x04, b"abcde"), HEARTBEAT, too_long),
+            Answers(
+                6,
+                mux(0x21, DOMAIN, [3, 0, 0, 0]),
+                vec![mux(0x60, DOMAIN, [0; 4])],
+            ),
+            Aborts(7, segment(0x06, b"abcd"), DOMAIN, too_long),
+            Answers(
+                8,
+                mux(0xC4, SHORT_STRING, [0; 4]),
+                vec![mux(0xA4, SHORT_STRING, [127, 0, 0, 0])],
+            ),
+            Answers(9, segment(0x01, b"0123456"), vec![]),
+            Aborts(10, segment(0x02, b"789abcd"), SHORT_STRING, too_long),
+            // 0607 0013: too short, expedited, announced, and a transfer shorter than announced.
+            Aborts(11, mux(0x2B, RW_U32, [1, 2, 0, 0]), RW_U32, too_short),
+            Aborts(12, mux(0x21, RW_U32, [2, 0, 0, 0]), RW_U32, too_short),
+            Answers(
+                13,
+                mux(0x21, DOMAIN, [9, 0, 0, 0]),
+                vec![mux(0x60, DOMAIN, [0; 4])],
+            ),
+            Aborts(14, segment(0x05, b"abc"), DOMAIN, too_short),
+            Answers(
+                15,
+                mux(0xC6, DOMAIN, [9, 0, 0, 0]),
+                vec![mux(0xA4, DOMAIN, [127, 0, 0, 0])],
+            ),
+            Answers(16, segment(0x81, b"abc"), vec![[0xA2, 1, 127, 0, 0, 0, 0, 0]]),
+            Aborts(17, [0xC1 | (4 << 2), lo, hi, 0, 0, 0, 0, 0], DOMAIN, too_short),
+        ]);
         assert_eq!(t.value(DOMAIN), b"");
         assert_eq!(t.value(HEARTBEAT), [0, 0]);
     }
 
     #[test]
     fn abort_0609_0030_0031_0032_limits() {
-        let mut t = Trace::new();
-        t.aborts(0, mux(0x2F, LIMITED_U8, [101, 0, 0, 0]), LIMITED_U8, 0x0609_0031);
-        t.aborts(1, mux(0x2F, LIMITED_U8, [9, 0, 0, 0]), LIMITED_U8, 0x0609_0032);
-        t.aborts(
-            2,
-            mux(0x23, LIMITED_REAL, f32::NAN.to_le_bytes()),
-            LIMITED_REAL,
-            0x0609_0030,
-        );
-        // The same checks at the end of a segmented and a block download.
-        t.req(
-            3,
-            mux(0x21, LIMITED_U8, [1, 0, 0, 0]),
-            &[mux(0x60, LIMITED_U8, [0; 4])],
-        );
-        t.aborts(4, segment(0x0D, &[200]), LIMITED_U8, 0x0609_0031);
-        t.req(
-            5,
-            mux(0xC6, LIMITED_U8, [1, 0, 0, 0]),
-            &[mux(0xA4, LIMITED_U8, [127, 0, 0, 0])],
-        );
-        t.req(6, segment(0x81, &[0]), &[[0xA2, 1, 127, 0, 0, 0, 0, 0]]);
+        let (too_high, too_low) = (0x0609_0031, 0x0609_0032);
         let [lo, hi] = crc16_ccitt(&[0]).to_le_bytes();
-        t.aborts(
-            7,
-            [0xC1 | (6 << 2), lo, hi, 0, 0, 0, 0, 0],
-            LIMITED_U8,
-            0x0609_0032,
-        );
+        let mut t = Trace::new();
+        t.play(&[
+            Aborts(0, mux(0x2F, LIMITED_U8, [101, 0, 0, 0]), LIMITED_U8, too_high),
+            Aborts(1, mux(0x2F, LIMITED_U8, [9, 0, 0, 0]), LIMITED_U8, too_low),
+            Aborts(
+                2,
+                mux(0x23, LIMITED_REAL, f32::NAN.to_le_bytes()),
+                LIMITED_REAL,
+                0x0609_0030,
+            ),
+            // The same checks at the end of a segmented and a block download.
+            Answers(
+                3,
+                mux(0x21, LIMITED_U8, [1, 0, 0, 0]),
+                vec![mux(0x60, LIMITED_U8, [0; 4])],
+            ),
+            Aborts(4, segment(0x0D, &[200]), LIMITED_U8, too_high),
+            Answers(
+                5,
+                mux(0xC6, LIMITED_U8, [1, 0, 0, 0]),
+                vec![mux(0xA4, LIMITED_U8, [127, 0, 0, 0])],
+            ),
+            Answers(6, segment(0x81, &[0]), vec![[0xA2, 1, 127, 0, 0, 0, 0, 0]]),
+            Aborts(7, [0xC1 | (6 << 2), lo, hi, 0, 0, 0, 0, 0], LIMITED_U8, too_low),
+        ]);
         assert_eq!(t.value(LIMITED_U8), [50]);
     }
 
     #[test]
     fn abort_0800_0022_device_state_refuses_downloads_only() {
+        let refused = 0x0800_0022;
         let mut t = Trace::new();
         t.server.set_downloads_allowed(false);
-        t.aborts(0, mux(0x2B, HEARTBEAT, [1, 0, 0, 0]), HEARTBEAT, 0x0800_0022);
-        t.aborts(1, mux(0x21, DOMAIN, [1, 0, 0, 0]), DOMAIN, 0x0800_0022);
-        t.aborts(2, mux(0xC6, DOMAIN, [1, 0, 0, 0]), DOMAIN, 0x0800_0022);
-        t.req(
-            3,
-            mux(0x40, HEARTBEAT, [0; 4]),
-            &[mux(0x4B, HEARTBEAT, [0, 0, 0, 0])],
-        );
+        t.play(&[
+            Aborts(0, mux(0x2B, HEARTBEAT, [1, 0, 0, 0]), HEARTBEAT, refused),
+            Aborts(1, mux(0x21, DOMAIN, [1, 0, 0, 0]), DOMAIN, refused),
+            Aborts(2, mux(0xC6, DOMAIN, [1, 0, 0, 0]), DOMAIN, refused),
+            Answers(
+                3,
+                mux(0x40, HEARTBEAT, [0; 4]),
+                vec![mux(0x4B, HEARTBEAT, [0, 0, 0, 0])],
+            ),
+        ]);
         // The state changes during a transfer: the final store is refused.
         t.server.set_downloads_allowed(true);
         t.req(4, mux(0x21, DOMAIN, [1, 0, 0, 0]), &[mux(0x60, DOMAIN, [0; 4])]);
         t.server.set_downloads_allowed(false);
-        t.aborts(5, segment(0x0D, b"a"), DOMAIN, 0x0800_0022);
+        t.aborts(5, segment(0x0D, b"a"), DOMAIN, refused);
         assert_eq!(t.value(DOMAIN), b"");
     }
 

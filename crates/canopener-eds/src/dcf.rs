@@ -11,6 +11,10 @@ use crate::value::{Radix, Value, parse_value};
 
 /// The bit rates CiA 306 names in `[DeviceInfo] BaudRate_*` and `[DeviceComissioning] Baudrate`, in kbit/s:
 /// those of [`DeviceInfo::BAUD_RATE_KEYS`].
+#[allow(
+    clippy::indexing_slicing,
+    reason = "const evaluation: an index out of bounds fails the build, it cannot panic at run time"
+)]
 pub const BITRATES_KBIT: [u16; 8] = {
     let keys = DeviceInfo::BAUD_RATE_KEYS;
     let mut rates = [0; 8];

@@ -1445,10 +1445,12 @@ impl Hash for Caseless<'_> {
         // Lower-cased one stack buffer at a time: the bytes `to_ascii_lowercase` would give.
         let mut buffer = [0u8; 32];
         for chunk in self.0.as_bytes().chunks(buffer.len()) {
-            let lower = &mut buffer[..chunk.len()];
-            lower.copy_from_slice(chunk);
-            lower.make_ascii_lowercase();
-            state.write(lower);
+            // Chunks are at most the buffer's length, so the prefix always exists.
+            if let Some(lower) = buffer.get_mut(..chunk.len()) {
+                lower.copy_from_slice(chunk);
+                lower.make_ascii_lowercase();
+                state.write(lower);
+            }
         }
     }
 }

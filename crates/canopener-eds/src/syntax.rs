@@ -459,7 +459,9 @@ fn split_lines(text: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<Line> {
         // Fast path for the `Key=value` line that makes up most of a file: a run of key characters
         // from column 1 followed directly by `=` is exactly the entry `classify` accepts without a
         // diagnostic, so the line is scanned once and its key needs no trimming.
-        let key_len = bytes[start..]
+        let key_len = bytes
+            .get(start..)
+            .unwrap_or_default()
             .iter()
             .position(|&b| !is_key_byte(b))
             .unwrap_or(bytes.len() - start);
@@ -511,6 +513,7 @@ fn split_lines(text: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<Line> {
 }
 
 /// Whether a byte may appear in a key without an [`Code::UnusualKey`] finding (letters, digits, `_`).
+#[allow(clippy::indexing_slicing, reason = "a u8 indexes a table of 256 entries")]
 fn is_key_byte(b: u8) -> bool {
     // A table lookup: the three range tests of `is_ascii_alphanumeric` cost more per key byte.
     const TABLE: [bool; 256] = {
@@ -545,10 +548,9 @@ fn classify(
     let indent = content.len() - trimmed.len();
     let line_span =
         |column: usize, len: usize| Span::new(u32_of(number + 1), u32_of(column + 1), u32_of(len));
-    if trimmed.is_empty() {
+    let Some(&first) = trimmed.as_bytes().first() else {
         return LineKind::Blank;
-    }
-    let first = trimmed.as_bytes()[0];
+    };
     if first == b';' || first == b'#' {
         if first == b'#' || indent > 0 {
             diagnostics.push(
@@ -647,7 +649,7 @@ fn classify(
 
 /// Trims ASCII white space (CiA 306 files are ASCII; Unicode-aware trimming costs a char decode per byte).
 fn trim_range(text: &str, range: Range<usize>) -> Range<usize> {
-    let bytes = &text.as_bytes()[range.clone()];
+    let bytes = text.as_bytes().get(range.clone()).unwrap_or_default();
     let leading = bytes.len() - bytes.trim_ascii_start().len();
     let trimmed_len = bytes.trim_ascii().len();
     range.start + leading..range.start + leading + trimmed_len
@@ -666,10 +668,13 @@ fn first_non_utf8(bytes: &[u8]) -> Span {
         Ok(_) => bytes.len(),
         Err(e) => e.valid_up_to(),
     };
-    let prefix = &bytes[..valid];
+    let prefix = bytes.get(..valid).unwrap_or(bytes);
     let line = prefix.iter().filter(|&&b| b == b'\n').count() + 1;
     let line_start = prefix.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
-    let column = String::from_utf8_lossy(&prefix[line_start..]).chars().count() + 1;
+    let column = String::from_utf8_lossy(prefix.get(line_start..).unwrap_or_default())
+        .chars()
+        .count()
+        + 1;
     Span::new(u32_of(line), u32_of(column), 1)
 }
 

@@ -81,6 +81,10 @@ pub struct Unencodable {
 
 fn cp1252_char(byte: u8) -> char {
     match byte {
+        #[allow(
+            clippy::indexing_slicing,
+            reason = "0x80..=0x9F less 0x80 indexes the table's 32 entries"
+        )]
         0x80..=0x9F => CP1252_HIGH[usize::from(byte - 0x80)],
         _ => char::from(byte),
     }

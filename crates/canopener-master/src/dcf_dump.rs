@@ -32,6 +32,7 @@ use canopener_eds::{AccessType, DataType, ObjectType, TypeKind};
 
 use crate::sdo_client::SdoTransferError;
 use crate::value::entry_label;
+use crate::value_typing::without_trailing_zeros;
 
 /// The longest value that fits a CiA 306 line (255 characters) after `ParameterValue=`.
 pub const MAX_VALUE_CHARS: usize = 255 - "ParameterValue=".len();
@@ -369,11 +370,7 @@ fn dcf_value(data_type: Option<DataType>, data: &[u8], real_bits: bool) -> Resul
         TypeKind::Real64 => f64::from_bits(sized(8)?).to_string(),
         TypeKind::TimeOfDay | TypeKind::TimeDifference => format!("0x{:X}", sized(6)?),
         TypeKind::VisibleString => {
-            let end = data
-                .iter()
-                .rposition(|byte| *byte != 0)
-                .map_or(0, |last| last + 1);
-            let text = std::str::from_utf8(&data[..end])
+            let text = std::str::from_utf8(without_trailing_zeros(data))
                 .ok()
                 .filter(|text| !text.chars().any(char::is_control))
                 .ok_or_else(|| {
@@ -387,13 +384,12 @@ fn dcf_value(data_type: Option<DataType>, data: &[u8], real_bits: bool) -> Resul
         TypeKind::UnicodeString => {
             let units: Vec<u16> = data
                 .chunks(2)
-                .map(|pair| u16::from_le_bytes([pair[0], pair.get(1).copied().unwrap_or(0)]))
+                .map(|pair| match *pair {
+                    [low, high] => u16::from_le_bytes([low, high]),
+                    _ => u16::from_le_bytes([pair.first().copied().unwrap_or(0), 0]),
+                })
                 .collect();
-            let end = units
-                .iter()
-                .rposition(|unit| *unit != 0)
-                .map_or(0, |last| last + 1);
-            String::from_utf16(&units[..end])
+            String::from_utf16(without_trailing_zeros(&units))
                 .ok()
                 .filter(|text| data.len().is_multiple_of(2) && !text.chars().any(char::is_control))
                 .ok_or_else(|| format!("not UTF-16 text on one line; its bytes are {}", hex(data)))?
@@ -512,8 +508,8 @@ fn commission(
         .zip(readings)
         .find(|(entry, _)| entry.index == 0x1018 && entry.sub == 4)
         .and_then(|(_, reading)| reading.value())
-        .filter(|data| data.len() == 4)
-        .map(|data| u32::from_le_bytes([data[0], data[1], data[2], data[3]]));
+        .and_then(|data| <[u8; 4]>::try_from(data).ok())
+        .map(u32::from_le_bytes);
     if let Some(serial) = serial {
         commissioning.lss_serial_number = Some(serial.to_string());
     }

@@ -643,15 +643,27 @@ mod tests {
         Trace::new(NodeMonitor::new(default))
     }
 
+    /// The frames of a table, each received at its millisecond, in order.
+    fn feed(trace: &mut Trace<NodeMonitor>, frames: &[(u64, &str)]) {
+        for (at, frame) in frames {
+            trace.rx(ms(*at), frame);
+        }
+    }
+
     #[test]
     fn states_from_boot_up_and_heartbeats() {
         let mut trace = monitor(ConsumerTime::Off);
-        trace.rx(ms(0), "705#00");
-        trace.rx(ms(100), "705#7F");
-        trace.rx(ms(150), "705#05");
-        trace.rx(ms(250), "705#05");
-        trace.rx(ms(300), "705#04");
-        trace.rx(ms(310), "70A#7F");
+        feed(
+            &mut trace,
+            &[
+                (0, "705#00"),
+                (100, "705#7F"),
+                (150, "705#05"),
+                (250, "705#05"),
+                (300, "705#04"),
+                (310, "70A#7F"),
+            ],
+        );
         assert_eq!(
             trace.events(),
             [
@@ -680,8 +692,7 @@ mod tests {
         assert_eq!(trace.core.poll_timeout(), Some(ms(250)));
         trace.rx(ms(200), "705#7F");
         trace.advance(ms(1000));
-        trace.rx(ms(1000), "705#7F");
-        trace.rx(ms(1100), "705#7F");
+        feed(&mut trace, &[(1000, "705#7F"), (1100, "705#7F")]);
         let events = trace.events();
         assert_eq!(
             events[2..],
@@ -709,9 +720,10 @@ mod tests {
         // 1.5 × 140 ms after the last heartbeat.
         assert_eq!(trace.core.poll_timeout(), Some(ms(610)));
         // The producer slows to 1 s: lost once, then the new period is learned.
-        trace.rx(ms(1400), "705#05");
-        trace.rx(ms(2400), "705#05");
-        trace.rx(ms(3400), "705#05");
+        feed(
+            &mut trace,
+            &[(1400, "705#05"), (2400, "705#05"), (3400, "705#05")],
+        );
         assert_eq!(trace.core.poll_timeout(), None, "relearning: 2 samples");
         trace.rx(ms(4400), "705#05");
         let events = trace.events();
@@ -752,11 +764,9 @@ mod tests {
     #[test]
     fn state_change_heartbeat_is_no_period_sample() {
         let mut trace = monitor(ConsumerTime::Learn);
-        trace.rx(ms(0), "705#7F");
-        trace.rx(ms(100), "705#7F");
+        feed(&mut trace, &[(0, "705#7F"), (100, "705#7F")]);
         // The node sends its new state at once and restarts its period.
-        trace.rx(ms(130), "705#05");
-        trace.rx(ms(230), "705#05");
+        feed(&mut trace, &[(130, "705#05"), (230, "705#05")]);
         assert_eq!(
             trace.core.status(node(5)).unwrap().learned_period,
             None,
@@ -782,12 +792,9 @@ mod tests {
     #[test]
     fn boot_up_restarts_monitoring_and_breaks_the_interval_chain() {
         let mut trace = monitor(ConsumerTime::Fixed(Duration::from_millis(150)));
-        trace.rx(ms(0), "705#05");
-        trace.rx(ms(100), "705#05");
-        trace.rx(ms(120), "705#00");
+        feed(&mut trace, &[(0, "705#05"), (100, "705#05"), (120, "705#00")]);
         assert_eq!(trace.core.poll_timeout(), None, "waiting again after boot-up");
-        trace.rx(ms(220), "705#7F");
-        trace.rx(ms(320), "705#7F");
+        feed(&mut trace, &[(220, "705#7F"), (320, "705#7F")]);
         let events = trace.events();
         assert_eq!(
             events[2..],
@@ -805,8 +812,7 @@ mod tests {
         trace
             .core
             .set_consumer_time(node(7), ConsumerTime::Fixed(Duration::from_millis(50)));
-        trace.rx(ms(0), "705#05");
-        trace.rx(ms(0), "707#05");
+        feed(&mut trace, &[(0, "705#05"), (0, "707#05")]);
         trace.advance(ms(500));
         let events = trace.events();
         assert_eq!(events[2], "50.000 HeartbeatLost { node: NodeId(7), after: 50ms }");
@@ -826,16 +832,26 @@ mod tests {
     #[test]
     fn garbage_is_reported_and_never_counts_as_a_heartbeat() {
         let mut trace = monitor(ConsumerTime::Fixed(Duration::from_millis(100)));
-        trace.rx(ms(0), "705#05");
-        trace.rx(ms(50), "705#");
-        trace.rx(ms(60), "705#0505");
-        trace.rx(ms(70), "705#03");
-        trace.rx(ms(80), "705#85");
+        feed(
+            &mut trace,
+            &[
+                (0, "705#05"),
+                (50, "705#"),
+                (60, "705#0505"),
+                (70, "705#03"),
+                (80, "705#85"),
+            ],
+        );
         // Other masters' requests, node-ID 0, other services and 29-bit frames are not ours.
-        trace.rx(ms(90), "705#R1");
-        trace.rx(ms(90), "700#05");
-        trace.rx(ms(90), "780#05");
-        trace.rx(ms(90), "00000705#05");
+        feed(
+            &mut trace,
+            &[
+                (90, "705#R1"),
+                (90, "700#05"),
+                (90, "780#05"),
+                (90, "00000705#05"),
+            ],
+        );
         trace.advance(ms(200));
         assert_eq!(
             trace.events()[1..],
@@ -865,12 +881,9 @@ mod tests {
             .core
             .start_guarding(ms(10), node(5), guarding(100, 3))
             .unwrap();
-        trace.rx(ms(11), "705#7F");
-        trace.rx(ms(111), "705#FF");
-        trace.rx(ms(211), "705#05");
+        feed(&mut trace, &[(11, "705#7F"), (111, "705#FF"), (211, "705#05")]);
         // Same toggle again: ignored.
-        trace.rx(ms(311), "705#05");
-        trace.rx(ms(411), "705#85");
+        feed(&mut trace, &[(311, "705#05"), (411, "705#85")]);
         trace.advance(ms(420));
         assert_eq!(
             trace.sent(),
@@ -912,9 +925,7 @@ mod tests {
             .core
             .start_guarding(ms(0), node(5), guarding(100, 3))
             .unwrap();
-        trace.rx(ms(1), "705#FF");
-        trace.rx(ms(101), "705#7F");
-        trace.rx(ms(201), "705#7F");
+        feed(&mut trace, &[(1, "705#FF"), (101, "705#7F"), (201, "705#7F")]);
         assert_eq!(
             trace.events(),
             [
@@ -935,8 +946,7 @@ mod tests {
         // Silence: the life time 300 ms runs from the last correct answer.
         trace.wait(Duration::from_millis(349));
         // A toggle error is no correct answer.
-        trace.rx(ms(401), "705#7F");
-        trace.rx(ms(501), "705#FF");
+        feed(&mut trace, &[(401, "705#7F"), (501, "705#FF")]);
         trace.advance(ms(520));
         assert_eq!(
             trace.events(),
@@ -964,11 +974,16 @@ mod tests {
             .start_guarding(ms(0), node(5), guarding(100, 2))
             .unwrap();
         // Toggle right, state wrong: the toggle still advances, the answer is not correct.
-        trace.rx(ms(1), "705#02");
-        trace.rx(ms(101), "705#82");
-        trace.rx(ms(201), "705#80");
-        trace.rx(ms(301), "705#7F");
-        trace.rx(ms(302), "705#");
+        feed(
+            &mut trace,
+            &[
+                (1, "705#02"),
+                (101, "705#82"),
+                (201, "705#80"),
+                (301, "705#7F"),
+                (302, "705#"),
+            ],
+        );
         trace.advance(ms(310));
         assert_eq!(
             trace.events(),

@@ -11,6 +11,7 @@ use canopener_can::CanFrame;
 use canopener_wire::{ERROR_CONTROL_BASE, NmtState};
 
 use crate::sdo_client::SdoTransferError;
+use crate::value_typing::without_trailing_zeros;
 
 /// The objects read for the identity, 1018h sub 1 to 4, in this order.
 pub const IDENTITY_SUBS: [u8; 4] = [1, 2, 3, 4];
@@ -85,11 +86,7 @@ impl Field<String> {
     pub fn text(read: Result<Vec<u8>, SdoTransferError>) -> Field<String> {
         match read {
             Ok(data) if data.is_empty() || crate::value_typing::is_printable(&data) => {
-                let end = data
-                    .iter()
-                    .rposition(|byte| *byte != 0)
-                    .map_or(0, |last| last + 1);
-                Field::Value(String::from_utf8_lossy(&data[..end]).into_owned())
+                Field::Value(String::from_utf8_lossy(without_trailing_zeros(&data)).into_owned())
             }
             Ok(data) => Field::Failed(format!(
                 "not text: {}",

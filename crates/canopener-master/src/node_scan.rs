@@ -183,12 +183,11 @@ impl Core for Fleet {
 
     fn handle_timeout(&mut self, now: Instant) {
         for slot in 0..self.nodes.len() {
-            let due = self.nodes[slot]
-                .client
-                .poll_timeout()
-                .is_some_and(|due| due <= now);
-            if due {
-                self.nodes[slot].client.handle_timeout(now);
+            let Some(jobs) = self.nodes.get_mut(slot) else {
+                continue;
+            };
+            if jobs.client.poll_timeout().is_some_and(|due| due <= now) {
+                jobs.client.handle_timeout(now);
                 self.collect(slot, now);
             }
         }
@@ -246,8 +245,9 @@ pub fn identify(results: &[ScanResult]) -> Vec<ScanRow> {
             (0x1018, sub @ 1..=4) => {
                 if let Some(row) = rows.iter_mut().find(|row| row.node == result.node)
                     && let Ok(data) = &result.outcome
+                    && let Some(identity) = row.identity.get_mut(usize::from(sub - 1))
                 {
-                    row.identity[usize::from(sub - 1)] = as_u32(data);
+                    *identity = as_u32(data);
                 }
             }
             _ => {}

@@ -255,7 +255,12 @@ impl fmt::Display for DecodedField {
 
 fn field_value(raw: u64, bits: u8, data_type: Option<DataType>) -> DisplayValue {
     let width = u32::from(bits);
-    let bytes = || raw.to_le_bytes()[..usize::from(bits / 8)].to_vec();
+    let bytes = || -> Vec<u8> {
+        raw.to_le_bytes()
+            .into_iter()
+            .take(usize::from(bits / 8))
+            .collect()
+    };
     let whole_bytes = bits.is_multiple_of(8);
     match data_type.and_then(DataType::kind) {
         Some(TypeKind::Boolean) => DisplayValue::Bool(raw != 0),

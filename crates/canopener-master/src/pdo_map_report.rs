@@ -75,11 +75,12 @@ impl MapReport {
 
     /// `3/7 1A00h:01 = 60000108h (map 6000:01:8): ok`.
     pub fn step_line(&self, step: usize) -> String {
-        let outcome = match &self.steps[step].1 {
-            StepOutcome::Ok => "ok".to_owned(),
-            StepOutcome::Failed(error) => error.to_string(),
-            StepOutcome::Interrupted => "interrupted".to_owned(),
-            StepOutcome::NotRun => "not run".to_owned(),
+        let outcome = match self.steps.get(step).map(|(_, outcome)| outcome) {
+            None => "no such step".to_owned(),
+            Some(StepOutcome::Ok) => "ok".to_owned(),
+            Some(StepOutcome::Failed(error)) => error.to_string(),
+            Some(StepOutcome::Interrupted) => "interrupted".to_owned(),
+            Some(StepOutcome::NotRun) => "not run".to_owned(),
         };
         format!(
             "{}/{} {}: {outcome}",
@@ -91,7 +92,9 @@ impl MapReport {
 
     /// `1A00h:01 = 60000108h (map 6000:01:8)`.
     pub fn describe(&self, step: usize) -> String {
-        let write = &self.steps[step].0;
+        let Some((write, _)) = self.steps.get(step) else {
+            return format!("step {} of {}: no such step", step + 1, self.steps.len());
+        };
         let why = match self.entry(write) {
             Some(entry) => format!("map {entry}"),
             None => write.why.to_owned(),
@@ -119,7 +122,7 @@ impl MapReport {
         if failed == 0 {
             return format!("{pdo} is unchanged");
         }
-        let done = &self.steps[..failed];
+        let done = self.steps.get(..failed).unwrap_or(&self.steps);
         let invalid = done
             .first()
             .map_or(self.current_cob_id | COB_ID_INVALID, |(write, _)| {

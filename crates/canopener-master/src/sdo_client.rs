@@ -973,12 +973,12 @@ impl SdoClient {
     /// The response in `rx`, or why it is not one.
     fn parse(&self, rx: &Rx) -> Result<SdoResponse, String> {
         let response = SdoResponse::parse(&rx.data)
-            .map_err(|err| format!("the server sent {}: {err}", hex(&rx.data[..rx.len])))?;
+            .map_err(|err| format!("the server sent {}: {err}", hex(rx.received())))?;
         let needed = needed_len(&response);
         if rx.len < needed {
             return Err(format!(
                 "the server sent {} with DLC {}, but that frame needs {needed} bytes",
-                hex(&rx.data[..rx.len]),
+                hex(rx.received()),
                 rx.len
             ));
         }
@@ -1252,6 +1252,11 @@ struct Rx {
 }
 
 impl Rx {
+    /// The bytes the frame carried (`len` never exceeds 8).
+    fn received(&self) -> &[u8] {
+        self.data.get(..self.len).unwrap_or(&self.data)
+    }
+
     fn new(payload: &[u8]) -> Rx {
         let mut data = [0; 8];
         for (slot, byte) in data.iter_mut().zip(payload) {
@@ -1457,6 +1462,85 @@ mod tests {
         }
     }
 
+    /// One step of a scripted exchange at a virtual millisecond, and the frames the client must answer
+    /// with (candump text).
+    #[derive(Debug, Clone, Copy)]
+    enum Step {
+        /// The application starts an upload of `index`:`sub`.
+        Up(u64, u16, u8, UploadMode, &'static [&'static str]),
+        /// The application starts a download of these bytes to `index`:`sub`.
+        Down(u64, u16, u8, &'static [u8], DownloadMode, &'static [&'static str]),
+        /// The server sends a frame.
+        Server(u64, &'static str, &'static [&'static str]),
+        /// Time passes.
+        Wait(u64, &'static [&'static str]),
+    }
+
+    /// How a scripted transfer ends.
+    #[derive(Debug, Clone, Copy)]
+    enum End {
+        Uploaded(&'static [u8], Protocol),
+        Downloaded(Protocol),
+        /// The client aborted with the code, for the reason given.
+        Aborted(u32, Reason),
+        /// At this millisecond, not one earlier, the transfer times out (after 100 ms) waiting for this.
+        TimedOut(u64, &'static str),
+    }
+
+    /// The text of a client abort's reason.
+    #[derive(Debug, Clone, Copy)]
+    enum Reason {
+        Any,
+        Is(&'static str),
+        Has(&'static str),
+    }
+
+    /// A transfer: its steps, the first of which starts it, and its end.
+    type Script = (&'static [Step], End);
+
+    use End::{Aborted, Downloaded, TimedOut, Uploaded};
+    use Step::{Down, Server, Up, Wait};
+
+    impl Trace {
+        /// Plays the scripts one after the other on this client, checking every frame it sends and how
+        /// each transfer ends (so each also shows the channel is free again for the next).
+        fn play(&mut self, scripts: &[Script]) {
+            for (number, (steps, end)) in scripts.iter().enumerate() {
+                let mut target = None;
+                for step in *steps {
+                    match *step {
+                        Up(ms, index, sub, mode, out) => {
+                            target = Some((index, sub));
+                            self.upload(ms, index, sub, mode, out);
+                        }
+                        Down(ms, index, sub, data, mode, out) => {
+                            target = Some((index, sub));
+                            self.download(ms, index, sub, data, mode, out);
+                        }
+                        Server(ms, frame, out) => self.rx(ms, frame, out),
+                        Wait(ms, out) => self.tick(ms, out),
+                    }
+                }
+                let Some((index, sub)) = target else {
+                    panic!("script {number} starts no transfer");
+                };
+                match *end {
+                    Uploaded(data, protocol) => self.uploaded(index, sub, data, protocol),
+                    Downloaded(protocol) => self.downloaded(index, sub, protocol),
+                    Aborted(code, reason) => {
+                        let text = self.client_aborted(index, sub, code);
+                        match reason {
+                            Reason::Any => {}
+                            Reason::Is(expected) => assert_eq!(text, expected, "script {number}"),
+                            Reason::Has(part) => assert!(text.contains(part), "script {number}: {text}"),
+                        }
+                    }
+                    TimedOut(at, waiting_for) => times_out(self, at, index, sub, waiting_for),
+                }
+            }
+        }
+    }
+
     fn progress(done: usize, total: Option<usize>) -> SdoClientEvent {
         SdoClientEvent::Progress { done, total }
     }
@@ -1540,10 +1624,13 @@ mod tests {
 
     #[test]
     fn expedited_upload_without_size_indication_takes_all_four_bytes() {
-        let mut trace = Trace::new();
-        trace.upload(0, 0x1001, 0, UploadMode::Normal, &["605#4001100000000000"]);
-        trace.rx(1, "585#4201100005000000", &[]);
-        trace.uploaded(0x1001, 0, &[5, 0, 0, 0], Protocol::Expedited);
+        Trace::new().play(&[(
+            &[
+                Up(0, 0x1001, 0, UploadMode::Normal, &["605#4001100000000000"]),
+                Server(1, "585#4201100005000000", &[]),
+            ],
+            Uploaded(&[5, 0, 0, 0], Protocol::Expedited),
+        )]);
     }
 
     #[test]
@@ -1594,43 +1681,79 @@ mod tests {
 
     #[test]
     fn segmented_upload_of_an_empty_value() {
-        let mut trace = Trace::new();
-        trace.upload(0, 0x2002, 0, UploadMode::Normal, &["605#4002200000000000"]);
-        trace.rx(1, "585#4102200000000000", &["605#6000000000000000"]);
-        trace.rx(2, "585#0F00000000000000", &[]);
-        trace.uploaded(0x2002, 0, &[], Protocol::Segmented);
+        Trace::new().play(&[(
+            &[
+                Up(0, 0x2002, 0, UploadMode::Normal, &["605#4002200000000000"]),
+                Server(1, "585#4102200000000000", &["605#6000000000000000"]),
+                Server(2, "585#0F00000000000000", &[]),
+            ],
+            Uploaded(&[], Protocol::Segmented),
+        )]);
     }
 
     // Expedited and segmented download (§7.2.4.3.2..4).
 
     #[test]
     fn expedited_download() {
-        let mut trace = Trace::new();
-        trace.download(
-            0,
-            0x1017,
-            0,
-            &[0xE8, 0x03],
-            DownloadMode::Auto,
-            &["605#2B171000E8030000"],
-        );
-        trace.rx(1, "585#6017100000000000", &[]);
-        trace.downloaded(0x1017, 0, Protocol::Expedited);
-        for (len, command) in [(1, "2F"), (3, "27"), (4, "23")] {
-            trace.download(
-                10,
-                0x2000,
-                0,
-                &vec![0xAA; len],
-                DownloadMode::Expedited,
-                &[&format!(
-                    "605#{command}002000{}",
-                    "AA".repeat(len) + &"00".repeat(4 - len)
-                )],
-            );
-            trace.rx(11, "585#6000200000000000", &[]);
-            trace.downloaded(0x2000, 0, Protocol::Expedited);
-        }
+        Trace::new().play(&[
+            (
+                &[
+                    Down(
+                        0,
+                        0x1017,
+                        0,
+                        &[0xE8, 0x03],
+                        DownloadMode::Auto,
+                        &["605#2B171000E8030000"],
+                    ),
+                    Server(1, "585#6017100000000000", &[]),
+                ],
+                Downloaded(Protocol::Expedited),
+            ),
+            // 1, 3 and 4 bytes: n = 3, 1 and 0 in the command byte.
+            (
+                &[
+                    Down(
+                        10,
+                        0x2000,
+                        0,
+                        &[0xAA],
+                        DownloadMode::Expedited,
+                        &["605#2F002000AA000000"],
+                    ),
+                    Server(11, "585#6000200000000000", &[]),
+                ],
+                Downloaded(Protocol::Expedited),
+            ),
+            (
+                &[
+                    Down(
+                        10,
+                        0x2000,
+                        0,
+                        &[0xAA; 3],
+                        DownloadMode::Expedited,
+                        &["605#27002000AAAAAA00"],
+                    ),
+                    Server(11, "585#6000200000000000", &[]),
+                ],
+                Downloaded(Protocol::Expedited),
+            ),
+            (
+                &[
+                    Down(
+                        10,
+                        0x2000,
+                        0,
+                        &[0xAA; 4],
+                        DownloadMode::Expedited,
+                        &["605#23002000AAAAAAAA"],
+                    ),
+                    Server(11, "585#6000200000000000", &[]),
+                ],
+                Downloaded(Protocol::Expedited),
+            ),
+        ]);
     }
 
     #[test]
@@ -1659,22 +1782,31 @@ mod tests {
 
     #[test]
     fn segmented_download_of_small_and_empty_values_when_asked() {
-        let mut trace = Trace::new();
-        trace.download(0, 0x2002, 0, &[], DownloadMode::Auto, &["605#2102200000000000"]);
-        trace.rx(1, "585#6002200000000000", &["605#0F00000000000000"]);
-        trace.rx(2, "585#2000000000000000", &[]);
-        trace.downloaded(0x2002, 0, Protocol::Segmented);
-        trace.download(
-            3,
-            0x2002,
-            0,
-            &[7],
-            DownloadMode::Segmented,
-            &["605#2102200001000000"],
-        );
-        trace.rx(4, "585#6002200000000000", &["605#0D07000000000000"]);
-        trace.rx(5, "585#2000000000000000", &[]);
-        trace.downloaded(0x2002, 0, Protocol::Segmented);
+        Trace::new().play(&[
+            (
+                &[
+                    Down(0, 0x2002, 0, &[], DownloadMode::Auto, &["605#2102200000000000"]),
+                    Server(1, "585#6002200000000000", &["605#0F00000000000000"]),
+                    Server(2, "585#2000000000000000", &[]),
+                ],
+                Downloaded(Protocol::Segmented),
+            ),
+            (
+                &[
+                    Down(
+                        3,
+                        0x2002,
+                        0,
+                        &[7],
+                        DownloadMode::Segmented,
+                        &["605#2102200001000000"],
+                    ),
+                    Server(4, "585#6002200000000000", &["605#0D07000000000000"]),
+                    Server(5, "585#2000000000000000", &[]),
+                ],
+                Downloaded(Protocol::Segmented),
+            ),
+        ]);
     }
 
     // Block upload (§7.2.4.3.12..15).
@@ -1707,12 +1839,15 @@ mod tests {
     #[test]
     fn block_upload_without_crc_ignores_the_crc_field() {
         // CCT "SDO 19": the client offers no CRC, the server does; the field is 0.
-        let mut trace = Trace::with(|client| client.with_block_size(20).with_crc(false));
-        trace.upload(0, 0x1000, 0, UploadMode::Block, &["605#A000100014000000"]);
-        trace.rx(1, "585#C600100004000000", &["605#A300000000000000"]);
-        trace.rx(2, "585#8191010F00000000", &["605#A201140000000000"]);
-        trace.rx(3, "585#CD00000000000000", &["605#A100000000000000"]);
-        trace.uploaded(0x1000, 0, &[0x91, 0x01, 0x0F, 0x00], Protocol::Block);
+        Trace::with(|client| client.with_block_size(20).with_crc(false)).play(&[(
+            &[
+                Up(0, 0x1000, 0, UploadMode::Block, &["605#A000100014000000"]),
+                Server(1, "585#C600100004000000", &["605#A300000000000000"]),
+                Server(2, "585#8191010F00000000", &["605#A201140000000000"]),
+                Server(3, "585#CD00000000000000", &["605#A100000000000000"]),
+            ],
+            Uploaded(&[0x91, 0x01, 0x0F, 0x00], Protocol::Block),
+        )]);
     }
 
     #[test]
@@ -1789,25 +1924,39 @@ mod tests {
 
     #[test]
     fn block_upload_answered_with_a_normal_upload_under_the_threshold() {
-        // pst 8: the server may switch; an expedited answer ends the transfer at once.
-        let mut trace = Trace::with(|client| client.with_block_upload_threshold(8));
-        trace.upload(0, 0x1017, 0, UploadMode::Block, &["605#A41710007F080000"]);
-        trace.rx(1, "585#4B171000E8030000", &[]);
-        trace.uploaded(0x1017, 0, &[0xE8, 0x03], Protocol::Expedited);
-        // A segmented answer is followed with upload segment requests.
-        trace.upload(2, 0x1008, 0, UploadMode::Block, &["605#A40810007F080000"]);
-        trace.rx(3, "585#4108100005000000", &["605#6000000000000000"]);
-        trace.rx(4, "585#0548454C4C4F0000", &[]);
-        trace.uploaded(0x1008, 0, b"HELLO", Protocol::Segmented);
+        // pst 8: the server may switch; an expedited answer ends the transfer at once, a segmented
+        // answer is followed with upload segment requests.
+        Trace::with(|client| client.with_block_upload_threshold(8)).play(&[
+            (
+                &[
+                    Up(0, 0x1017, 0, UploadMode::Block, &["605#A41710007F080000"]),
+                    Server(1, "585#4B171000E8030000", &[]),
+                ],
+                Uploaded(&[0xE8, 0x03], Protocol::Expedited),
+            ),
+            (
+                &[
+                    Up(2, 0x1008, 0, UploadMode::Block, &["605#A40810007F080000"]),
+                    Server(3, "585#4108100005000000", &["605#6000000000000000"]),
+                    Server(4, "585#0548454C4C4F0000", &[]),
+                ],
+                Uploaded(b"HELLO", Protocol::Segmented),
+            ),
+        ]);
     }
 
     #[test]
     fn protocol_switch_without_threshold_is_an_error() {
-        let mut trace = Trace::new();
-        trace.upload(0, 0x1017, 0, UploadMode::Block, &["605#A41710007F000000"]);
-        trace.rx(1, "585#4B171000E8030000", &["605#8017100001000405"]);
-        let reason = trace.client_aborted(0x1017, 0, abort::COMMAND_SPECIFIER_INVALID);
-        assert!(reason.contains("protocol switch threshold is 0"), "{reason}");
+        Trace::new().play(&[(
+            &[
+                Up(0, 0x1017, 0, UploadMode::Block, &["605#A41710007F000000"]),
+                Server(1, "585#4B171000E8030000", &["605#8017100001000405"]),
+            ],
+            Aborted(
+                abort::COMMAND_SPECIFIER_INVALID,
+                Reason::Has("protocol switch threshold is 0"),
+            ),
+        )]);
     }
 
     // Block download (§7.2.4.3.8..11).
@@ -1899,35 +2048,41 @@ mod tests {
 
     #[test]
     fn block_download_repeats_the_last_segment_when_its_ack_falls_short() {
-        let mut trace = Trace::with(|client| client.with_crc(false));
-        trace.download(
-            0,
-            0x2002,
-            0,
-            &[9; 10],
-            DownloadMode::Block,
-            &["605#C20220000A000000"],
-        );
-        trace.rx(
-            1,
-            "585#A002200010000000",
-            &["605#0109090909090909", "605#8209090900000000"],
-        );
-        trace.rx(2, "585#A201100000000000", &["605#8109090900000000"]);
-        // Without CRC on both sides the field is 0; n = 4.
-        trace.rx(3, "585#A201100000000000", &["605#D100000000000000"]);
-        trace.rx(4, "585#A100000000000000", &[]);
-        trace.downloaded(0x2002, 0, Protocol::Block);
+        Trace::with(|client| client.with_crc(false)).play(&[(
+            &[
+                Down(
+                    0,
+                    0x2002,
+                    0,
+                    &[9; 10],
+                    DownloadMode::Block,
+                    &["605#C20220000A000000"],
+                ),
+                Server(
+                    1,
+                    "585#A002200010000000",
+                    &["605#0109090909090909", "605#8209090900000000"],
+                ),
+                Server(2, "585#A201100000000000", &["605#8109090900000000"]),
+                // Without CRC on both sides the field is 0; n = 4.
+                Server(3, "585#A201100000000000", &["605#D100000000000000"]),
+                Server(4, "585#A100000000000000", &[]),
+            ],
+            Downloaded(Protocol::Block),
+        )]);
     }
 
     #[test]
     fn block_download_of_an_empty_value() {
-        let mut trace = Trace::new();
-        trace.download(0, 0x2002, 0, &[], DownloadMode::Block, &["605#C602200000000000"]);
-        trace.rx(1, "585#A40220007F000000", &["605#8100000000000000"]);
-        trace.rx(2, "585#A2017F0000000000", &["605#DD00000000000000"]);
-        trace.rx(3, "585#A100000000000000", &[]);
-        trace.downloaded(0x2002, 0, Protocol::Block);
+        Trace::new().play(&[(
+            &[
+                Down(0, 0x2002, 0, &[], DownloadMode::Block, &["605#C602200000000000"]),
+                Server(1, "585#A40220007F000000", &["605#8100000000000000"]),
+                Server(2, "585#A2017F0000000000", &["605#DD00000000000000"]),
+                Server(3, "585#A100000000000000", &[]),
+            ],
+            Downloaded(Protocol::Block),
+        )]);
     }
 
     #[test]
@@ -1955,209 +2110,321 @@ mod tests {
 
     #[test]
     fn garbage_responses_abort_with_0504_0001() {
-        let mut trace = Trace::new();
-        trace.upload(0, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]);
-        trace.rx(1, "585#E0FFFFFFFFFFFFFF", &["605#8018100101000405"]);
-        let reason = trace.client_aborted(0x1018, 1, abort::COMMAND_SPECIFIER_INVALID);
-        assert!(reason.contains("E0 FF"), "{reason}");
-        // A valid frame of the wrong kind: a download confirmation for an upload.
-        trace.upload(2, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]);
-        trace.rx(3, "585#6018100100000000", &["605#8018100101000405"]);
-        let reason = trace.client_aborted(0x1018, 1, abort::COMMAND_SPECIFIER_INVALID);
-        assert!(
-            reason.contains("expected the initiate upload response"),
-            "{reason}"
-        );
-        // A block download answer to a segmented download.
-        trace.download(
-            4,
-            0x2002,
-            0,
-            &[1; 9],
-            DownloadMode::Segmented,
-            &["605#2102200009000000"],
-        );
-        trace.rx(5, "585#A40220007F000000", &["605#8002200001000405"]);
-        trace.client_aborted(0x2002, 0, abort::COMMAND_SPECIFIER_INVALID);
-        // A block upload answer to a normal upload.
-        trace.upload(6, 0x2002, 0, UploadMode::Normal, &["605#4002200000000000"]);
-        trace.rx(7, "585#C602200010000000", &["605#8002200001000405"]);
-        trace.client_aborted(0x2002, 0, abort::COMMAND_SPECIFIER_INVALID);
-        // Anything but the end response after a block download end.
-        trace.download(
-            8,
-            0x1017,
-            0,
-            &[0, 0],
-            DownloadMode::Block,
-            &["605#C617100002000000"],
-        );
-        trace.rx(9, "585#A41710007F000000", &["605#8100000000000000"]);
-        trace.rx(10, "585#A2017F0000000000", &["605#D500000000000000"]);
-        trace.rx(11, "585#A2017F0000000000", &["605#8017100001000405"]);
-        let reason = trace.client_aborted(0x1017, 0, abort::COMMAND_SPECIFIER_INVALID);
-        assert!(reason.contains("block download end response"), "{reason}");
+        let invalid = abort::COMMAND_SPECIFIER_INVALID;
+        Trace::new().play(&[
+            (
+                &[
+                    Up(0, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]),
+                    Server(1, "585#E0FFFFFFFFFFFFFF", &["605#8018100101000405"]),
+                ],
+                Aborted(invalid, Reason::Has("E0 FF")),
+            ),
+            // A valid frame of the wrong kind: a download confirmation for an upload.
+            (
+                &[
+                    Up(2, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]),
+                    Server(3, "585#6018100100000000", &["605#8018100101000405"]),
+                ],
+                Aborted(invalid, Reason::Has("expected the initiate upload response")),
+            ),
+            // A block download answer to a segmented download.
+            (
+                &[
+                    Down(
+                        4,
+                        0x2002,
+                        0,
+                        &[1; 9],
+                        DownloadMode::Segmented,
+                        &["605#2102200009000000"],
+                    ),
+                    Server(5, "585#A40220007F000000", &["605#8002200001000405"]),
+                ],
+                Aborted(invalid, Reason::Any),
+            ),
+            // A block upload answer to a normal upload.
+            (
+                &[
+                    Up(6, 0x2002, 0, UploadMode::Normal, &["605#4002200000000000"]),
+                    Server(7, "585#C602200010000000", &["605#8002200001000405"]),
+                ],
+                Aborted(invalid, Reason::Any),
+            ),
+            // Anything but the end response after a block download end.
+            (
+                &[
+                    Down(
+                        8,
+                        0x1017,
+                        0,
+                        &[0, 0],
+                        DownloadMode::Block,
+                        &["605#C617100002000000"],
+                    ),
+                    Server(9, "585#A41710007F000000", &["605#8100000000000000"]),
+                    Server(10, "585#A2017F0000000000", &["605#D500000000000000"]),
+                    Server(11, "585#A2017F0000000000", &["605#8017100001000405"]),
+                ],
+                Aborted(invalid, Reason::Has("block download end response")),
+            ),
+        ]);
     }
 
     #[test]
     fn answer_for_another_entry_aborts_with_0604_0043() {
-        let mut trace = Trace::new();
-        trace.upload(0, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]);
-        trace.rx(1, "585#4318100278563412", &["605#8018100143000406"]);
-        let reason = trace.client_aborted(0x1018, 1, abort::PARAMETER_INCOMPATIBLE);
-        assert_eq!(reason, "the server answered for 1018h:02 instead of 1018h:01");
-        trace.download(
-            2,
-            0x1017,
-            0,
-            &[1, 0],
-            DownloadMode::Auto,
-            &["605#2B17100001000000"],
-        );
-        trace.rx(3, "585#6016100000000000", &["605#8017100043000406"]);
-        trace.client_aborted(0x1017, 0, abort::PARAMETER_INCOMPATIBLE);
-        trace.download(
-            4,
-            0x1017,
-            0,
-            &[1, 0],
-            DownloadMode::Block,
-            &["605#C617100002000000"],
-        );
-        trace.rx(5, "585#A41610007F000000", &["605#8017100043000406"]);
-        trace.client_aborted(0x1017, 0, abort::PARAMETER_INCOMPATIBLE);
-        trace.upload(6, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]);
-        trace.rx(7, "585#C609100010000000", &["605#8008100043000406"]);
-        trace.client_aborted(0x1008, 0, abort::PARAMETER_INCOMPATIBLE);
+        let incompatible = abort::PARAMETER_INCOMPATIBLE;
+        Trace::new().play(&[
+            (
+                &[
+                    Up(0, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]),
+                    Server(1, "585#4318100278563412", &["605#8018100143000406"]),
+                ],
+                Aborted(
+                    incompatible,
+                    Reason::Is("the server answered for 1018h:02 instead of 1018h:01"),
+                ),
+            ),
+            (
+                &[
+                    Down(
+                        2,
+                        0x1017,
+                        0,
+                        &[1, 0],
+                        DownloadMode::Auto,
+                        &["605#2B17100001000000"],
+                    ),
+                    Server(3, "585#6016100000000000", &["605#8017100043000406"]),
+                ],
+                Aborted(incompatible, Reason::Any),
+            ),
+            (
+                &[
+                    Down(
+                        4,
+                        0x1017,
+                        0,
+                        &[1, 0],
+                        DownloadMode::Block,
+                        &["605#C617100002000000"],
+                    ),
+                    Server(5, "585#A41610007F000000", &["605#8017100043000406"]),
+                ],
+                Aborted(incompatible, Reason::Any),
+            ),
+            (
+                &[
+                    Up(6, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]),
+                    Server(7, "585#C609100010000000", &["605#8008100043000406"]),
+                ],
+                Aborted(incompatible, Reason::Any),
+            ),
+        ]);
     }
 
     #[test]
     fn toggle_errors_abort_with_0503_0000() {
-        let mut trace = Trace::new();
-        trace.upload(0, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]);
-        trace.rx(1, "585#4108100010000000", &["605#6000000000000000"]);
-        trace.rx(2, "585#0041414141414141", &["605#7000000000000000"]);
-        // The second segment repeats toggle 0.
-        trace.rx(3, "585#0042424242424242", &["605#8008100000000305"]);
-        let reason = trace.client_aborted(0x1008, 0, abort::TOGGLE_BIT_NOT_ALTERNATED);
-        assert_eq!(reason, "the server answered with toggle 0, expected 1");
-        trace.download(
-            4,
-            0x2002,
-            0,
-            &[1; 9],
-            DownloadMode::Auto,
-            &["605#2102200009000000"],
-        );
-        trace.rx(5, "585#6002200000000000", &["605#0001010101010101"]);
-        trace.rx(6, "585#3000000000000000", &["605#8002200000000305"]);
-        trace.client_aborted(0x2002, 0, abort::TOGGLE_BIT_NOT_ALTERNATED);
+        let toggle = abort::TOGGLE_BIT_NOT_ALTERNATED;
+        Trace::new().play(&[
+            (
+                &[
+                    Up(0, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]),
+                    Server(1, "585#4108100010000000", &["605#6000000000000000"]),
+                    Server(2, "585#0041414141414141", &["605#7000000000000000"]),
+                    // The second segment repeats toggle 0.
+                    Server(3, "585#0042424242424242", &["605#8008100000000305"]),
+                ],
+                Aborted(
+                    toggle,
+                    Reason::Is("the server answered with toggle 0, expected 1"),
+                ),
+            ),
+            (
+                &[
+                    Down(
+                        4,
+                        0x2002,
+                        0,
+                        &[1; 9],
+                        DownloadMode::Auto,
+                        &["605#2102200009000000"],
+                    ),
+                    Server(5, "585#6002200000000000", &["605#0001010101010101"]),
+                    Server(6, "585#3000000000000000", &["605#8002200000000305"]),
+                ],
+                Aborted(toggle, Reason::Any),
+            ),
+        ]);
     }
 
     #[test]
     fn delivered_length_disagreeing_with_the_size_aborts_with_0607_0010() {
-        let mut trace = Trace::new();
-        trace.upload(0, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]);
-        trace.rx(1, "585#4108100003000000", &["605#6000000000000000"]);
-        trace.rx(2, "585#0141424344454647", &["605#8008100010000706"]);
-        let reason = trace.client_aborted(0x1008, 0, abort::LENGTH_MISMATCH);
-        assert_eq!(reason, "the server announced 3 bytes and delivered 7");
-        // Fewer bytes than announced, noticed at the last segment.
-        trace.upload(3, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]);
-        trace.rx(4, "585#410810000A000000", &["605#6000000000000000"]);
-        trace.rx(5, "585#0B41420000000000", &["605#8008100010000706"]);
-        trace.client_aborted(0x1008, 0, abort::LENGTH_MISMATCH);
-        // Block upload: the end frame leaves 10 bytes of 16 announced.
-        trace.upload(6, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]);
-        trace.rx(7, "585#C608100010000000", &["605#A300000000000000"]);
-        trace.rx(8, "585#0141424344454647", &[]);
-        trace.rx(8, "585#8241424344454647", &["605#A2027F0000000000"]);
-        trace.rx(9, "585#D100000000000000", &["605#8008100010000706"]);
-        trace.client_aborted(0x1008, 0, abort::LENGTH_MISMATCH);
-        // Block upload: more segments than 16 bytes need.
-        trace.upload(10, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]);
-        trace.rx(11, "585#C608100010000000", &["605#A300000000000000"]);
-        trace.rx(12, "585#0141424344454647", &[]);
-        trace.rx(12, "585#0241424344454647", &[]);
-        trace.rx(12, "585#0341424344454647", &[]);
-        trace.rx(12, "585#0441424344454647", &["605#8008100010000706"]);
-        trace.client_aborted(0x1008, 0, abort::LENGTH_MISMATCH);
+        let mismatch = abort::LENGTH_MISMATCH;
+        Trace::new().play(&[
+            (
+                &[
+                    Up(0, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]),
+                    Server(1, "585#4108100003000000", &["605#6000000000000000"]),
+                    Server(2, "585#0141424344454647", &["605#8008100010000706"]),
+                ],
+                Aborted(
+                    mismatch,
+                    Reason::Is("the server announced 3 bytes and delivered 7"),
+                ),
+            ),
+            // Fewer bytes than announced, noticed at the last segment.
+            (
+                &[
+                    Up(3, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]),
+                    Server(4, "585#410810000A000000", &["605#6000000000000000"]),
+                    Server(5, "585#0B41420000000000", &["605#8008100010000706"]),
+                ],
+                Aborted(mismatch, Reason::Any),
+            ),
+            // Block upload: the end frame leaves 10 bytes of 16 announced.
+            (
+                &[
+                    Up(6, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]),
+                    Server(7, "585#C608100010000000", &["605#A300000000000000"]),
+                    Server(8, "585#0141424344454647", &[]),
+                    Server(8, "585#8241424344454647", &["605#A2027F0000000000"]),
+                    Server(9, "585#D100000000000000", &["605#8008100010000706"]),
+                ],
+                Aborted(mismatch, Reason::Any),
+            ),
+            // Block upload: more segments than 16 bytes need.
+            (
+                &[
+                    Up(10, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]),
+                    Server(11, "585#C608100010000000", &["605#A300000000000000"]),
+                    Server(12, "585#0141424344454647", &[]),
+                    Server(12, "585#0241424344454647", &[]),
+                    Server(12, "585#0341424344454647", &[]),
+                    Server(12, "585#0441424344454647", &["605#8008100010000706"]),
+                ],
+                Aborted(mismatch, Reason::Any),
+            ),
+        ]);
     }
 
     #[test]
     fn short_frames_abort_by_default() {
-        let mut trace = Trace::new();
-        trace.download(
-            0,
-            0x1017,
-            0,
-            &[1, 0],
-            DownloadMode::Auto,
-            &["605#2B17100001000000"],
-        );
-        trace.rx(1, "585#60171000", &["605#8017100001000405"]);
-        let reason = trace.client_aborted(0x1017, 0, abort::COMMAND_SPECIFIER_INVALID);
-        assert_eq!(
-            reason,
-            "the server answered with DLC 4 (585#60171000); CiA 301 SDO frames have 8 bytes"
-        );
-        trace.upload(2, 0x1017, 0, UploadMode::Normal, &["605#4017100000000000"]);
-        trace.rx(3, "585#", &["605#8017100001000405"]);
-        trace.client_aborted(0x1017, 0, abort::COMMAND_SPECIFIER_INVALID);
+        Trace::new().play(&[
+            (
+                &[
+                    Down(
+                        0,
+                        0x1017,
+                        0,
+                        &[1, 0],
+                        DownloadMode::Auto,
+                        &["605#2B17100001000000"],
+                    ),
+                    Server(1, "585#60171000", &["605#8017100001000405"]),
+                ],
+                Aborted(
+                    abort::COMMAND_SPECIFIER_INVALID,
+                    Reason::Is(
+                        "the server answered with DLC 4 (585#60171000); CiA 301 SDO frames have 8 bytes",
+                    ),
+                ),
+            ),
+            (
+                &[
+                    Up(2, 0x1017, 0, UploadMode::Normal, &["605#4017100000000000"]),
+                    Server(3, "585#", &["605#8017100001000405"]),
+                ],
+                Aborted(abort::COMMAND_SPECIFIER_INVALID, Reason::Any),
+            ),
+        ]);
     }
 
     #[test]
     fn short_frames_are_padded_when_asked_if_nothing_is_cut_off() {
-        let mut trace = Trace::with(|client| client.with_short_frames(ShortFrames::Pad));
-        trace.download(
-            0,
-            0x1017,
-            0,
-            &[1, 0],
-            DownloadMode::Auto,
-            &["605#2B17100001000000"],
-        );
-        trace.rx(1, "585#60171000", &[]);
-        trace.downloaded(0x1017, 0, Protocol::Expedited);
-        // An expedited answer of 1 byte in a DLC-5 frame, with and without size indication.
-        trace.upload(2, 0x1001, 0, UploadMode::Normal, &["605#4001100000000000"]);
-        trace.rx(3, "585#4F01100005", &[]);
-        trace.uploaded(0x1001, 0, &[5], Protocol::Expedited);
-        trace.upload(4, 0x1001, 0, UploadMode::Normal, &["605#4001100000000000"]);
-        trace.rx(5, "585#4201100005", &[]);
-        trace.uploaded(0x1001, 0, &[5], Protocol::Expedited);
-        // Segments shortened to their data.
-        trace.upload(6, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]);
-        trace.rx(7, "585#4108100002000000", &["605#6000000000000000"]);
-        trace.rx(8, "585#0B4F4B", &[]);
-        trace.uploaded(0x1008, 0, b"OK", Protocol::Segmented);
-        // But a frame missing bytes its command uses still aborts: "4 bytes" in a DLC-6 frame.
-        trace.upload(9, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]);
-        trace.rx(10, "585#431810017856", &["605#8018100101000405"]);
-        let reason = trace.client_aborted(0x1018, 1, abort::COMMAND_SPECIFIER_INVALID);
-        assert!(reason.contains("needs 8 bytes"), "{reason}");
-        // Block segments always need 8 bytes.
-        trace.upload(11, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]);
-        trace.rx(12, "585#C608100002000000", &["605#A300000000000000"]);
-        trace.rx(13, "585#814F4B", &["605#8008100001000405"]);
-        trace.client_aborted(0x1008, 0, abort::COMMAND_SPECIFIER_INVALID);
-        // A shortened abort frame has lost its code.
-        trace.upload(14, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]);
-        trace.rx(15, "585#8018100100", &["605#8018100101000405"]);
-        trace.client_aborted(0x1018, 1, abort::COMMAND_SPECIFIER_INVALID);
+        let invalid = abort::COMMAND_SPECIFIER_INVALID;
+        Trace::with(|client| client.with_short_frames(ShortFrames::Pad)).play(&[
+            (
+                &[
+                    Down(
+                        0,
+                        0x1017,
+                        0,
+                        &[1, 0],
+                        DownloadMode::Auto,
+                        &["605#2B17100001000000"],
+                    ),
+                    Server(1, "585#60171000", &[]),
+                ],
+                Downloaded(Protocol::Expedited),
+            ),
+            // An expedited answer of 1 byte in a DLC-5 frame, with and without size indication.
+            (
+                &[
+                    Up(2, 0x1001, 0, UploadMode::Normal, &["605#4001100000000000"]),
+                    Server(3, "585#4F01100005", &[]),
+                ],
+                Uploaded(&[5], Protocol::Expedited),
+            ),
+            (
+                &[
+                    Up(4, 0x1001, 0, UploadMode::Normal, &["605#4001100000000000"]),
+                    Server(5, "585#4201100005", &[]),
+                ],
+                Uploaded(&[5], Protocol::Expedited),
+            ),
+            // Segments shortened to their data.
+            (
+                &[
+                    Up(6, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]),
+                    Server(7, "585#4108100002000000", &["605#6000000000000000"]),
+                    Server(8, "585#0B4F4B", &[]),
+                ],
+                Uploaded(b"OK", Protocol::Segmented),
+            ),
+            // But a frame missing bytes its command uses still aborts: "4 bytes" in a DLC-6 frame.
+            (
+                &[
+                    Up(9, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]),
+                    Server(10, "585#431810017856", &["605#8018100101000405"]),
+                ],
+                Aborted(invalid, Reason::Has("needs 8 bytes")),
+            ),
+            // Block segments always need 8 bytes.
+            (
+                &[
+                    Up(11, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]),
+                    Server(12, "585#C608100002000000", &["605#A300000000000000"]),
+                    Server(13, "585#814F4B", &["605#8008100001000405"]),
+                ],
+                Aborted(invalid, Reason::Any),
+            ),
+            // A shortened abort frame has lost its code.
+            (
+                &[
+                    Up(14, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]),
+                    Server(15, "585#8018100100", &["605#8018100101000405"]),
+                ],
+                Aborted(invalid, Reason::Any),
+            ),
+        ]);
     }
 
     #[test]
     fn crc_mismatch_aborts_with_0504_0004() {
-        let mut trace = Trace::with(|client| client.with_block_size(20));
-        trace.upload(0, 0x1008, 0, UploadMode::Block, &["605#A408100014000000"]);
-        trace.rx(1, "585#C608100010000000", &["605#A300000000000000"]);
-        trace.rx(2, "585#0143414E6F70656E", &[]);
-        trace.rx(2, "585#0244656D6F504943", &[]);
-        trace.rx(2, "585#8333320000000000", &["605#A203140000000000"]);
-        trace.rx(3, "585#D5F3440000000000", &["605#8008100004000405"]);
-        let reason = trace.client_aborted(0x1008, 0, abort::CRC_ERROR);
-        assert_eq!(reason, "the server's CRC is 44F3h, the data received has 43F3h");
+        Trace::with(|client| client.with_block_size(20)).play(&[(
+            &[
+                Up(0, 0x1008, 0, UploadMode::Block, &["605#A408100014000000"]),
+                Server(1, "585#C608100010000000", &["605#A300000000000000"]),
+                Server(2, "585#0143414E6F70656E", &[]),
+                Server(2, "585#0244656D6F504943", &[]),
+                Server(2, "585#8333320000000000", &["605#A203140000000000"]),
+                Server(3, "585#D5F3440000000000", &["605#8008100004000405"]),
+            ],
+            Aborted(
+                abort::CRC_ERROR,
+                Reason::Is("the server's CRC is 44F3h, the data received has 43F3h"),
+            ),
+        )]);
     }
 
     #[test]
@@ -2201,30 +2468,33 @@ mod tests {
 
     #[test]
     fn bad_sequence_numbers_abort_with_0504_0003() {
+        let invalid = abort::INVALID_SEQUENCE_NUMBER;
         // An acknowledge of more segments than were sent.
-        let mut trace = Trace::new();
-        trace.download(
-            0,
-            0x1017,
-            0,
-            &[0, 0],
-            DownloadMode::Block,
-            &["605#C617100002000000"],
-        );
-        trace.rx(1, "585#A41710007F000000", &["605#8100000000000000"]);
-        trace.rx(2, "585#A2027F0000000000", &["605#8017100003000405"]);
-        let reason = trace.client_aborted(0x1017, 0, abort::INVALID_SEQUENCE_NUMBER);
-        assert_eq!(
-            reason,
-            "the server acknowledged segment 2 of a sub-block of 1 segments"
-        );
+        Trace::new().play(&[(
+            &[
+                Down(
+                    0,
+                    0x1017,
+                    0,
+                    &[0, 0],
+                    DownloadMode::Block,
+                    &["605#C617100002000000"],
+                ),
+                Server(1, "585#A41710007F000000", &["605#8100000000000000"]),
+                Server(2, "585#A2027F0000000000", &["605#8017100003000405"]),
+            ],
+            Aborted(
+                invalid,
+                Reason::Is("the server acknowledged segment 2 of a sub-block of 1 segments"),
+            ),
+        )]);
         // Segment 0, and a segment beyond the block size the client offered.
         for segment in ["585#0041424344454647", "585#0541424344454647"] {
             let mut trace = Trace::with(|client| client.with_block_size(4));
             trace.upload(3, 0x1008, 0, UploadMode::Block, &["605#A408100004000000"]);
             trace.rx(4, "585#C608100010000000", &["605#A300000000000000"]);
             trace.rx(5, segment, &["605#8008100003000405"]);
-            trace.client_aborted(0x1008, 0, abort::INVALID_SEQUENCE_NUMBER);
+            trace.client_aborted(0x1008, 0, invalid);
         }
     }
 
@@ -2247,103 +2517,119 @@ mod tests {
 
     #[test]
     fn silence_times_out_in_every_phase() {
-        let mut trace = Trace::with(|client| client.with_timeout(Duration::from_millis(100)));
-
-        trace.upload(0, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"]);
-        times_out(&mut trace, 100, 0x1018, 1, "initiate upload response");
-
-        trace.upload(200, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]);
-        trace.rx(250, "585#410810000A000000", &["605#6000000000000000"]);
-        times_out(&mut trace, 350, 0x1008, 0, "upload segment response");
-
-        trace.download(
-            400,
-            0x1017,
-            0,
-            &[1, 0],
-            DownloadMode::Auto,
-            &["605#2B17100001000000"],
-        );
-        times_out(&mut trace, 500, 0x1017, 0, "initiate download response");
-
-        trace.download(
-            600,
-            0x2002,
-            0,
-            &[1; 9],
-            DownloadMode::Auto,
-            &["605#2102200009000000"],
-        );
-        trace.rx(610, "585#6002200000000000", &["605#0001010101010101"]);
-        times_out(&mut trace, 710, 0x2002, 0, "download segment response");
-
-        trace.download(
-            800,
-            0x2002,
-            0,
-            &[1; 9],
-            DownloadMode::Block,
-            &["605#C602200009000000"],
-        );
-        times_out(&mut trace, 900, 0x2002, 0, "block download initiate response");
-
-        trace.download(
-            1000,
-            0x2002,
-            0,
-            &[1; 9],
-            DownloadMode::Block,
-            &["605#C602200009000000"],
-        );
-        trace.rx(
-            1010,
-            "585#A40220007F000000",
-            &["605#0101010101010101", "605#8201010000000000"],
-        );
-        times_out(
-            &mut trace,
-            1110,
-            0x2002,
-            0,
-            "block download sub-block acknowledge",
-        );
-
-        trace.download(
-            1200,
-            0x2002,
-            0,
-            &[1; 2],
-            DownloadMode::Block,
-            &["605#C602200002000000"],
-        );
-        trace.rx(1210, "585#A40220007F000000", &["605#8101010000000000"]);
-        let crc = crc16_ccitt(&[1, 1]).to_le_bytes();
-        trace.rx(
-            1220,
-            "585#A2017F0000000000",
-            &[format!("605#D5{:02X}{:02X}0000000000", crc[0], crc[1]).as_str()],
-        );
-        times_out(&mut trace, 1320, 0x2002, 0, "block download end response");
-
-        trace.upload(1400, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]);
-        times_out(&mut trace, 1500, 0x1008, 0, "block upload initiate response");
-
-        // No segment at all after "start upload": no acknowledge can help, the timeout ends it.
-        trace.upload(1600, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]);
-        trace.rx(1610, "585#C608100010000000", &["605#A300000000000000"]);
-        times_out(&mut trace, 1710, 0x1008, 0, "block upload sub-block segment");
-
-        // Segments stop: one acknowledge after 70 ms, then the timeout 100 ms after the last one.
-        trace.upload(1800, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]);
-        trace.rx(1810, "585#C608100010000000", &["605#A300000000000000"]);
-        trace.rx(1820, "585#0141424344454647", &[]);
-        trace.tick(1890, &["605#A2017F0000000000"]);
-        times_out(&mut trace, 1920, 0x1008, 0, "block upload sub-block segment");
-
-        trace.upload(2000, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]);
-        trace.rx(2010, "585#C608100002000000", &["605#A300000000000000"]);
-        trace.rx(2020, "585#814F4B0000000000", &["605#A2017F0000000000"]);
-        times_out(&mut trace, 2120, 0x1008, 0, "block upload end");
+        Trace::with(|client| client.with_timeout(Duration::from_millis(100))).play(&[
+            (
+                &[Up(0, 0x1018, 1, UploadMode::Normal, &["605#4018100100000000"])],
+                TimedOut(100, "initiate upload response"),
+            ),
+            (
+                &[
+                    Up(200, 0x1008, 0, UploadMode::Normal, &["605#4008100000000000"]),
+                    Server(250, "585#410810000A000000", &["605#6000000000000000"]),
+                ],
+                TimedOut(350, "upload segment response"),
+            ),
+            (
+                &[Down(
+                    400,
+                    0x1017,
+                    0,
+                    &[1, 0],
+                    DownloadMode::Auto,
+                    &["605#2B17100001000000"],
+                )],
+                TimedOut(500, "initiate download response"),
+            ),
+            (
+                &[
+                    Down(
+                        600,
+                        0x2002,
+                        0,
+                        &[1; 9],
+                        DownloadMode::Auto,
+                        &["605#2102200009000000"],
+                    ),
+                    Server(610, "585#6002200000000000", &["605#0001010101010101"]),
+                ],
+                TimedOut(710, "download segment response"),
+            ),
+            (
+                &[Down(
+                    800,
+                    0x2002,
+                    0,
+                    &[1; 9],
+                    DownloadMode::Block,
+                    &["605#C602200009000000"],
+                )],
+                TimedOut(900, "block download initiate response"),
+            ),
+            (
+                &[
+                    Down(
+                        1000,
+                        0x2002,
+                        0,
+                        &[1; 9],
+                        DownloadMode::Block,
+                        &["605#C602200009000000"],
+                    ),
+                    Server(
+                        1010,
+                        "585#A40220007F000000",
+                        &["605#0101010101010101", "605#8201010000000000"],
+                    ),
+                ],
+                TimedOut(1110, "block download sub-block acknowledge"),
+            ),
+            // The CRC of 01 01 is 2310h.
+            (
+                &[
+                    Down(
+                        1200,
+                        0x2002,
+                        0,
+                        &[1; 2],
+                        DownloadMode::Block,
+                        &["605#C602200002000000"],
+                    ),
+                    Server(1210, "585#A40220007F000000", &["605#8101010000000000"]),
+                    Server(1220, "585#A2017F0000000000", &["605#D510230000000000"]),
+                ],
+                TimedOut(1320, "block download end response"),
+            ),
+            (
+                &[Up(1400, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"])],
+                TimedOut(1500, "block upload initiate response"),
+            ),
+            // No segment at all after "start upload": no acknowledge can help, the timeout ends it.
+            (
+                &[
+                    Up(1600, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]),
+                    Server(1610, "585#C608100010000000", &["605#A300000000000000"]),
+                ],
+                TimedOut(1710, "block upload sub-block segment"),
+            ),
+            // Segments stop: one acknowledge after 70 ms, then the timeout 100 ms after the last one.
+            (
+                &[
+                    Up(1800, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]),
+                    Server(1810, "585#C608100010000000", &["605#A300000000000000"]),
+                    Server(1820, "585#0141424344454647", &[]),
+                    Wait(1890, &["605#A2017F0000000000"]),
+                ],
+                TimedOut(1920, "block upload sub-block segment"),
+            ),
+            (
+                &[
+                    Up(2000, 0x1008, 0, UploadMode::Block, &["605#A40810007F000000"]),
+                    Server(2010, "585#C608100002000000", &["605#A300000000000000"]),
+                    Server(2020, "585#814F4B0000000000", &["605#A2017F0000000000"]),
+                ],
+                TimedOut(2120, "block upload end"),
+            ),
+        ]);
     }
 
     #[test]

@@ -834,7 +834,7 @@ fn parse_integer(ty: ValueType, text: &str, signed: bool, bits: u32) -> Result<V
     if value < min || value > max {
         return Err(out_of_range());
     }
-    Ok(value.to_le_bytes()[..bits as usize / 8].to_vec())
+    Ok(value.to_le_bytes().into_iter().take(bits as usize / 8).collect())
 }
 
 /// A REAL parsed straight into its own width, so the shortest text of an `f32` reads back as

@@ -87,16 +87,23 @@ pub fn guess_type(data: &[u8]) -> ValueType {
 /// Text a person can read: UTF-8 without control characters other than tab, CR and LF; trailing NULs
 /// (a fixed-size string buffer's padding) allowed.
 pub fn is_printable(data: &[u8]) -> bool {
-    let end = data
-        .iter()
-        .rposition(|byte| *byte != 0)
-        .map_or(0, |last| last + 1);
-    let text = &data[..end];
+    let text = without_trailing_zeros(data);
     !text.is_empty()
         && std::str::from_utf8(text).is_ok_and(|text| {
             text.chars()
                 .all(|c| !c.is_control() || matches!(c, '\t' | '\r' | '\n'))
         })
+}
+
+/// `items` without the zeros at its end: a fixed-size string buffer's padding.
+pub(crate) fn without_trailing_zeros<T: Default + PartialEq>(items: &[T]) -> &[T] {
+    let mut rest = items;
+    while let [head @ .., last] = rest
+        && *last == T::default()
+    {
+        rest = head;
+    }
+    rest
 }
 
 /// Decodes `data` as `ty`; a length the type does not take gives hex bytes and a warning for stderr.
@@ -116,17 +123,20 @@ pub fn decode(ty: ValueType, data: &[u8]) -> (ValueType, DisplayValue, Option<St
 /// about the rest.
 pub fn expedited_value(ty: ValueType, data: &[u8], protocol: Protocol) -> (&[u8], Option<String>) {
     match ty.byte_len() {
-        Some(len) if protocol == Protocol::Expedited && len < data.len() => (
-            &data[..len],
-            Some(format!(
-                "the device sent {} bytes for a {ty} of {len}; the rest ({}) is taken as padding",
-                data.len(),
-                data[len..]
-                    .iter()
-                    .map(|byte| format!("{byte:02X}"))
-                    .collect::<String>()
-            )),
-        ),
+        Some(len) if protocol == Protocol::Expedited && len < data.len() => {
+            let (value, padding) = data.split_at_checked(len).unwrap_or((data, &[]));
+            (
+                value,
+                Some(format!(
+                    "the device sent {} bytes for a {ty} of {len}; the rest ({}) is taken as padding",
+                    data.len(),
+                    padding
+                        .iter()
+                        .map(|byte| format!("{byte:02X}"))
+                        .collect::<String>()
+                )),
+            )
+        }
         _ => (data, None),
     }
 }

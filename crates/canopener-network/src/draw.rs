@@ -6,6 +6,10 @@
 //! row in a snake, so neighbours on a line stay neighbours on the page; a cell is wider than any label
 //! it holds (long names are shortened with `…`, the full name is in the `<title>`), so labels of an
 //! automatic layout never overlap, at 100 devices as at 3.
+#![allow(
+    clippy::indexing_slicing,
+    reason = "graph code: the topology's own vertex, edge and device numbers index vectors built with one entry each; still to be rewritten (issue 25)"
+)]
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::fmt::Write as _;

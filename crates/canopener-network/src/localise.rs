@@ -11,6 +11,10 @@
 //! [`EXHAUSTIVE_SUPPLY_DOMAINS`], greedily beyond). Each covering set is reported once per kind with
 //! every hypothesis of that kind predicting exactly it: the ambiguity group of equivalent cables, the
 //! device (a drop cable or its device), the supply domain, the monitor.
+#![allow(
+    clippy::indexing_slicing,
+    reason = "graph code: the topology's own vertex, edge and device numbers index vectors built with one entry each; still to be rewritten (issue 25)"
+)]
 
 use std::collections::{BTreeMap, BTreeSet};
 

@@ -370,7 +370,9 @@ impl SystemMonitor {
     pub fn start(&mut self, now: Instant) {
         self.started = Some(now);
         for index in 0..self.devices.len() {
-            let device = &mut self.devices[index];
+            let Some(device) = self.devices.get_mut(index) else {
+                continue;
+            };
             if device.is_monitor {
                 continue;
             }
@@ -378,8 +380,7 @@ impl SystemMonitor {
                 Some(period) => device.deadline = Some(now + period.mul_f64(SILENCE_FACTOR)),
                 None => {
                     device.state = Some(DeviceState::Unmonitored);
-                    let event = self.state_event(now, index);
-                    self.events.push_back(event);
+                    self.events.extend(self.state_event(now, index));
                 }
             }
         }
@@ -402,7 +403,9 @@ impl SystemMonitor {
         match (base, frame.data()) {
             (0x700, &[byte]) => match DeviceState::from_heartbeat(byte) {
                 Some(state) => {
-                    let device = &self.devices[index];
+                    let Some(device) = self.devices.get(index) else {
+                        return;
+                    };
                     let babbled = device.state == Some(state)
                         && device
                             .last_heard
@@ -427,11 +430,13 @@ impl SystemMonitor {
                 self.anomaly(now, index, frame, reason);
             }
             (0x080, &[low, high, register, _, _, _, _, _]) => {
-                self.devices[index].last_emcy = Some(LastEmcy {
-                    at: now,
-                    code: u16::from_le_bytes([low, high]),
-                    register,
-                });
+                if let Some(device) = self.devices.get_mut(index) {
+                    device.last_emcy = Some(LastEmcy {
+                        at: now,
+                        code: u16::from_le_bytes([low, high]),
+                        register,
+                    });
+                }
             }
             (0x080, data) => {
                 let reason = format!("an EMCY has 8 bytes, this one {}", data.len());
@@ -463,15 +468,16 @@ impl SystemMonitor {
     /// Runs what is due at `now`: silences and settled diagnoses.
     pub fn handle_timeout(&mut self, now: Instant) {
         for index in 0..self.devices.len() {
-            let device = &mut self.devices[index];
+            let Some(device) = self.devices.get_mut(index) else {
+                continue;
+            };
             if device.deadline.is_some_and(|d| d <= now) && !device.silent {
                 device.deadline = None;
                 device.silent = true;
                 device.silences = device.silences.saturating_add(1);
                 device.state = Some(DeviceState::Silent);
                 let network = device.network;
-                let event = self.state_event(now, index);
-                self.events.push_back(event);
+                self.events.extend(self.state_event(now, index));
                 self.changed(now, network);
             }
         }
@@ -553,18 +559,20 @@ impl SystemMonitor {
 
     fn find(&self, network: u32, node_id: u8) -> Option<usize> {
         let watched = self.networks.get(&network)?;
-        watched
-            .devices
-            .iter()
-            .copied()
-            .find(|&i| self.devices[i].node_id == node_id && !self.devices[i].is_monitor)
+        watched.devices.iter().copied().find(|&i| {
+            self.devices
+                .get(i)
+                .is_some_and(|d| d.node_id == node_id && !d.is_monitor)
+        })
     }
 
     /// Counts an anomaly and reports it unless the device's last report was within
     /// [`ANOMALY_REPEAT`].
     fn anomaly(&mut self, now: Instant, index: usize, frame: &CanFrame, reason: String) {
         let time = self.seconds(now);
-        let device = &mut self.devices[index];
+        let Some(device) = self.devices.get_mut(index) else {
+            return;
+        };
         device.anomalies = device.anomalies.saturating_add(1);
         if device
             .last_anomaly
@@ -584,7 +592,9 @@ impl SystemMonitor {
     }
 
     fn heard(&mut self, now: Instant, index: usize, state: DeviceState) {
-        let device = &mut self.devices[index];
+        let Some(device) = self.devices.get_mut(index) else {
+            return;
+        };
         device.last_heard = Some(now);
         if let Some(period) = device.period {
             device.deadline = Some(now + period.mul_f64(SILENCE_FACTOR));
@@ -595,8 +605,7 @@ impl SystemMonitor {
         if device.state != Some(DeviceState::Unmonitored) || device.period.is_some() {
             device.state = Some(state);
         }
-        if was_silent {
-            let device = &self.devices[index];
+        if was_silent && let Some(device) = self.devices.get(index) {
             self.events.push_back(Event::Recovered {
                 time: self.seconds(now),
                 network,
@@ -605,9 +614,8 @@ impl SystemMonitor {
             });
             self.changed(now, network);
         }
-        if changed && self.devices[index].state == Some(state) {
-            let event = self.state_event(now, index);
-            self.events.push_back(event);
+        if changed && self.devices.get(index).is_some_and(|d| d.state == Some(state)) {
+            self.events.extend(self.state_event(now, index));
         }
     }
 
@@ -628,7 +636,7 @@ impl SystemMonitor {
             .devices
             .iter()
             .enumerate()
-            .filter(|(_, i)| self.devices[**i].silent)
+            .filter(|(_, i)| self.devices.get(**i).is_some_and(|d| d.silent))
             .map(|(position, _)| position)
             .collect();
         let time = self.seconds(now);
@@ -660,13 +668,20 @@ impl SystemMonitor {
                 .devices
                 .iter()
                 .enumerate()
-                .filter(|(_, i)| pred(&self.devices[**i]))
+                .filter(|(_, i)| self.devices.get(**i).is_some_and(pred))
                 .map(|(position, _)| position)
                 .collect()
         };
         let watched_set = positions(&|d| d.period.is_some() && !d.is_monitor);
         let silent = positions(&|d| d.silent);
-        let name = |position: &usize| self.devices[watched.devices[*position]].name.clone();
+        let name = |position: &usize| {
+            watched
+                .devices
+                .get(*position)
+                .and_then(|i| self.devices.get(*i))
+                .map(|d| d.name.clone())
+                .unwrap_or_default()
+        };
         let explanations = watched
             .localiser
             .explain(&watched_set, &silent)
@@ -680,15 +695,15 @@ impl SystemMonitor {
         (silent.iter().map(name).collect(), explanations)
     }
 
-    fn state_event(&self, now: Instant, index: usize) -> Event {
-        let device = &self.devices[index];
-        Event::State {
+    fn state_event(&self, now: Instant, index: usize) -> Option<Event> {
+        let device = self.devices.get(index)?;
+        Some(Event::State {
             time: self.seconds(now),
             network: device.network,
             node: device.name.clone(),
             node_id: device.node_id,
             state: device.state.unwrap_or(DeviceState::Silent),
-        }
+        })
     }
 
     fn seconds(&self, now: Instant) -> f64 {

@@ -429,7 +429,10 @@ impl Entry {
             return Err(EntryError::LimitIsNan { key });
         }
         let mut limit = [0; 8];
-        // Numeric types are at most 8 bytes, so `expected` fits the buffer.
+        #[allow(
+            clippy::indexing_slicing,
+            reason = "numeric types are at most 8 bytes, so `expected` fits the buffer"
+        )]
         limit[..expected].copy_from_slice(bytes);
         Ok(limit)
     }

@@ -31,6 +31,12 @@
 //! ```
 
 #![warn(missing_docs)]
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does); each exception names, where it stands, why it cannot fail.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
 
 mod access;
 mod data_type;

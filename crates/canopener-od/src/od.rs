@@ -104,7 +104,10 @@ impl DynamicOd {
     pub fn insert(&mut self, entry: Entry) -> Result<Option<Entry>, OdError> {
         let key = entry.key();
         match self.keys.binary_search(&key.packed()) {
-            // `position < keys.len() == entries.len()`, as a successful `binary_search` promises.
+            #[allow(
+                clippy::indexing_slicing,
+                reason = "`position < keys.len() == entries.len()`, as a successful `binary_search` promises"
+            )]
             Ok(position) => Ok(Some(std::mem::replace(&mut self.entries[position], entry))),
             Err(position) => {
                 if self.entries.len() >= self.capacity {

@@ -23,7 +23,10 @@ impl ValueBytes {
         match u8::try_from(data.len()) {
             Ok(len) if data.len() <= INLINE_CAPACITY => {
                 let mut bytes = [0; INLINE_CAPACITY];
-                // The guard above keeps `data.len()` within the buffer.
+                #[allow(
+                    clippy::indexing_slicing,
+                    reason = "the guard above keeps `data.len()` within the buffer"
+                )]
                 bytes[..data.len()].copy_from_slice(data);
                 ValueBytes::Inline { len, bytes }
             }
@@ -34,7 +37,7 @@ impl ValueBytes {
     pub(crate) fn as_slice(&self) -> &[u8] {
         match self {
             // `len <= INLINE_CAPACITY` is the variant's invariant, set only by `new`.
-            ValueBytes::Inline { len, bytes } => &bytes[..usize::from(*len)],
+            ValueBytes::Inline { len, bytes } => bytes.get(..usize::from(*len)).unwrap_or(bytes),
             ValueBytes::Heap(bytes) => bytes,
         }
     }
@@ -48,7 +51,10 @@ impl ValueBytes {
     pub(crate) fn set(&mut self, data: &[u8]) {
         match self {
             ValueBytes::Inline { len, bytes } if usize::from(*len) == data.len() => {
-                // The guard ties `data.len()` to the stored `len`, which never exceeds the buffer.
+                #[allow(
+                    clippy::indexing_slicing,
+                    reason = "the guard ties `data.len()` to the stored `len`, which never exceeds the buffer"
+                )]
                 bytes[..data.len()].copy_from_slice(data);
             }
             ValueBytes::Heap(bytes) if bytes.len() == data.len() => bytes.copy_from_slice(data),

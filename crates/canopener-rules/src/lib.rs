@@ -30,6 +30,12 @@
 //! an item is reported once per rule and file as an `R000` finding ([`EVALUATION_ERROR`]).
 
 #![warn(missing_docs)]
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does); each exception names, where it stands, why it cannot fail.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
 
 mod error;
 mod eval;

@@ -82,6 +82,11 @@ pub fn backup_path(path: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
+/// Whether `path` names something that exists (a result file the caller would replace).
+pub fn exists(path: &Path) -> bool {
+    path.exists()
+}
+
 /// Whether two paths name the same existing file.
 pub fn same_file(a: &Path, b: &Path) -> bool {
     match (fs::canonicalize(a), fs::canonicalize(b)) {

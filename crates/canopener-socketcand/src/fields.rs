@@ -193,17 +193,30 @@ pub(crate) fn push_id(out: &mut Vec<u8>, id: CanId) {
         CanId::Extended(id) => (id.as_raw(), 8),
     };
     for shift in (0..width).rev() {
-        out.push(HEX_UPPER[((raw >> (4 * shift)) & 0xF) as usize]);
+        out.push(hex_digit(raw >> (4 * shift)));
     }
+}
+
+/// The upper-case hex digit of the low 4 bits of `value`.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "masked to 4 bits, the index is below the table's 16 entries"
+)]
+fn hex_digit(value: u32) -> u8 {
+    HEX_UPPER[(value & 0xF) as usize]
 }
 
 /// `%02X`.
 pub(crate) fn push_hex_byte(out: &mut Vec<u8>, byte: u8) {
-    out.push(HEX_UPPER[usize::from(byte >> 4)]);
-    out.push(HEX_UPPER[usize::from(byte & 0xF)]);
+    out.push(hex_digit(u32::from(byte >> 4)));
+    out.push(hex_digit(u32::from(byte)));
 }
 
 /// A number in decimal.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "20 digits hold u64::MAX, so `start` stays inside `digits`"
+)]
 pub(crate) fn push_decimal(out: &mut Vec<u8>, mut value: u64) {
     // u64::MAX has 20 decimal digits, so `start` never goes below zero.
     let mut digits = [0u8; 20];

@@ -46,6 +46,11 @@ pub fn list(dir: impl AsRef<Path>) -> io::Result<Vec<PathBuf>> {
     Ok(entries)
 }
 
+/// `std::path::Path::is_dir`: whether a listed entry is a directory to descend into.
+pub fn is_dir(path: impl AsRef<Path>) -> bool {
+    path.as_ref().is_dir()
+}
+
 /// A fresh, empty directory of its own for one test, removed again when dropped.
 #[derive(Debug)]
 pub struct ScratchDir {

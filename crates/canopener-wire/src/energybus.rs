@@ -71,6 +71,15 @@ impl EmsState {
         matches!(self, EmsState::Limiting | EmsState::Operating)
     }
 
+    /// This state's code among `codes`, which are in [`EmsState::ALL`] order.
+    #[allow(
+        clippy::indexing_slicing,
+        reason = "`position` is 0..=5 for the six states, the array's length"
+    )]
+    fn code_in(self, codes: &[u16; 6]) -> u16 {
+        codes[self.position()]
+    }
+
     fn position(self) -> usize {
         match self {
             EmsState::Disconnected => 0,
@@ -296,9 +305,10 @@ impl EmsProfile {
                 .ok()
                 .filter(|v| u32::from(*v) < 1u32 << state_width)
                 .ok_or_else(|| invalid(&key, &value.to_string(), "does not fit the state bits"))?;
-            if let Some(other) = EmsState::ALL[..state.position()]
+            if let Some(other) = EmsState::ALL
                 .iter()
-                .find(|s| state_codes[s.position()] == code)
+                .take(state.position())
+                .find(|s| s.code_in(&state_codes) == code)
             {
                 return Err(invalid(
                     &key,
@@ -306,7 +316,9 @@ impl EmsProfile {
                     &format!("{other} has that code"),
                 ));
             }
-            state_codes[state.position()] = code;
+            if let Some(slot) = state_codes.get_mut(state.position()) {
+                *slot = code;
+            }
         }
         let mut controls: Vec<(u16, EmsTransition)> = Vec::new();
         for transition in EmsTransition::ALL {
@@ -363,12 +375,12 @@ impl EmsProfile {
         let code = (u32::from(status) >> self.state_shift) & mask;
         EmsState::ALL
             .into_iter()
-            .find(|s| u32::from(self.state_codes[s.position()]) == code)
+            .find(|s| u32::from(s.code_in(&self.state_codes)) == code)
     }
 
     /// The status word bits that report `state` (the other bits 0).
     pub fn status_bits(&self, state: EmsState) -> u16 {
-        self.state_codes[state.position()] << self.state_shift
+        state.code_in(&self.state_codes) << self.state_shift
     }
 
     /// The transition a control word value asks for, if any.

@@ -157,7 +157,9 @@ impl LssAddress {
     /// This address with one part replaced (a tester's "wrong in one part" address).
     pub fn with_part(&self, part: LssAddressPart, value: u32) -> LssAddress {
         let mut parts = self.parts();
-        parts[usize::from(part.offset())] = value;
+        if let Some(slot) = parts.get_mut(usize::from(part.offset())) {
+            *slot = value;
+        }
         LssAddress::from_parts(parts)
     }
 
@@ -305,9 +307,10 @@ pub enum LssRequest {
 impl LssRequest {
     /// The identify remote slave requests (46h–4Bh) for `bounds` in [`IdentifyField::ALL`] order.
     pub fn identify_remote_slave(bounds: [u32; 6]) -> [LssRequest; 6] {
-        std::array::from_fn(|i| LssRequest::IdentifyRemoteSlave {
-            field: IdentifyField::ALL[i],
-            value: bounds[i],
+        let mut bounds = bounds.into_iter();
+        IdentifyField::ALL.map(|field| LssRequest::IdentifyRemoteSlave {
+            field,
+            value: bounds.next().unwrap_or(0),
         })
     }
 }

@@ -461,6 +461,10 @@ fn end_frame(unused: u8, crc: u16) -> Result<[u8; 8], SdoEncodeError> {
 }
 
 /// The reserved bits of D0 (`d0`) and of whole bytes `from..8`.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "byte 0 and bytes below 8 (the loop's bound) of an 8-byte array"
+)]
 const fn mask(d0: u8, from: usize) -> [u8; 8] {
     let mut bytes = [0; 8];
     bytes[0] = d0;

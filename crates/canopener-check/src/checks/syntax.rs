@@ -571,6 +571,10 @@ fn normalise(name: &str) -> Vec<u8> {
 }
 
 /// Optimal string alignment distance: insertions, deletions, substitutions and swaps of neighbours.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "every index stays inside the table and inside `a` and `b`, as the comment below shows"
+)]
 fn edit_distance(a: &[u8], b: &[u8]) -> usize {
     // Indexing below stays inside the (a.len() + 1) x (b.len() + 1) table and inside `a` and `b`:
     // i runs over 1..=a.len(), j over 1..=b.len(), and the swap case requires i, j > 1.
@@ -712,8 +716,10 @@ fn lely_cut(value: &str) -> Option<Cut<'_>> {
 /// that follows white space. `None` when it reads the whole value.
 fn python_cut(value: &str) -> Option<&str> {
     let bytes = value.as_bytes();
-    // i runs over 1..len, so both bytes[i] and bytes[i - 1] exist.
-    let position = (1..bytes.len()).find(|&i| bytes[i] == b';' && bytes[i - 1].is_ascii_whitespace())?;
+    let position = bytes
+        .windows(2)
+        .position(|pair| matches!(pair, [before, b';'] if before.is_ascii_whitespace()))?
+        + 1;
     Some(value.get(..position)?.trim_end())
 }
 

@@ -15,7 +15,7 @@ use canopener_conformance::model::{Report, Verdict, rfc3339_utc};
 use canopener_conformance::render::html;
 use canopener_device::faults::Fault;
 use canopener_runtime::clock::wall_time;
-use canopener_runtime::files::{create_dir_all, write_atomic};
+use canopener_runtime::files::{self, create_dir_all, write_atomic};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
@@ -100,7 +100,7 @@ struct Written {
 
 impl Written {
     fn write(&mut self, path: &Path, bytes: &[u8]) -> CliResult {
-        if path.exists() {
+        if files::exists(path) {
             self.replaced.push(path.to_owned());
         }
         write_atomic(path, bytes, false).map_err(write_failed)?;

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use canopener_master::statistics::Spread;
 use canopener_master::value::{DisplayValue, entry_label};
-use canopener_runtime::files::{WriteError, backup_path};
+use canopener_runtime::files::{self, WriteError, backup_path};
 use canopener_runtime::sdo_session::SdoError;
 use canopener_wire::NmtState;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -190,7 +190,7 @@ pub(crate) fn kbytes_per_s(bytes: usize, elapsed: Duration) -> f64 {
 
 /// Refuses to replace `path` without `--force` (before any bus traffic).
 pub(crate) fn refuse_existing(path: &Path, force: bool) -> CliResult {
-    if path.exists() && !force {
+    if files::exists(path) && !force {
         return Err(CliError::Usage(format!(
             "{} exists; pass --force to replace it (the old file is kept as {})",
             path.display(),

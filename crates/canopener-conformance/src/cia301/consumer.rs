@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::context::{Ctx, Reply, hex};
+use crate::context::{Ctx, Reply, first_hex, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::procedures::emcy::emcy_producer;
 use crate::procedures::nmt::{observed_state, start_heartbeat, state_name};
@@ -233,7 +233,7 @@ fn consumer_reaction(ctx: &mut Ctx<'_, '_>) -> Outcome {
                 answer: if after.is_empty() {
                     format!("no EMCY within {} ms", u64::from(TEST_CONSUMER_MS) * 2)
                 } else {
-                    format!("EMCY {}", hex(after[0].frame.data()))
+                    format!("EMCY {}", first_hex(&after))
                 },
                 cause: "the heartbeat consumer does not watch 1016h, or the event sends no EMCY".to_owned(),
             },

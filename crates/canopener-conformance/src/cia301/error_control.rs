@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::context::{Ctx, Reply, hex};
+use crate::context::{Ctx, Reply, first_hex, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::procedures::emcy::emcy_producer;
 use crate::procedures::intervals::{intervals_text, measure_intervals};
@@ -206,7 +206,9 @@ fn error_register(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let reply = ctx.read(0x1001, 0)?;
     ctx.performed("Emergency 02");
     Ok(match reply {
-        Reply::Done(d) if d.len() == 1 => Finding::pass(format!("error register {:02X}h", d[0])),
+        Reply::Done(ref d) if let [register] = d.as_slice() => {
+            Finding::pass(format!("error register {register:02X}h"))
+        }
         other => refused_unexpectedly(
             &upload_text((0x1001, 0)),
             &other,
@@ -351,7 +353,7 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
                         answer: if after.is_empty() {
                             "no EMCY within 500 ms".to_owned()
                         } else {
-                            format!("EMCY {}", hex(after[0].frame.data()))
+                            format!("EMCY {}", first_hex(&after))
                         },
                         cause: "the EMCY producer does not report that the error was cleared".to_owned(),
                     },
@@ -402,7 +404,7 @@ fn rpdo_length(ctx: &mut Ctx<'_, '_>, look: Look) -> Outcome {
                     answer: if seen.is_empty() {
                         "no EMCY within 500 ms".to_owned()
                     } else {
-                        format!("EMCY {}", hex(seen[0].frame.data()))
+                        format!("EMCY {}", first_hex(&seen))
                     },
                     cause: "the RPDO length is not checked, or the EMCY producer is missing".to_owned(),
                 },
@@ -420,7 +422,10 @@ fn register_agrees(
     error: bool,
     request: &str,
 ) -> Result<Option<Finding>, Stop> {
-    let code = emcy.get(..2).map_or(0, |c| u16::from_le_bytes([c[0], c[1]]));
+    let code = emcy
+        .get(..2)
+        .and_then(|c| <[u8; 2]>::try_from(c).ok())
+        .map_or(0, u16::from_le_bytes);
     let Some(&register) = emcy.get(2) else {
         return Ok(Some(Finding::fail(
             format!("EMCY {} carries no error register byte", hex(emcy)),
@@ -488,7 +493,7 @@ fn error_history(ctx: &mut Ctx<'_, '_>, request: &str) -> Result<Finding, Stop> 
     ctx.performed("Emergency 03");
     ctx.performed("Emergency 06");
     let count = match ctx.read(0x1003, 0)? {
-        Reply::Done(d) if d.len() == 1 => d[0],
+        Reply::Done(ref d) if let [byte] = d.as_slice() => *byte,
         other => {
             return Ok(refused_unexpectedly(
                 &upload_text((0x1003, 0)),
@@ -759,7 +764,10 @@ fn guarding_toggle(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         ));
     }
-    let toggles_alternate = got.windows(2).all(|w| (w[0] ^ w[1]) & 0x80 != 0);
+    let toggles_alternate = got
+        .iter()
+        .zip(got.iter().skip(1))
+        .all(|(a, b)| (a ^ b) & 0x80 != 0);
     let state_right = got.iter().all(|b| b & 0x7F == 0x7F);
     ctx.performed("Guarding 01");
     ctx.performed("Guarding 02");

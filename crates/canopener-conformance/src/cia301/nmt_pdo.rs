@@ -109,7 +109,12 @@ impl SyncSource {
         }
         let overflow = if ctx.model().has(0x1019) {
             match ctx.read(0x1019, 0)? {
-                Reply::Done(d) if d.len() == 1 && d[0] > 1 => Some(d[0]),
+                Reply::Done(ref d)
+                    if let [count] = d.as_slice()
+                        && *count > 1 =>
+                {
+                    Some(*count)
+                }
                 _ => None,
             }
         } else {
@@ -508,7 +513,10 @@ struct RpdoTarget {
 impl RpdoTarget {
     fn frame(&self, value: &[u8]) -> Vec<u8> {
         let mut data = self.data.clone();
-        data[self.offset..self.offset + value.len()].copy_from_slice(value);
+        // The target's bytes lie inside the PDO: both come from the same mapping.
+        if let Some(target) = data.get_mut(self.offset..self.offset + value.len()) {
+            target.copy_from_slice(value);
+        }
         data
     }
 }
@@ -525,14 +533,14 @@ fn rpdo_mapping(ctx: &mut Ctx<'_, '_>, pdo: &PdoModel) -> Result<Option<(u16, u8
         return Ok(None);
     }
     let kind = match ctx.read(pdo.comm, 2)? {
-        Reply::Done(d) if d.len() == 1 => d[0],
+        Reply::Done(ref d) if let [byte] = d.as_slice() => *byte,
         _ => return Ok(None),
     };
     let Some(mapping) = pdo.mapping else {
         return Ok(None);
     };
     let count = match ctx.read(mapping, 0)? {
-        Reply::Done(d) if d.len() == 1 => d[0],
+        Reply::Done(ref d) if let [byte] = d.as_slice() => *byte,
         _ => return Ok(None),
     };
     let mut entries = Vec::new();

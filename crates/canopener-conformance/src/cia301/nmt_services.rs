@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::context::{Ctx, Reply, hex};
+use crate::context::{Ctx, Reply, first_hex, hex};
 use crate::finding::{Evidence, Finding, Outcome, Stop};
 use crate::procedures::nmt::{SETTLE, back_to_pre_operational, enter};
 use crate::procedures::sdo::{download_text, u32_of, upload_text};
@@ -227,7 +227,7 @@ fn emcy_per_state(ctx: &mut Ctx<'_, '_>) -> Outcome {
     back_to_pre_operational(ctx)?;
     // Without an EMCY, only the error register tells whether the device noticed the error at all.
     let register = match ctx.read(0x1001, 0)? {
-        Reply::Done(d) if d.len() == 1 => Some(d[0]),
+        Reply::Done(ref d) if let [byte] = d.as_slice() => Some(*byte),
         _ => None,
     };
     provoker.resume(ctx)?;
@@ -282,14 +282,14 @@ fn emcy_per_state(ctx: &mut Ctx<'_, '_>) -> Outcome {
     }
     Ok(Finding::pass(format!(
         "{event}: EMCY {} in pre-operational, none in stopped within {} ms",
-        hex(seen[0].frame.data()),
+        first_hex(&seen),
         window.as_millis()
     )))
 }
 
 fn register_while_error(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let before = match ctx.read(0x1001, 0)? {
-        Reply::Done(d) if d.len() == 1 => d[0],
+        Reply::Done(ref d) if let [byte] = d.as_slice() => *byte,
         other => {
             return Ok(Finding::inconclusive(format!(
                 "{} got {} (cia301.emcy.2 judges 1001h)",
@@ -319,11 +319,16 @@ fn register_while_error(ctx: &mut Ctx<'_, '_>) -> Outcome {
         (Some(_), Some(l)) => format!("EMCY {}", hex(l.frame.data())),
     };
     match during {
-        Reply::Done(d) if d.len() == 1 && d[0] != 0 => Ok(Finding::pass(format!(
-            "1001h {:02X}h during a {} ({emcy}), 00h before",
-            d[0],
-            provoker.event()
-        ))),
+        Reply::Done(ref d)
+            if let [register] = d.as_slice()
+                && *register != 0 =>
+        {
+            Ok(Finding::pass(format!(
+                "1001h {:02X}h during a {} ({emcy}), 00h before",
+                register,
+                provoker.event()
+            )))
+        }
         Reply::Done(d) if d == [0] && seen.is_empty() => Ok(Finding::inconclusive(format!(
             "{emcy} and 1001h stayed 00h: the device may not have detected the error (cia301.ec.6 and cia301.ec.7 judge the heartbeat consumer and life guarding)"
         ))),
@@ -404,7 +409,7 @@ fn sync_producer_per_state(ctx: &mut Ctx<'_, '_>) -> Outcome {
         counts.push(ctx.listen(SYNC_WATCH, |f| f.id() == id && !f.is_remote())?.len());
     }
     back_to_pre_operational(ctx)?;
-    let [pre_operational, stopped, operational] = [counts[0], counts[1], counts[2]];
+    let [pre_operational, stopped, operational] = <[usize; 3]>::try_from(counts).unwrap_or_default();
     let request = format!(
         "1005h = {:#010X}, 1006h = {TEST_SYNC_PERIOD_US} µs; SYNC frames in {} ms of pre-operational: {pre_operational}, then NMT stop: {stopped}, then NMT start: {operational}",
         cob | 0x4000_0000,

@@ -293,7 +293,7 @@ fn defaults(ctx: &mut Ctx<'_, '_>) -> Outcome {
 
 fn trim(data: &[u8]) -> &[u8] {
     let end = data.iter().rposition(|b| *b != 0).map_or(0, |p| p + 1);
-    &data[..end]
+    data.get(..end).unwrap_or(data)
 }
 
 fn write_read_only(ctx: &mut Ctx<'_, '_>) -> Outcome {
@@ -565,7 +565,7 @@ fn structure_subs(ctx: &mut Ctx<'_, '_>) -> Outcome {
         let described = ctx.model().entry(at.0, at.1).is_some();
         let reply = ctx.read(at.0, at.1)?;
         let value = match &reply {
-            Reply::Done(d) if d.len() == 4 => u32::from_le_bytes([d[0], d[1], d[2], d[3]]),
+            Reply::Done(d) if let Ok(bytes) = <[u8; 4]>::try_from(d.as_slice()) => u32::from_le_bytes(bytes),
             Reply::Refused(code) if !described && req::NO_SUB_INDEX.accepts(*code) => {
                 absent += 1;
                 continue;

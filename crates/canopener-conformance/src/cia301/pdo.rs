@@ -6,7 +6,7 @@ use std::time::Duration;
 use canopener_wire::NmtCommand;
 
 use crate::cia301::pdo_transmission::{nmt_path, served_outside_operational};
-use crate::context::{Ctx, Reply, hex};
+use crate::context::{Ctx, Reply, first_hex, hex};
 use crate::device_model::{PdoDirection, PdoModel};
 use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::nmt::back_to_pre_operational;
@@ -113,7 +113,7 @@ fn communication_parameters(ctx: &mut Ctx<'_, '_>) -> Outcome {
         if ctx.model().entry(pdo.comm, 2).is_some() {
             let kind = ctx.read(pdo.comm, 2)?;
             let reserved = match &kind {
-                Reply::Done(d) if d.len() == 1 => (0xF1..=0xFB).contains(&d[0]),
+                Reply::Done(d) if let [kind] = d.as_slice() => (0xF1..=0xFB).contains(kind),
                 _ => true,
             };
             if reserved {
@@ -274,7 +274,7 @@ fn tpdo_rtr(ctx: &mut Ctx<'_, '_>) -> Outcome {
             },
         )
     } else {
-        Finding::pass(format!("TPDO{number} answered: {}", hex(answer[0].frame.data())))
+        Finding::pass(format!("TPDO{number} answered: {}", first_hex(&answer)))
     })
 }
 

@@ -463,13 +463,13 @@ fn without_procedure(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let Some(m) = prepared!(mappable(ctx, PdoDirection::Transmit)?) else {
         return Ok(no_mappable(PdoDirection::Transmit));
     };
-    if m.entries.is_empty() {
+    let Some(first) = m.entries.first() else {
         return Ok(Finding::not_applicable(format!(
             "TPDO{} maps nothing ({:04X}h:00 = 0): no entry to write back while it is valid",
             m.pdo.number, m.mapping
         )));
-    }
-    let entry = m.entries[0].to_le_bytes().to_vec();
+    };
+    let entry = first.to_le_bytes().to_vec();
     let pdo = format!("TPDO{}", m.pdo.number);
     // CCT PDO 23: the PDO made invalid (step 1 of the procedure), sub-index 0 left as it is
     // (step 2 skipped): the entry must be refused.
@@ -853,7 +853,7 @@ fn dummy_into_rpdo(ctx: &mut Ctx<'_, '_>) -> Outcome {
         3 | 6 => 16,
         _ => 32,
     };
-    let Some(index) = (2u16..=7).find(|i| ctx.model().dummies[usize::from(*i)]) else {
+    let Some(index) = (2u16..=7).find(|i| ctx.model().dummies.get(usize::from(*i)) == Some(&true)) else {
         return Ok(Finding::not_applicable(
             "the EDS's [DummyUsage] enables none of 0002h–0007h",
         ));

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use canopener_wire::NmtCommand;
 
-use crate::context::{Ctx, Reply, hex};
+use crate::context::{Ctx, Reply, first_hex};
 use crate::finding::{Evidence, Finding, Outcome, Prepared, Stop};
 use crate::procedures::intervals::{intervals_text, measure_intervals};
 use crate::procedures::nmt::back_to_pre_operational;
@@ -187,7 +187,7 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     // sooner than the timer means the timer elapsed early.
     let early = intervals.iter().copied().enumerate().find(|(i, interval)| {
         *interval < period * (1.0 - EVENT_TIMER_TOLERANCE)
-            && frames[i + 1].frame.data() == frames[*i].frame.data()
+            && frames.get(i + 1).map(|l| l.frame.data()) == frames.get(*i).map(|l| l.frame.data())
     });
     let operational = if frames.len() < 5 {
         Finding::fail(
@@ -216,7 +216,7 @@ fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         Finding::fail(
             format!(
                 "a TPDO {early:.1} ms after the previous one with the same data ({}) and a {TEST_EVENT_TIMER_MS} ms event timer",
-                hex(frames[i + 1].frame.data())
+                first_hex(frames.get(i + 1..).unwrap_or_default())
             ),
             Evidence {
                 request,
@@ -260,8 +260,9 @@ fn synchronous(ctx: &mut Ctx<'_, '_>) -> Outcome {
         .map(|(i, _)| i)
         .collect();
     let evenly = sent
-        .windows(2)
-        .all(|w| w[1] - w[0] == usize::from(TEST_SYNC_EVERY));
+        .iter()
+        .zip(sent.iter().skip(1))
+        .all(|(before, after)| after - before == usize::from(TEST_SYNC_EVERY));
     let expected = TEST_SYNCS / usize::from(TEST_SYNC_EVERY);
     let operational = if sent.len() == expected && evenly && after_sync.iter().all(|n| *n <= 1) {
         Finding::pass(format!("TPDOs after SYNCs {pattern}"))
@@ -578,7 +579,10 @@ fn tpdos_after_syncs(
     counters: &[Option<u8>],
 ) -> Result<Vec<usize>, Stop> {
     let per_sync = tpdo_counts_after_syncs(ctx, sync, &[(cob & 0x7FF) as u16], counters)?;
-    Ok(per_sync.into_iter().map(|counts| counts[0]).collect())
+    Ok(per_sync
+        .into_iter()
+        .map(|counts| counts.first().copied().unwrap_or(0))
+        .collect())
 }
 
 /// [`tpdos_after_syncs`] for several TPDOs: per SYNC, the number of frames on each of `ids`.
@@ -701,9 +705,9 @@ fn sync_consumer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let wrong: Vec<String> = names
         .iter()
         .enumerate()
-        .filter(|(i, _)| per_sync.iter().any(|counts| counts[*i] != 1))
+        .filter(|(i, _)| per_sync.iter().any(|counts| counts.get(*i) != Some(&1)))
         .map(|(i, name)| {
-            let counts: Vec<usize> = per_sync.iter().map(|c| c[i]).collect();
+            let counts: Vec<usize> = per_sync.iter().filter_map(|c| c.get(i).copied()).collect();
             format!("{name}: {counts:?}")
         })
         .collect();

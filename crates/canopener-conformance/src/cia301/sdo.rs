@@ -343,7 +343,7 @@ fn device_type_either_way(ctx: &mut Ctx<'_, '_>, value: &[u8]) -> Result<Option<
         } else {
             4
         };
-        return Ok((size != 4 || answer[4..8] != *value).then(|| {
+        return Ok((size != 4 || answer.get(4..8) != Some(value)).then(|| {
             Finding::fail(
                 format!(
                     "the expedited answer {} does not carry the 4 bytes {}",
@@ -364,7 +364,7 @@ fn device_type_either_way(ctx: &mut Ctx<'_, '_>, value: &[u8]) -> Result<Option<
     }
     // Segmented: the size (when indicated) is 4, and one segment with toggle 0, c = 1 and 3 unused
     // bytes carries the value (§7.2.4.3.7).
-    if sized && answer[4..8] != 4u32.to_le_bytes() {
+    if sized && answer.get(4..8) != Some(&4u32.to_le_bytes()[..]) {
         return Ok(fail(
             format!(
                 "the segmented answer {} indicates another size than 4",
@@ -389,7 +389,9 @@ fn device_type_either_way(ctx: &mut Ctx<'_, '_>, value: &[u8]) -> Result<Option<
             &[0x80, 0x00, 0x10, 0x00, a, b, c, d],
         )?;
     }
-    Ok((segment.len() != 8 || segment[0] != 0x07 || segment[1..5] != *value).then(|| {
+    let one_segment =
+        segment.len() == 8 && segment.first() == Some(&0x07) && segment.get(1..5) == Some(value);
+    Ok((!one_segment).then(|| {
         Finding::fail(
             format!("the one segment of 1000h is {}, not 07 {}", hex(&segment), hex(value)),
             Evidence {
@@ -688,7 +690,9 @@ fn server_parameter(ctx: &mut Ctx<'_, '_>) -> Outcome {
         ctx.performed("SDO 12");
         let request = upload_text((0x1200, sub));
         let got = match &reply {
-            Reply::Done(data) if data.len() == 4 => u32::from_le_bytes([data[0], data[1], data[2], data[3]]),
+            Reply::Done(data) if let Ok(bytes) = <[u8; 4]>::try_from(data.as_slice()) => {
+                u32::from_le_bytes(bytes)
+            }
             other => {
                 return Ok(refused_unexpectedly(
                     &request,
@@ -798,15 +802,17 @@ fn segments(ctx: &mut Ctx<'_, '_>, at: (u16, u8)) -> Result<Result<Vec<u8>, Brok
             "the server does not answer",
         )));
     };
-    if first.len() != 8 || first[0] & 0xE2 != 0x40 {
-        return Ok(Err((
-            format!("the frame {}", hex(&first)),
-            "a value longer than 4 bytes is answered with a segmented initiate response (e = 0)",
-            "the server answers the initiate upload wrongly",
-        )));
-    }
-    let size =
-        (first[0] & 0x01 != 0).then(|| u32::from_le_bytes([first[4], first[5], first[6], first[7]]) as usize);
+    let (command, size_bytes) = match *first.as_slice() {
+        [command, _, _, _, s0, s1, s2, s3] if command & 0xE2 == 0x40 => (command, [s0, s1, s2, s3]),
+        _ => {
+            return Ok(Err((
+                format!("the frame {}", hex(&first)),
+                "a value longer than 4 bytes is answered with a segmented initiate response (e = 0)",
+                "the server answers the initiate upload wrongly",
+            )));
+        }
+    };
+    let size = (command & 0x01 != 0).then(|| u32::from_le_bytes(size_bytes) as usize);
     let mut data = Vec::new();
     let mut frames = vec![hex(&first)];
     let mut toggle = 0u8;
@@ -822,14 +828,17 @@ fn segments(ctx: &mut Ctx<'_, '_>, at: (u16, u8)) -> Result<Result<Vec<u8>, Brok
             )));
         };
         frames.push(hex(&segment));
-        if segment.len() != 8 || segment[0] >> 5 != 0 {
-            return Ok(Err((
-                frames.join(", "),
-                "each segment request is answered with a segment (scs 0)",
-                "the server answers a segment request with another frame",
-            )));
-        }
-        if segment[0] & 0x10 != toggle {
+        let command = match segment.first() {
+            Some(&command) if segment.len() == 8 && command >> 5 == 0 => command,
+            _ => {
+                return Ok(Err((
+                    frames.join(", "),
+                    "each segment request is answered with a segment (scs 0)",
+                    "the server answers a segment request with another frame",
+                )));
+            }
+        };
+        if command & 0x10 != toggle {
             let [a, b, c, d] = abort::TOGGLE_BIT_NOT_ALTERNATED.to_le_bytes();
             ctx.send(0x600 + u16::from(ctx.node()), &[0x80, lo, hi, at.1, a, b, c, d])?;
             return Ok(Err((
@@ -838,13 +847,13 @@ fn segments(ctx: &mut Ctx<'_, '_>, at: (u16, u8)) -> Result<Result<Vec<u8>, Brok
                 "the server does not echo the toggle bit",
             )));
         }
-        let last = segment[0] & 0x01 != 0;
+        let last = command & 0x01 != 0;
         let unused = if last {
-            usize::from((segment[0] >> 1) & 0x07)
+            usize::from((command >> 1) & 0x07)
         } else {
             0
         };
-        data.extend_from_slice(&segment[1..8 - unused]);
+        data.extend_from_slice(segment.get(1..8 - unused).unwrap_or_default());
         if last {
             return Ok(match size {
                 Some(size) if size != data.len() => Err((
@@ -862,7 +871,7 @@ fn segments(ctx: &mut Ctx<'_, '_>, at: (u16, u8)) -> Result<Result<Vec<u8>, Brok
     Ok(Err((
         format!(
             "{} ... (no last segment)",
-            frames[..3.min(frames.len())].join(", ")
+            frames.get(..3).unwrap_or(&frames).join(", ")
         ),
         "the last segment (c = 1) ends the transfer within the size indicated",
         "the server sends more segments than the size it indicated",

@@ -343,8 +343,9 @@ fn producer(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let lengths_right = frames.iter().all(|l| l.frame.dlc() == 1);
     // Each counter is the previous + 1, wrapping from the overflow value to 1.
     let counting = counters
-        .windows(2)
-        .all(|w| w[1] == if w[0] >= TEST_COUNTER { 1 } else { w[0] + 1 })
+        .iter()
+        .zip(counters.iter().skip(1))
+        .all(|(before, after)| *after == if *before >= TEST_COUNTER { 1 } else { before + 1 })
         && counters.iter().all(|c| (1..=TEST_COUNTER).contains(c));
     ctx.performed("Synchronization 02");
     ctx.performed("Synchronization 07");

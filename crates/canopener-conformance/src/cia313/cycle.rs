@@ -54,7 +54,11 @@ pub(super) fn event_timer(ctx: &mut Ctx<'_, '_>) -> Outcome {
         "TPDO{} ({id:#X}) with type FFh and event timer {EVENT_TIMER_MS} ms; NMT start, {PERIODS} periods",
         pdo.number
     );
-    let periods: Vec<f64> = stamps.windows(2).map(|w| ms_between(w[0], w[1])).collect();
+    let periods: Vec<f64> = stamps
+        .iter()
+        .zip(stamps.iter().skip(1))
+        .map(|(a, b)| ms_between(*a, *b))
+        .collect();
     if periods.len() < PERIODS {
         ctx.measure("event_timer_period", Measurement::new("ms", periods.clone()));
         return Ok(Finding::fail(
@@ -127,21 +131,21 @@ pub(super) fn sync(ctx: &mut Ctx<'_, '_>) -> Outcome {
         counts.push(frames.len());
     }
     back_to_pre_operational(ctx)?;
-    let periods: Vec<f64> = stamps.windows(2).map(|w| ms_between(w[0], w[1])).collect();
+    let periods: Vec<f64> = stamps
+        .iter()
+        .zip(stamps.iter().skip(1))
+        .map(|(a, b)| ms_between(*a, *b))
+        .collect();
     ctx.measure("tpdo_period", Measurement::new("ms", periods));
     let request = format!(
         "TPDO{} ({id:#X}) with transmission type 1; NMT start, {PERIODS} SYNCs on {sync:#X}, {} ms apart",
         pdo.number,
         SYNC_PERIOD.as_millis()
     );
-    if let Some(wrong) = counts.iter().position(|n| *n != 1) {
+    if let Some((wrong, count)) = counts.iter().enumerate().find(|(_, n)| **n != 1) {
         ctx.measure("sync_to_tpdo", Measurement::new("ms", delays));
         return Ok(Finding::fail(
-            format!(
-                "SYNC {} was followed by {} TPDOs instead of 1",
-                wrong + 1,
-                counts[wrong]
-            ),
+            format!("SYNC {} was followed by {} TPDOs instead of 1", wrong + 1, count),
             Evidence {
                 request,
                 requirement: format!(
@@ -201,7 +205,11 @@ pub(super) fn heartbeat(ctx: &mut Ctx<'_, '_>) -> Outcome {
             None => break,
         }
     }
-    let periods: Vec<f64> = stamps.windows(2).map(|w| ms_between(w[0], w[1])).collect();
+    let periods: Vec<f64> = stamps
+        .iter()
+        .zip(stamps.iter().skip(1))
+        .map(|(a, b)| ms_between(*a, *b))
+        .collect();
     let request = format!(
         "SDO download 1017h:00 = {HEARTBEAT_MS} ms; {PERIODS} consecutive heartbeat periods on {id:#X}"
     );

@@ -71,7 +71,10 @@ pub(super) fn sdo_write(ctx: &mut Ctx<'_, '_>) -> Outcome {
     let [lo, hi] = index.to_le_bytes();
     // Expedited download with the size indicated: 23h, 27h, 2Bh or 2Fh for 4, 3, 2 or 1 bytes.
     let mut request = [0x23 | ((4 - value.len() as u8) << 2), lo, hi, sub, 0, 0, 0, 0];
-    request[4..4 + value.len()].copy_from_slice(&value);
+    // The value has 1 to 4 bytes (above), so it fits D4..D7.
+    for (slot, byte) in request.iter_mut().skip(4).zip(&value) {
+        *slot = *byte;
+    }
     let criterion = Criterion::at_most(
         ctx,
         "sdo.write_max_ms",
@@ -357,9 +360,10 @@ fn rtr_tpdo(ctx: &mut Ctx<'_, '_>) -> Prepared<Option<(u16, u16, u8)>> {
                 Err(failed) => return Ok(Err(failed)),
             }
         }
-        let cob = u32_of(&Reply::Done(values[0].clone()));
-        let kind = values[1].first().copied();
-        let mapped = values[2].first().is_some_and(|n| *n > 0);
+        let [cob, kind, mapped] = <[Vec<u8>; 3]>::try_from(values).unwrap_or_default();
+        let cob = u32_of(&Reply::Done(cob));
+        let kind = kind.first().copied();
+        let mapped = mapped.first().is_some_and(|n| *n > 0);
         if let (Some(cob), Some(kind)) = (cob, kind)
             && cob & 0xC000_0000 == 0
             && cob & 0x7FF != 0

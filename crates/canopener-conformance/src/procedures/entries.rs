@@ -45,7 +45,7 @@ pub fn another_value(entry: &EntryModel, current: &[u8]) -> Option<Vec<u8>> {
     }
     [0x01u8, 0x02].into_iter().find_map(|bit| {
         let mut value = current.to_vec();
-        value[0] ^= bit;
+        *value.first_mut()? ^= bit;
         let number = Number::decode(data_type, &value)?;
         let inside = entry
             .low

@@ -8,8 +8,9 @@ use crate::recorder::Logged;
 /// `name` with their statistics.
 pub fn measure_intervals(ctx: &mut Ctx<'_, '_>, name: &str, frames: &[Logged]) -> Vec<f64> {
     let intervals: Vec<f64> = frames
-        .windows(2)
-        .map(|w| w[1].at.saturating_duration_since(w[0].at).as_secs_f64() * 1000.0)
+        .iter()
+        .zip(frames.iter().skip(1))
+        .map(|(before, after)| after.at.saturating_duration_since(before.at).as_secs_f64() * 1000.0)
         .collect();
     ctx.measure(name, Measurement::new("ms", intervals.clone()));
     intervals

@@ -46,11 +46,13 @@ pub fn observed_state(ctx: &mut Ctx<'_, '_>, heartbeat: bool) -> Result<Option<u
         ctx.listen(Duration::from_millis(10), |_| false)?;
         let window = Duration::from_millis(u64::from(TEST_HEARTBEAT_MS) * 2);
         let frame = ctx.wait_for(window, |f| f.id() == id && !f.is_remote() && f.dlc() == 1)?;
-        return Ok(frame.map(|l| l.frame.data()[0] & 0x7F));
+        return Ok(frame.and_then(|l| l.frame.data().first().map(|state| state & 0x7F)));
     }
     ctx.send_remote(0x700 + u16::from(ctx.node()), 1)?;
     let frames = ctx.listen(ctx.timeout(), |f| f.id() == id && !f.is_remote() && f.dlc() == 1)?;
-    Ok(frames.first().map(|l| l.frame.data()[0] & 0x7F))
+    Ok(frames
+        .first()
+        .and_then(|l| l.frame.data().first().map(|state| state & 0x7F)))
 }
 
 /// `pre-operational (7Fh)`.

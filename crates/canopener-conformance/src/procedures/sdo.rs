@@ -91,7 +91,9 @@ pub fn download_text(entry: (u16, u8), data: &[u8]) -> String {
 /// A 4-byte value read as UNSIGNED32.
 pub fn u32_of(reply: &Reply) -> Option<u32> {
     match reply {
-        Reply::Done(d) if d.len() == 4 => Some(u32::from_le_bytes([d[0], d[1], d[2], d[3]])),
+        Reply::Done(d) if let Ok(bytes) = <[u8; 4]>::try_from(d.as_slice()) => {
+            Some(u32::from_le_bytes(bytes))
+        }
         _ => None,
     }
 }

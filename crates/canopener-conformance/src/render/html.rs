@@ -711,7 +711,10 @@ mod plot {
         framed("histogram", "Histogram", name, &description, samples, |out| {
             let (data_lo, data_hi) = range(samples.iter().map(|(_, v)| *v), None);
             // Equal samples fill one bin centred on them, not the edge of two.
-            let bins = if samples.iter().all(|(_, v)| *v == samples[0].1) {
+            let bins = if samples
+                .iter()
+                .all(|(_, v)| Some(v) == samples.first().map(|(_, first)| first))
+            {
                 1
             } else {
                 ((samples.len() as f64).sqrt().ceil() as usize).clamp(1, MAX_BINS)
@@ -720,7 +723,9 @@ mod plot {
             let mut counts = vec![0usize; bins];
             for (_, value) in samples {
                 let bin = (((value - data_lo) / width).floor().max(0.0) as usize).min(bins - 1);
-                counts[bin] += 1;
+                if let Some(count) = counts.get_mut(bin) {
+                    *count += 1;
+                }
             }
             let (lo, hi) = range(samples.iter().map(|(_, v)| *v), limits);
             let x = Scale::horizontal(lo, hi);

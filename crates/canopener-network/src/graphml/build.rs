@@ -140,8 +140,12 @@ impl KeyList {
     /// that id for a key of another type (`NetNumber` on nodes of the port variant never happens here,
     /// but an unknown datum may share a name across scopes).
     fn declare(&mut self, scope: &str, name: &str) -> String {
-        if let Some(&at) = self.index.get(&(scope.to_owned(), name.to_owned())) {
-            return self.keys[at].id.clone();
+        if let Some(key) = self
+            .index
+            .get(&(scope.to_owned(), name.to_owned()))
+            .and_then(|&at| self.keys.get(at))
+        {
+            return key.id.clone();
         }
         let class = crate::vocabulary::class_of(scope, name)
             .or_else(|| crate::vocabulary::class_of("node", name).filter(|_| scope == "node"))
