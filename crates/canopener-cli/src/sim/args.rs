@@ -50,7 +50,7 @@ pub(crate) struct SimArgs {
     #[arg(long = "bus", value_name = "SPEC")]
     pub(crate) buses: Vec<String>,
     /// Node-ID of the devices (several files: N, N+1, ... in order); it wins over a DCF's own
-    /// [DeviceComissioning] NodeID. Without it a DCF runs at its own node-ID and other devices start
+    /// DeviceComissioning NodeID. Without it a DCF runs at its own node-ID and other devices start
     /// LSS-unconfigured (node-ID FFh) and wait for an LSS master. The start line says which applies.
     #[arg(long, value_parser = parse_node_id, value_name = "N")]
     pub(crate) node_id: Option<u8>,
