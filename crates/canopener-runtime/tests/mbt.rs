@@ -11,7 +11,7 @@ use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_run::{run, shrink};
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_sim::simulation::Simulation;
 use canopener_testkit::corpus;
 
 /// CANopenNode's example I/O device: heartbeat every 1000 ms (1017h), the CiA 301 objects.
@@ -356,7 +356,7 @@ fn failing_runs_shrink_to_one_minimal_scripts() {
                 .start()
                 .expect("simulation");
             bus.run_until(Instant::from_millis(100))?;
-            Ok::<_, canopener_runtime::link::LinkError>(bus)
+            Ok::<_, canopener_link::link::LinkError>(bus)
         };
         let shrunk = shrink(&mut new_bus, &model, &config, &failing.script(), None)
             .unwrap()
