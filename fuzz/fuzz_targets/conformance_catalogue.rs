@@ -26,9 +26,9 @@ use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::performance::Performance;
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_eds::model::Eds;
-use canopener_runtime::link::{Link, LinkError, Stamped, Timestamps};
-use canopener_runtime::simulator::simulation::{Simulation, VIRTUAL_CALENDAR_START_UNIX_MILLIS};
-use canopener_runtime::virtual_link::VirtualLink;
+use canopener_link::link::{Link, LinkError, Stamped, Timestamps};
+use canopener_link::virtual_link::VirtualLink;
+use canopener_sim::simulation::{Simulation, VIRTUAL_CALENDAR_START_UNIX_MILLIS};
 use canopener_testkit::hostile::{Behaviour, Entropy, Hostile};
 use libfuzzer_sys::fuzz_target;
 

@@ -3,7 +3,7 @@
 //! A core is a state machine that never touches a socket and never reads a clock: a driver hands it
 //! received frames and the current time, and takes from it the frames to send, the events to report
 //! and the time it next wants to be woken. The same core therefore runs on virtual time in tests, on a
-//! simulated bus and on real hardware. The drivers live in `canopener-runtime`; the virtual-time test
+//! simulated bus and on real hardware. The drivers live in `canopener-link`; the virtual-time test
 //! harness in `canopener-testkit`.
 
 use crate::{CanFrame, Instant};

@@ -99,15 +99,15 @@ impl CliError {
 
 /// A result file that could not be written: `eds` commands report it as trouble (exit 2, as diff(1) does);
 /// commands that write what a device gave map it to an output error themselves.
-impl From<canopener_runtime::files::WriteError> for CliError {
-    fn from(err: canopener_runtime::files::WriteError) -> CliError {
+impl From<canopener_files::WriteError> for CliError {
+    fn from(err: canopener_files::WriteError) -> CliError {
         CliError::EdsTrouble(err.to_string())
     }
 }
 
 /// A result file or directory that could not be written, for the commands outside `eds`: an output error
 /// (exit 5) naming what and where.
-pub(crate) fn write_failed(err: canopener_runtime::files::WriteError) -> CliError {
+pub(crate) fn write_failed(err: canopener_files::WriteError) -> CliError {
     CliError::output(
         format!("cannot {} {}", err.action, err.path.display()),
         err.source,
@@ -115,10 +115,10 @@ pub(crate) fn write_failed(err: canopener_runtime::files::WriteError) -> CliErro
 }
 
 /// A failing bus is a bus error (exit 4); the simulated bus refusing a frame is a bug of ours.
-impl From<canopener_runtime::link::LinkError> for CliError {
-    fn from(err: canopener_runtime::link::LinkError) -> CliError {
+impl From<canopener_link::link::LinkError> for CliError {
+    fn from(err: canopener_link::link::LinkError) -> CliError {
         match err {
-            canopener_runtime::link::LinkError::Transport(err) => CliError::Bus(err),
+            canopener_link::link::LinkError::Transport(err) => CliError::Bus(err),
             other => CliError::Internal(anyhow::Error::new(other)),
         }
     }
@@ -149,10 +149,10 @@ pub(crate) fn stdout_error(source: io::Error) -> CliError {
 /// Simulated devices that cannot start: a file or state file the user gave is invalid input (exit 3),
 /// node-IDs that do not fit together are a usage error (exit 2), a state directory that cannot be
 /// created an output error (exit 5), a failing bus a bus error (exit 4).
-impl From<canopener_runtime::simulator::error::SimError> for CliError {
-    fn from(err: canopener_runtime::simulator::error::SimError) -> CliError {
-        use canopener_runtime::simulator::error::SimError;
-        use canopener_runtime::state_store::StateStoreError;
+impl From<canopener_sim::error::SimError> for CliError {
+    fn from(err: canopener_sim::error::SimError) -> CliError {
+        use canopener_sim::error::SimError;
+        use canopener_sim::state_store::StateStoreError;
         match err {
             SimError::NodeIdAbove127 { .. } => CliError::Usage(format!("{err}; start --node-id lower")),
             SimError::InvalidNodeId { .. } | SimError::NodeIdClash { .. } => CliError::Usage(err.to_string()),

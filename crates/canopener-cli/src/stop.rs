@@ -1,7 +1,7 @@
 //! Ctrl-C and SIGTERM handling: long-running commands poll a flag and finish cleanly (flush logs, print a
 //! summary) instead of dying mid-write.
 
-use canopener_runtime::cancel::Cancel;
+use canopener_link::cancel::Cancel;
 
 use crate::error::CliError;
 

@@ -25,7 +25,7 @@ use std::time::Duration;
 use canopener_can::{CanFrame, CanId, Instant};
 use canopener_wire::NmtCommand;
 
-use canopener_runtime::link::{TimestampSource, Timestamps};
+use canopener_link::link::{TimestampSource, Timestamps};
 
 use crate::context::{Ctx, Reply};
 use crate::finding::{Evidence, Finding, Stop};

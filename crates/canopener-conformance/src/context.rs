@@ -5,11 +5,11 @@ use std::collections::BTreeMap;
 use std::time::Duration;
 
 use canopener_can::{CanFrame, CanId, Instant, StandardId};
+use canopener_link::link::{Link, Timestamps};
+use canopener_link::nmt_command;
+use canopener_link::sdo_session::{SdoError, SdoSession};
 use canopener_master::nmt_master::NmtTarget;
 use canopener_master::sdo_client::{DownloadMode, SdoTransferError, UploadMode};
-use canopener_runtime::link::{Link, Timestamps};
-use canopener_runtime::nmt_command;
-use canopener_runtime::sdo_session::{SdoError, SdoSession};
 use canopener_wire::{NmtCommand, NodeId};
 
 use crate::device_model::DeviceModel;

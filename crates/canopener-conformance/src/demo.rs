@@ -11,9 +11,9 @@ use std::time::Duration;
 use canopener_check::Selection as CheckSelection;
 use canopener_device::faults::Fault;
 use canopener_eds::Severity;
-use canopener_runtime::cancel::Cancel;
-use canopener_runtime::simulator::error::SimError;
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_link::cancel::Cancel;
+use canopener_sim::error::SimError;
+use canopener_sim::simulation::Simulation;
 
 use crate::catalogue::{Selection, catalogue};
 use crate::device_model::DeviceModel;

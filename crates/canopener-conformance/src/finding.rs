@@ -1,7 +1,7 @@
 //! What one test concludes, and the evidence of a failure: the request, what CiA 301 requires (with
 //! the clause), what came back, and the likely cause.
 
-use canopener_runtime::link::LinkError;
+use canopener_link::link::LinkError;
 
 use crate::model::Verdict;
 

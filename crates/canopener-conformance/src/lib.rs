@@ -1,5 +1,5 @@
 //! Conformance test suites for CANopen devices: point them at a device on any
-//! [`Link`](canopener_runtime::link::Link) (a real bus on the wall clock, or simulated devices on
+//! [`Link`](canopener_link::link::Link) (a real bus on the wall clock, or simulated devices on
 //! virtual time) with its EDS, and get a verdict per test with the evidence.
 //!
 //! - [`test_def`]: what a test is (stable id, title, CiA and CCT references, the precondition it takes

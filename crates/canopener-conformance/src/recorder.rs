@@ -3,7 +3,7 @@
 //! EMCY searched for).
 
 use canopener_can::{CanFrame, Instant};
-use canopener_runtime::link::{Link, LinkError, Stamped, Timestamps};
+use canopener_link::link::{Link, LinkError, Stamped, Timestamps};
 
 use crate::model::Direction;
 

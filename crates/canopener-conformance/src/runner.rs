@@ -5,8 +5,8 @@
 use std::time::Duration;
 
 use canopener_can::Instant;
-use canopener_runtime::link::Link;
-use canopener_runtime::sdo_session::SdoSession;
+use canopener_link::link::Link;
+use canopener_link::sdo_session::SdoSession;
 use canopener_wire::{Decoder, NmtCommand};
 
 use crate::context::{Ctx, Reply};
@@ -42,7 +42,7 @@ pub struct RunSpec<'a> {
     /// cancellation back once to put the device into pre-operational and write back what the test
     /// changed (each SDO transfer bounded by the timeout), then cancels again; a second Ctrl-C
     /// stops the write-back too. `None`: nothing is written back after a cancellation.
-    pub cancel: Option<canopener_runtime::cancel::Cancel>,
+    pub cancel: Option<canopener_link::cancel::Cancel>,
 }
 
 /// How far a run got, for a progress bar.
@@ -64,7 +64,7 @@ pub struct Progress<'a> {
 pub enum RunError {
     /// The node-ID or the timeout cannot make an SDO session.
     #[error(transparent)]
-    Session(#[from] canopener_runtime::sdo_session::SessionError),
+    Session(#[from] canopener_link::sdo_session::SessionError),
 }
 
 /// The result of [`run`]: the report and whether the device answered at all.

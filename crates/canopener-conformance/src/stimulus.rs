@@ -4,13 +4,13 @@
 //! the tests wait [`Hook::settle`] on the link's clock before they look, since a real input has a
 //! filter between the terminal and the object dictionary.
 //!
-//! The crate runs no programs: [`canopener_runtime::stimulus_program::StimulusProgram`] (the CLI's
+//! The crate runs no programs: [`canopener_link::stimulus_program::StimulusProgram`] (the CLI's
 //! `--stimulus CMD`) implements [`Stimulus`] here, tests implement it in Rust.
 
 use std::fmt;
 use std::time::Duration;
 
-use canopener_runtime::stimulus_program::StimulusProgram;
+use canopener_link::stimulus_program::StimulusProgram;
 
 /// The settle time when the user gives none: long enough for a typical input filter (1–3 ms) and
 /// the device's processing, short enough that the event-driven TPDO window stays tight.

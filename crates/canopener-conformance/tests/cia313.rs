@@ -14,7 +14,7 @@ use canopener_conformance::cia313::cycle;
 use canopener_conformance::model::{Direction, Report, Telegram, TestReport, Verdict};
 use canopener_conformance::performance::{Criteria, DEFAULT_REPETITIONS, Performance};
 use canopener_device::faults::{DEFAULT_SDO_DELAY, Fault};
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_sim::simulation::Simulation;
 
 /// A CiA 401 device: TPDO1 maps 6000h:01, RPDO1 6200h:01.
 const CIA401: &str = "CANopenNode__CANopenDemo__demo__demoDevice.eds";

@@ -20,8 +20,8 @@ use canopener_conformance::model::{Report, Verdict};
 use canopener_conformance::performance::Performance;
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_conformance::stimulus::{Hook, InputChange, Stimulus};
-use canopener_runtime::link::{Link, LinkError};
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_link::link::{Link, LinkError};
+use canopener_sim::simulation::Simulation;
 
 const NODE: u8 = 5;
 /// The index the tester's requests to the hidden registers are turned to: no device has it.

@@ -18,10 +18,10 @@ use canopener_conformance::model::{Report, Verdict};
 use canopener_conformance::performance::Performance;
 use canopener_conformance::runner::{self, FinishedRun, RunSpec};
 use canopener_eds::model::Eds;
-use canopener_runtime::link::{Link, LinkError, Stamped, Timestamps};
-use canopener_runtime::simulator::device::SimulatedDevice;
-use canopener_runtime::simulator::simulation::{Simulation, VIRTUAL_CALENDAR_START_UNIX_MILLIS};
-use canopener_runtime::virtual_link::VirtualLink;
+use canopener_link::link::{Link, LinkError, Stamped, Timestamps};
+use canopener_link::virtual_link::VirtualLink;
+use canopener_sim::device::SimulatedDevice;
+use canopener_sim::simulation::{Simulation, VIRTUAL_CALENDAR_START_UNIX_MILLIS};
 use canopener_testkit::hostile::{Behaviour, Entropy, Hostile, JunkNode, Station};
 
 /// The node of the device under test.

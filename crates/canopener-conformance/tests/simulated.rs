@@ -154,8 +154,7 @@ fn clean_simulated_devices_pass_within_ten_virtual_seconds() {
 #[test]
 fn the_state_tests_decide_on_devices_that_refuse_downloads_in_operational() {
     let setup = support::Setup {
-        simulation: canopener_runtime::simulator::simulation::Simulation::ideal()
-            .downloads_refused_in_operational(true),
+        simulation: canopener_sim::simulation::Simulation::ideal().downloads_refused_in_operational(true),
         ..support::Setup::default()
     };
     let states = state_tests();

@@ -3,7 +3,7 @@
 //! Every core here follows the same discipline as `canopener-device`: frames and the current time go
 //! in (`handle_frame(now, &frame)`, `handle_timeout(now)`), frames, events and the next deadline come out
 //! (`poll_transmit()`, `poll_event()`, `poll_timeout()`). Nothing here opens a socket, starts a thread or
-//! reads a clock; `canopener-runtime` drives the cores over a real bus or on virtual time.
+//! reads a clock; `canopener-link` drives the cores over a real bus or on virtual time.
 //!
 //! The cores share the frame codecs of `canopener-wire` with the device side, but no state.
 

@@ -2,8 +2,8 @@
 //! error register (mandatory), 1018h identity (sub 1 mandatory), 1008h/1009h/100Ah names and
 //! versions and 1017h producer heartbeat time (optional), and the state of its heartbeat.
 //!
-//! This module holds the data and its decoding; reading it over SDO is a procedure of the runtime
-//! (`canopener_runtime::node_info`).
+//! This module holds the data and its decoding; reading it over SDO is a procedure of the link crate
+//! (`canopener_link::node_info`).
 
 use std::time::Duration;
 

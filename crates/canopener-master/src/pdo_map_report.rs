@@ -1,7 +1,7 @@
 //! Executing a PDO configuration plan ([`pdo_config`](crate::pdo_config), CiA 301 §7.2.2 and the PDO
 //! parameter objects 1400h–1BFFh, §7.5.2.35–§7.5.2.38) step by step: [`MapReport`] records how far
 //! it got, and says in which state a failure left the PDO. Sending the writes over SDO is the
-//! runtime's (`canopener_runtime::pdo_map`).
+//! link crate's (`canopener_link::pdo_map`).
 
 use canopener_wire::{NodeId, abort};
 

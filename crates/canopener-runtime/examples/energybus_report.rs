@@ -22,9 +22,9 @@ use canopener_device::energybus::station::{DeviceFault, EnergyBusFault};
 use canopener_device::faults::Fault;
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::explore::explore;
-use canopener_runtime::energybus::graphs::{PURPOSES, PaperPurpose, follows, graph, model, run};
-use canopener_runtime::energybus::system::{BOOT_LIMIT, EnergyBusSystem, boot, ready_for_test};
-use canopener_runtime::energybus::telegrams::TelegramDecoder;
+use canopener_runtime::energybus_graphs::{PURPOSES, PaperPurpose, follows, graph, model, run};
+use canopener_sim::energybus::system::{BOOT_LIMIT, EnergyBusSystem, boot, ready_for_test};
+use canopener_sim::energybus::telegrams::TelegramDecoder;
 use canopener_wire::NodeId;
 
 const STEPS: usize = 3000;

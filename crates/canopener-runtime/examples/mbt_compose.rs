@@ -39,13 +39,13 @@ use std::time::Duration;
 use canopener_can::Instant;
 use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
+use canopener_files::write_atomic;
 use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
-use canopener_runtime::files::write_atomic;
 use canopener_runtime::mbt_run::run;
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_sim::simulation::Simulation;
 use canopener_testkit::corpus;
 use rayon::prelude::*;
 

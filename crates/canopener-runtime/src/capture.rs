@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 use canopener_can::candump::{LogEvent, LogRecord};
 use canopener_transport::{BusSpec, CanBus, Received, TransportError};
 
-use crate::cancel::Cancel;
 use crate::candump_file::{LogFileError, LogWriter};
+use canopener_link::cancel::Cancel;
 
 /// How long one receive may block: how late a cancel or the end of the duration is noticed.
 const POLL: Duration = Duration::from_millis(100);

@@ -11,8 +11,8 @@ use canopener_can::candump::parse_log;
 use canopener_hub::{HubConfig, HubHandle};
 use canopener_transport::{BusSpec, CanBus, Received, TransportError, open};
 
-use crate::cancel::Cancel;
 use crate::replay::{Pace, TimedFrame, frames_of, replay};
+use canopener_link::cancel::Cancel;
 
 /// The recorded session: four nodes with boot-up, NMT, SDO expedited/segmented/block, PDOs with SYNC,
 /// EMCY, heartbeat, node guarding, LSS and TIME. A candump log kept with its generator in

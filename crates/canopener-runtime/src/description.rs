@@ -49,7 +49,7 @@ pub enum PackReadError {
 
 /// Reads a file's bytes.
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>, ReadError> {
-    crate::files::read(path).map_err(|source| ReadError::Io {
+    canopener_files::read(path).map_err(|source| ReadError::Io {
         path: path.to_owned(),
         source,
     })

@@ -6,8 +6,8 @@ use std::time::{Duration, Instant};
 use canopener_can::{CanFrame, CanId};
 use canopener_transport::{CanBus, TransportError};
 
-use crate::cancel::Cancel;
 use crate::pacing::{offset_from, sleep_until};
+use canopener_link::cancel::Cancel;
 
 /// What to generate and when to stop.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -10,8 +10,8 @@ use canopener_hub::HubHandle;
 /// tokio) themselves.
 pub use canopener_hub::{HubConfig, HubStats};
 
-use crate::cancel::Cancel;
 use crate::pacing::{SLICE, offset_from, sleep_until};
+use canopener_link::cancel::Cancel;
 
 /// The hub could not start; nothing is listening.
 #[derive(Debug, thiserror::Error)]

@@ -1,5 +1,5 @@
 //! Model-based testing on a link: the driver loop of [`canopener_mbt::executor::Executor`]. The same
-//! run works on a real bus on the wall clock and on a [`VirtualLink`](crate::virtual_link::VirtualLink)
+//! run works on a real bus on the wall clock and on a [`VirtualLink`](canopener_link::virtual_link::VirtualLink)
 //! with simulated devices on virtual time, where it is deterministic.
 
 use std::time::Duration;
@@ -8,7 +8,7 @@ use canopener_mbt::executor::{Executor, Outcome, RunConfig, ScriptStep};
 use canopener_mbt::model::Model;
 use rayon::prelude::*;
 
-use crate::link::{Ended, Flow, Link, LinkError, drive};
+use canopener_link::link::{Ended, Flow, Link, LinkError, drive};
 
 /// Tests the device behind `link` against `model` until the executor decides, `limit` passes
 /// (a `pass` if nothing failed so far) or the link is cancelled (`inconclusive`).

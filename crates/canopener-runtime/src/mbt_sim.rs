@@ -15,10 +15,10 @@ use canopener_mbt::executor::{Outcome, RunConfig};
 use canopener_mbt::model::Model;
 use canopener_od::{DataType, Entry, Number};
 
-use crate::link::LinkError;
 use crate::mbt_run::run;
-use crate::simulator::error::SimError;
-use crate::simulator::simulation::Simulation;
+use canopener_link::link::LinkError;
+use canopener_sim::error::SimError;
+use canopener_sim::simulation::Simulation;
 
 /// Why a run on a simulated device could not be made.
 #[derive(Debug, thiserror::Error)]

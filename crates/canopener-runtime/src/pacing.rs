@@ -3,7 +3,7 @@
 
 use std::time::{Duration, Instant};
 
-use crate::cancel::Cancel;
+use canopener_link::cancel::Cancel;
 
 /// The longest single sleep: how late a cancel may be noticed while waiting.
 pub(crate) const SLICE: Duration = Duration::from_millis(100);

@@ -7,8 +7,8 @@ use canopener_can::CanFrame;
 use canopener_can::candump::{LogEvent, LogRecord};
 use canopener_transport::{CanBus, TransportError};
 
-use crate::cancel::Cancel;
 use crate::pacing::{offset_from, sleep_until};
+use canopener_link::cancel::Cancel;
 
 /// A frame with the time it was recorded.
 pub type TimedFrame = (canopener_can::Instant, CanFrame);

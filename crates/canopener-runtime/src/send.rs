@@ -5,8 +5,8 @@ use std::time::{Duration, Instant};
 use canopener_can::CanFrame;
 use canopener_transport::{CanBus, TransportError};
 
-use crate::cancel::Cancel;
 use crate::pacing::sleep_until;
+use canopener_link::cancel::Cancel;
 
 /// Sends `frames` in order, the whole list `repeat` times, pausing `gap` between any two frames (also
 /// from the last frame of one round to the first of the next). The gap is measured from the previous

@@ -12,8 +12,8 @@ use canopener_eds::Eds;
 use canopener_master::energybus_controller::ControllerConfig;
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
-use canopener_runtime::energybus::graphs::{PURPOSES, follows, graph, model, run};
-use canopener_runtime::energybus::system::EnergyBusSystem;
+use canopener_runtime::energybus_graphs::{PURPOSES, follows, graph, model, run};
+use canopener_sim::energybus::system::EnergyBusSystem;
 use canopener_wire::NodeId;
 use canopener_wire::energybus::{EmsState, EmsTransition};
 

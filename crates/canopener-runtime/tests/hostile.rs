@@ -10,17 +10,17 @@ use std::time::Duration;
 use canopener_bus_engine::network::Timing;
 use canopener_can::Instant;
 use canopener_eds::model::Eds;
+use canopener_link::link::{Flow, LinkError};
+use canopener_link::system_watch::SystemWatch;
+use canopener_link::virtual_link::VirtualLink;
 use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_network::monitor::{Event, Health, MonitorConfig, SystemMonitor};
-use canopener_runtime::link::{Flow, LinkError};
 use canopener_runtime::mbt_run::run;
-use canopener_runtime::simulator::device::SimulatedDevice;
-use canopener_runtime::simulator::simulation::{Simulation, VIRTUAL_CALENDAR_START_UNIX_MILLIS};
-use canopener_runtime::system::watch::SystemWatch;
-use canopener_runtime::virtual_link::VirtualLink;
+use canopener_sim::device::SimulatedDevice;
+use canopener_sim::simulation::{Simulation, VIRTUAL_CALENDAR_START_UNIX_MILLIS};
 use canopener_testkit::corpus;
 use canopener_testkit::hostile::{Behaviour, Entropy, Hostile};
 
@@ -117,7 +117,7 @@ fn mbt_runs_against_every_hostile_behaviour_end_in_fail_or_inconclusive() {
 }
 
 fn bus_time<N: canopener_can::Core>(bus: &VirtualLink<N>) -> Instant {
-    use canopener_runtime::link::Link;
+    use canopener_link::link::Link;
     bus.now()
 }
 
@@ -148,7 +148,7 @@ fn watch<N: canopener_can::Core>(bus: &mut VirtualLink<N>) -> (Vec<Event>, Healt
     };
     let mut watch = SystemWatch::new(SystemMonitor::new(&topology, &config));
     let mut events = Vec::new();
-    let mut links: Vec<(u32, &mut dyn canopener_runtime::link::Link)> = vec![(1, bus)];
+    let mut links: Vec<(u32, &mut dyn canopener_link::link::Link)> = vec![(1, bus)];
     watch
         .run(&mut links, Some(Instant::from_secs(5)), |_, _, mut slice| {
             events.append(&mut slice);

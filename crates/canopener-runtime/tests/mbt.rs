@@ -6,13 +6,13 @@ use std::time::Duration;
 use canopener_can::{CanFrame, Instant};
 use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
+use canopener_link::link::{Link, LinkError};
 use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
-use canopener_runtime::link::{Link, LinkError};
 use canopener_runtime::mbt_run::{run, shrink};
-use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
+use canopener_sim::simulation::{SimulatedBus, Simulation};
 use canopener_testkit::corpus;
 
 /// CANopenNode's example I/O device: heartbeat every 1000 ms (1017h), the CiA 301 objects.

@@ -60,6 +60,56 @@ const LIFTS: &[Lift] = &[
         reason: "an IO edge: an HTTP server on tokio with threads for the monitor, the tour and the runs",
     },
     Lift {
+        member: "crates/canopener-files",
+        lifted: Lifted::These(&[
+            "std::fs::read",
+            "std::fs::read_to_string",
+            "std::fs::write",
+            "std::fs::read_dir",
+            "std::fs::create_dir_all",
+            "std::fs::remove_file",
+            "std::fs::rename",
+            "std::fs::File::open",
+            "std::fs::File::create",
+            "std::fs::OpenOptions::open",
+            "std::fs::metadata",
+            "std::fs::canonicalize",
+            "std::path::Path::exists",
+            "std::path::Path::try_exists",
+            "std::path::Path::is_file",
+            "std::path::Path::is_dir",
+            "std::path::Path::metadata",
+            "std::path::Path::read_dir",
+            "std::path::Path::canonicalize",
+        ]),
+        reason: "the one crate that reads and writes files for the others (write_atomic, backups, \
+                 same_file); clocks, sleeping, threads and sockets stay banned",
+    },
+    Lift {
+        member: "crates/canopener-link",
+        lifted: Lifted::These(&[
+            "std::time::Instant::now",
+            "std::time::SystemTime::now",
+            "std::thread::sleep",
+            "std::thread::spawn",
+        ]),
+        reason: "where the master side meets a real bus: BusLink waits between receives, a DCF dump states \
+                 the wall-clock time, the stimulus program has a timeout and a stderr reader thread; files \
+                 and sockets stay banned",
+    },
+    Lift {
+        member: "crates/canopener-sim",
+        lifted: Lifted::These(&[
+            "std::fs::read",
+            "std::fs::read_to_string",
+            "std::fs::create_dir_all",
+            "std::thread::sleep",
+            "std::thread::spawn",
+        ]),
+        reason: "simulated devices on a real bus in real time (SimHost sleeps, a stdin reader thread) read \
+                 their descriptions and state files; writes go through canopener_files",
+    },
+    Lift {
         member: "xtask",
         lifted: Lifted::Everything,
         reason: "automates the project (setup, tests, benchmarks, fuzzing): runs processes and touches files",

@@ -1,5 +1,5 @@
-//! Every call of the web front end into `canopener-runtime` and the transports, in one module, so a
-//! change of the runtime's crates or names (the system simulation, the links) is a change here only.
+//! Every call of the web front end into `canopener-link`, `canopener-sim`, `canopener-files`,
+//! `canopener-runtime` and the transports, in one module, so a change of those crates or names (the system simulation, the links) is a change here only.
 //! The functions block: the server runs each on a thread of its own.
 //!
 //! What is here: reading a system and its DCFs, watching buses with the system monitor, simulating a
@@ -14,16 +14,16 @@ use canopener_conformance::device_model::DeviceModel;
 use canopener_conformance::runner::{self, FinishedRun, Progress, RunSpec};
 use canopener_device::faults::Fault;
 use canopener_eds::Eds;
+use canopener_link::link::{BusLink, Flow, Link, LinkError};
+use canopener_link::system_watch::SystemWatch;
 use canopener_network::Topology;
 use canopener_network::monitor::{Event, MonitorConfig, Snapshot, SystemMonitor};
-use canopener_runtime::link::{BusLink, Flow, Link, LinkError};
-use canopener_runtime::simulator::simulation::Simulation;
-use canopener_runtime::system::files::{SystemError, SystemFiles};
-use canopener_runtime::system::serve::{ServeReport, serve};
-use canopener_runtime::system::sim::SystemSim;
-use canopener_runtime::system::watch::SystemWatch;
+use canopener_sim::simulation::Simulation;
+use canopener_sim::system::files::{SystemError, SystemFiles};
+use canopener_sim::system::serve::{ServeReport, serve};
+use canopener_sim::system::sim::SystemSim;
 
-pub use canopener_runtime::cancel::Cancel;
+pub use canopener_link::cancel::Cancel;
 
 /// Why a backend job could not run.
 #[derive(Debug, thiserror::Error)]
@@ -44,7 +44,7 @@ pub enum BackendError {
     },
     /// A simulated device could not be built.
     #[error(transparent)]
-    Sim(#[from] canopener_runtime::simulator::error::SimError),
+    Sim(#[from] canopener_sim::error::SimError),
     /// The runner refused the run.
     #[error(transparent)]
     Run(#[from] runner::RunError),
@@ -208,15 +208,15 @@ pub fn now_rfc3339() -> String {
 
 /// Writes `bytes` to `path` through a temporary file and a rename (never a half-written file).
 pub fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    canopener_runtime::files::write_atomic(path, bytes, false).map_err(std::io::Error::other)
+    canopener_files::write_atomic(path, bytes, false).map_err(std::io::Error::other)
 }
 
 /// Reads a file.
 pub fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
-    canopener_runtime::files::read(path)
+    canopener_files::read(path)
 }
 
 /// Creates a folder and its parents.
 pub fn create_dir(path: &Path) -> std::io::Result<()> {
-    canopener_runtime::files::create_dir_all(path).map_err(std::io::Error::other)
+    canopener_files::create_dir_all(path).map_err(std::io::Error::other)
 }

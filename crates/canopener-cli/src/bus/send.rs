@@ -1,7 +1,7 @@
 //! `canopener bus send`: put frames given on the command line onto a bus.
 
 use canopener_can::candump::parse_compact_frame;
-use canopener_runtime::cancel::Cancel;
+use canopener_link::cancel::Cancel;
 use canopener_runtime::send::send_frames;
 
 use crate::bus::args::SendArgs;

@@ -14,8 +14,8 @@ use canopener_conformance::demo::{self, EdsCheck};
 use canopener_conformance::model::{Report, Verdict, rfc3339_utc};
 use canopener_conformance::render::html;
 use canopener_device::faults::Fault;
+use canopener_files::{self as files, create_dir_all, write_atomic};
 use canopener_runtime::clock::wall_time;
-use canopener_runtime::files::{self, create_dir_all, write_atomic};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 

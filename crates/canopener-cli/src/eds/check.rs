@@ -2,9 +2,9 @@
 
 use std::io::IsTerminal;
 
+use canopener_files::write_atomic;
 use canopener_report::{HumanOptions, Report};
 use canopener_runtime::batch::{check_all, expand};
-use canopener_runtime::files::write_atomic;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::eds::args::{CheckFormat, ColorChoice, DenyLevel, EdsCheckArgs};

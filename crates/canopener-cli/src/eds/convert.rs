@@ -1,7 +1,7 @@
 //! `canopener eds convert`: EDS ⇄ DCF ⇄ XDD/XDC ⇄ JSON.
 
 use canopener_description::convert::{ConvertError, Target, convert};
-use canopener_runtime::files::{same_file, write_atomic};
+use canopener_files::{same_file, write_atomic};
 
 use crate::eds::args::{ConvertTarget, EdsConvertArgs};
 use crate::eds::input::{read_input, report_diagnostics};

@@ -3,8 +3,8 @@
 use canopener_check::fix;
 use canopener_description::Format;
 use canopener_eds::Severity;
+use canopener_files::{backup_path, same_file, write_atomic};
 use canopener_runtime::batch::display_path;
-use canopener_runtime::files::{backup_path, same_file, write_atomic};
 
 use crate::eds::args::{DenyLevel, EdsFixArgs};
 use crate::eds::input::{checker, read_bytes};

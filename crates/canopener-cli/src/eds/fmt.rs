@@ -2,7 +2,7 @@
 
 use canopener_description::DescriptionCode;
 use canopener_eds::Code;
-use canopener_runtime::files::{backup_path, same_file, write_atomic};
+use canopener_files::{backup_path, same_file, write_atomic};
 
 use crate::eds::args::EdsFmtArgs;
 use crate::eds::input::{read_bytes, read_input, report_diagnostics};

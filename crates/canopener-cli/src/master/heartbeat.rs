@@ -1,16 +1,16 @@
 //! `canopener heartbeat watch`: the NMT state and heartbeat timing of every node, live (CiA 301
 //! §7.2.8.3.2.2 heartbeat, §7.2.8.3.3 boot-up), with the EMCYs the nodes send (§7.2.7), watched by
-//! `canopener_runtime::heartbeat_watch`; this module reads the options and prints the events and the
+//! `canopener_link::heartbeat_watch`; this module reads the options and prints the events and the
 //! summary.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Duration;
 
+use canopener_link::heartbeat_watch::{WatchConfig, watch as watch_nodes};
+use canopener_link::link::LinkError;
 use canopener_master::emcy_consumer::EmcyEvent;
 use canopener_master::error_control::{ConsumerTime, GuardingConfig, GuardingConfigError, MonitorEvent};
 use canopener_master::heartbeat_core::{HeardKind, NodeStats};
-use canopener_runtime::heartbeat_watch::{WatchConfig, watch as watch_nodes};
-use canopener_runtime::link::LinkError;
 use canopener_wire::NodeId;
 use serde_json::json;
 

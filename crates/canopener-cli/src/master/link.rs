@@ -3,8 +3,8 @@
 
 use std::time::Duration;
 
-use canopener_runtime::link::BusLink;
-use canopener_runtime::sdo_session::{SdoSession, SessionError};
+use canopener_link::link::BusLink;
+use canopener_link::sdo_session::{SdoSession, SessionError};
 
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult};

@@ -1,5 +1,5 @@
 //! `canopener lss scan|configure|inquire`: layer setting services (CiA 305) through
-//! `canopener_runtime::lss_session`, which runs the sequences; this module reads the options and
+//! `canopener_link::lss_session`, which runs the sequences; this module reads the options and
 //! prints the devices and the advice.
 //!
 //! Timing: `--timeout` is the LSS response timeout. LSS commands do not take the 1 s SDO default of
@@ -9,14 +9,14 @@
 //! when that is shorter.
 //!
 //! `lss scan` without `--assign` lists the unconfigured devices without giving them node-IDs (see
-//! `canopener_runtime::lss_session` for how); a device found twice ends the listing with a warning.
+//! `canopener_link::lss_session` for how); a device found twice ends the listing with a warning.
 
 use std::collections::BTreeSet;
 use std::time::Duration;
 
+use canopener_link::link::{BusLink, Link};
+use canopener_link::lss_session::{Found, LssError, LssSession, MAX_LISTED, ScanOutcome, node_id_text};
 use canopener_master::lss_master::{KnownParts, LssConfig, ScanError, ScanPlan};
-use canopener_runtime::link::{BusLink, Link};
-use canopener_runtime::lss_session::{Found, LssError, LssSession, MAX_LISTED, ScanOutcome, node_id_text};
 use canopener_wire::lss::UNCONFIGURED_NODE_ID;
 use canopener_wire::{LssAddress, LssAddressPart, NodeId};
 use serde_json::json;

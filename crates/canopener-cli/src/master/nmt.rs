@@ -1,13 +1,13 @@
 //! `canopener nmt`: one NMT module control command (CiA 301 §7.2.8.3.1), optionally confirmed by
 //! the nodes' error control messages (heartbeat §7.2.8.3.2.2, boot-up §7.2.8.3.3). The rules of the
-//! confirmation are `canopener_master::nmt_confirmation`'s, the wait `canopener_runtime::nmt_command`'s;
+//! confirmation are `canopener_master::nmt_confirmation`'s, the wait `canopener_link::nmt_command`'s;
 //! this module reads the target and prints the outcome.
 
 use std::str::FromStr;
 
+use canopener_link::nmt_command::{send, send_confirmed};
 use canopener_master::nmt_confirmation::{NEXT_HEARTBEAT_WAIT, NodeConfirmation, Unconfirmed, is_reset};
 use canopener_master::nmt_master::{NmtTarget, command_name};
-use canopener_runtime::nmt_command::{send, send_confirmed};
 use canopener_wire::{NmtCommand, NodeId};
 use serde_json::json;
 

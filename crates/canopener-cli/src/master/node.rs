@@ -1,5 +1,5 @@
 //! `canopener node info|scan`: what one node is (identity, device type, error register, names,
-//! heartbeat state) and which node-IDs answer, read by `canopener_runtime::node_info` and
+//! heartbeat state) and which node-IDs answer, read by `canopener_link::node_info` and
 //! `node_scan`; this module prints them (`node dump` is `node_dump`).
 
 use std::fmt::Write as _;
@@ -7,12 +7,12 @@ use std::time::Duration;
 
 use canopener_eds::Eds;
 use canopener_eds::model::int_of;
+use canopener_link::link::Ended;
+use canopener_link::node_info::NodeInfoError;
+use canopener_link::node_scan::{ScanError, scan as scan_nodes};
+use canopener_link::sdo_session::SessionError;
 use canopener_master::node_info::{DeviceType, Field, NodeInfo};
 use canopener_master::node_scan::{ScanRow, identify};
-use canopener_runtime::link::Ended;
-use canopener_runtime::node_info::NodeInfoError;
-use canopener_runtime::node_scan::{ScanError, scan as scan_nodes};
-use canopener_runtime::sdo_session::SessionError;
 use canopener_wire::error_register_text;
 use serde_json::json;
 
@@ -32,7 +32,7 @@ pub(crate) fn info(args: NodeInfoArgs) -> CliResult {
     };
     let node = args.target.node;
     let mut session = open_session(&args.master, node, "node info")?;
-    let info = canopener_runtime::node_info::read(&mut session).map_err(|err| match err {
+    let info = canopener_link::node_info::read(&mut session).map_err(|err| match err {
         NodeInfoError::Session(err) => session_error(node, err),
         other => CliError::Device(other.to_string()),
     })?;

@@ -1,16 +1,16 @@
 //! `canopener node dump`: every readable entry an EDS lists, read from a device over SDO into a DCF
 //! (CiA 306 §5). `canopener_master::dcf_dump` plans the reads and builds the DCF (its module docs say
-//! which entries and which notations), `canopener_runtime::node_dump` reads and writes; this module
+//! which entries and which notations), `canopener_link::node_dump` reads and writes; this module
 //! checks the arguments and reports.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use canopener_files::same_file;
+use canopener_link::link::Link;
+use canopener_link::node_dump::{DumpError, dcf_time, read_entries, write_dcf};
 use canopener_master::dcf_dump::{DcfOptions, DumpTally, build_dcf, plan};
-use canopener_runtime::files::same_file;
-use canopener_runtime::link::Link;
-use canopener_runtime::node_dump::{DumpError, dcf_time, read_entries, write_dcf};
 use serde_json::json;
 
 use crate::args::OutputFormat;

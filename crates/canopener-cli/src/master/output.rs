@@ -1,15 +1,15 @@
 //! What the master commands share in presenting results: JSON lines, milliseconds, object names,
 //! the wording of SDO failures (exit status 7) and interruptions (130), and the progress bar of long
-//! transfers. Protocol logic is in `canopener-master` and `canopener-runtime`.
+//! transfers. Protocol logic is in `canopener-master` and `canopener-link`.
 
 use std::io::IsTerminal;
 use std::path::Path;
 use std::time::Duration;
 
+use canopener_files::{self as files, WriteError, backup_path};
+use canopener_link::sdo_session::SdoError;
 use canopener_master::statistics::Spread;
 use canopener_master::value::{DisplayValue, entry_label};
-use canopener_runtime::files::{self, WriteError, backup_path};
-use canopener_runtime::sdo_session::SdoError;
 use canopener_wire::NmtState;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;

@@ -1,17 +1,17 @@
 //! `canopener pdo map`: configures one PDO with the dynamic mapping procedure of CiA 301 §7.2.2 on the
 //! PDO parameter objects 1400h–1BFFh (§7.5.2.35–§7.5.2.38; reference §3.4), run by
-//! `canopener_runtime::pdo_map` as `canopener_master::pdo_config` plans it; this module reads the
+//! `canopener_link::pdo_map` as `canopener_master::pdo_config` plans it; this module reads the
 //! arguments and prints the steps, the report and the recovery advice.
 //!
 //! Refusals of the planner (too many bits, restricted CAN-IDs, ...) come before the bus is opened
 //! whenever they do not depend on the device, so a typo never leaves a PDO half-configured.
 
+use canopener_link::pdo_map::{ReadCobIdError, execute, read_cob_id};
+use canopener_link::sdo_session::SdoError;
 use canopener_master::pdo_config::{Direction, MappedObject, PdoConfig, PdoConfigError, SdoWrite};
 use canopener_master::pdo_map_report::{MapReport, StepHint, StepOutcome};
 use canopener_master::sdo_client::SdoTransferError;
 use canopener_master::value::{ValueType, entry_label, hex_value, parse_mapping};
-use canopener_runtime::pdo_map::{ReadCobIdError, execute, read_cob_id};
-use canopener_runtime::sdo_session::SdoError;
 use canopener_wire::NodeId;
 use serde_json::{Value, json};
 

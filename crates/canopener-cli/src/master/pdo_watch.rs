@@ -2,7 +2,7 @@
 //! PDO, the communication parameters 1800h–19FFh and mapping parameters 1A00h–1BFFh, §7.5.2.37 and
 //! §7.5.2.38; reference §3.1 and §3.4).
 //!
-//! The TPDOs watched are those the EDS describes; `canopener_runtime::pdo_watch` finds their
+//! The TPDOs watched are those the EDS describes; `canopener_link::pdo_watch` finds their
 //! configuration over SDO, or with `--offline` from the EDS/DCF values, and receives them;
 //! `canopener_master::pdo_watch` decodes and counts. This module prints: a frame shorter than its
 //! mapping is an error line (a device receiving it as an RPDO would not process it either, reference
@@ -12,13 +12,13 @@ use std::io::IsTerminal;
 use std::time::Duration;
 
 use canopener_can::{CanFrame, Instant};
+use canopener_link::link::Link;
+use canopener_link::pdo_watch::{DiscoverError, discover, from_eds, receive};
+use canopener_link::sdo_session::SdoError;
 use canopener_master::pdo_decode::DecodedField;
 use canopener_master::pdo_watch::{Found, WatchedPdo, eds_lookup, tpdo_numbers, transmission_text};
 use canopener_master::value::DisplayValue;
 use canopener_od::DataType;
-use canopener_runtime::link::Link;
-use canopener_runtime::pdo_watch::{DiscoverError, discover, from_eds, receive};
-use canopener_runtime::sdo_session::SdoError;
 use serde_json::{Value, json};
 
 use crate::args::OutputFormat;
@@ -300,7 +300,7 @@ mod tests {
 
     fn watched(mapping: &[MappedObject]) -> WatchedPdo {
         let path = canopener_testkit::corpus::eds("CANopenNode__CANopenNode__example__IO.eds");
-        let eds = canopener_eds::load(&canopener_runtime::files::read(&path).expect("EDS")).eds;
+        let eds = canopener_eds::load(&canopener_files::read(&path).expect("EDS")).eds;
         let layout = PdoLayout::new(mapping).expect("layout").typed(eds_lookup(&eds));
         match WatchedPdo::found(1, 0x185, Some(255), layout) {
             Found::Watch(pdo) => pdo,

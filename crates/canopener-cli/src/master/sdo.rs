@@ -8,13 +8,13 @@
 use std::path::Path;
 
 use canopener_eds::Eds;
+use canopener_files::write_atomic;
+use canopener_link::sdo_session::Progress;
 use canopener_master::sdo_client::{DownloadMode, UploadMode};
 use canopener_master::value::{ValueType, parse_index, parse_sub};
 use canopener_master::value_typing::{
     EdsEntry, TypeSource, decode, eds_entry, expedited_value, guess_type, value_type_of, write_warnings,
 };
-use canopener_runtime::files::write_atomic;
-use canopener_runtime::sdo_session::Progress;
 use serde_json::json;
 
 use crate::args::OutputFormat;
@@ -215,8 +215,7 @@ pub(crate) fn upload(args: SdoUploadArgs) -> CliResult {
 pub(crate) fn download(args: SdoDownloadArgs) -> CliResult {
     let example = "canopener sdo download --node 5 1F50 1 firmware.bin";
     let (index, sub) = object_args(&args.object.index, &args.object.sub, example)?;
-    let data =
-        canopener_runtime::files::read(&args.input).map_err(|err| CliError::read_file(&args.input, err))?;
+    let data = canopener_files::read(&args.input).map_err(|err| CliError::read_file(&args.input, err))?;
     let mut session = open_session(&args.master, args.object.node, "sdo download")?;
     let mode = if args.block {
         DownloadMode::Block

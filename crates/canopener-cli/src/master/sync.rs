@@ -1,13 +1,13 @@
 //! `canopener sync`: a SYNC producer (CiA 301 §7.2.5) on the bus, run by
-//! `canopener_runtime::sync_producer`, with a report of how well the operating system kept the
+//! `canopener_link::sync_producer`, with a report of how well the operating system kept the
 //! period (`canopener_master::sync_stats`): on a non-real-time OS wakeups come late, and the
 //! consumers' synchronous PDOs inherit every late SYNC.
 
 use std::time::Duration;
 
+use canopener_link::sync_producer::{SyncLimits, run as produce};
 use canopener_master::sync_producer::{SyncConfig, SyncProducer};
 use canopener_master::sync_stats::SyncStats;
-use canopener_runtime::sync_producer::{SyncLimits, run as produce};
 
 use serde_json::json;
 

@@ -4,7 +4,7 @@
 use canopener_device::energybus::station::DeviceFault;
 use canopener_device::faults::Fault;
 use canopener_eds::Eds;
-use canopener_runtime::energybus::system::{EnergyBusBus, EnergyBusSystem, SystemError, ready_for_test};
+use canopener_sim::energybus::system::{EnergyBusBus, EnergyBusSystem, SystemError, ready_for_test};
 use canopener_wire::NodeId;
 
 use crate::error::{CliError, CliResult};

@@ -66,7 +66,7 @@ pub(crate) fn explore(args: ExploreArgs) -> CliResult {
         return Err(CliError::InvalidInput("the model cannot be explored".into()));
     }
     if let Some(path) = &args.aut {
-        canopener_runtime::files::write_atomic(path, canopener_mbt::aut::write(&space.lts).as_bytes(), false)
+        canopener_files::write_atomic(path, canopener_mbt::aut::write(&space.lts).as_bytes(), false)
             .map_err(|e| {
                 CliError::output(
                     format!("writing {}", path.display()),
@@ -76,7 +76,7 @@ pub(crate) fn explore(args: ExploreArgs) -> CliResult {
     }
     if let Some(path) = &args.dot {
         let dot = canopener_mbt::explore::to_dot(&loaded.model, &space);
-        canopener_runtime::files::write_atomic(path, dot.as_bytes(), false).map_err(|e| {
+        canopener_files::write_atomic(path, dot.as_bytes(), false).map_err(|e| {
             CliError::output(
                 format!("writing {}", path.display()),
                 std::io::Error::other(e.to_string()),
@@ -183,7 +183,7 @@ fn untimed_note(model: &canopener_mbt::model::Model, purpose: &str, from_aut: bo
 
 /// Reads an .aut file; errors are exit 3 with every diagnostic named by place.
 fn read_aut(path: &std::path::Path) -> CliResult<canopener_mbt::explore::Lts> {
-    let bytes = canopener_runtime::files::read(path).map_err(|e| CliError::read_file(path, e))?;
+    let bytes = canopener_files::read(path).map_err(|e| CliError::read_file(path, e))?;
     let (lts, diagnostics) = canopener_mbt::aut::read(&String::from_utf8_lossy(&bytes));
     let text = canopener_mbt::diagnostics::render(&path.display().to_string(), &diagnostics);
     if canopener_mbt::diagnostics::has_errors(&diagnostics) {

@@ -25,7 +25,7 @@ fn source(arg: &str) -> CliResult<Source> {
         });
     }
     let path = Path::new(arg);
-    let bytes = canopener_runtime::files::read(path).map_err(|e| {
+    let bytes = canopener_files::read(path).map_err(|e| {
         let names: Vec<&str> = shipped::MODELS.iter().map(|m| m.name).collect();
         CliError::Usage(format!(
             "`{arg}` is neither a shipped model ({}) nor a readable file: {e}",
@@ -76,7 +76,7 @@ pub(crate) fn load(
 
 /// Writes a result file atomically (a reader never sees half of it).
 pub(crate) fn write(path: &Path, text: &str) -> CliResult {
-    canopener_runtime::files::write_atomic(path, text.as_bytes(), false).map_err(|e| {
+    canopener_files::write_atomic(path, text.as_bytes(), false).map_err(|e| {
         CliError::output(
             format!("writing {}", path.display()),
             std::io::Error::other(e.to_string()),

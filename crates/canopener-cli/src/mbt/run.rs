@@ -3,12 +3,12 @@
 use std::time::Duration;
 
 use canopener_can::Instant;
+use canopener_link::link::BusLink;
 use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
 use canopener_mbt::log::{self, RunHeader};
 use canopener_mbt::model::Model;
-use canopener_runtime::link::BusLink;
 use canopener_runtime::mbt_run;
-use canopener_runtime::simulator::simulation::{SimulatedBus, Simulation};
+use canopener_sim::simulation::{SimulatedBus, Simulation};
 
 use crate::bus_open::open_bus;
 use crate::error::{CliError, CliResult, exit_code};
@@ -168,7 +168,7 @@ fn find_purpose(model: &Model, name: Option<&str>) -> CliResult<Option<canopener
 }
 
 fn read_log(path: &std::path::Path) -> CliResult<log::Log> {
-    let bytes = canopener_runtime::files::read(path).map_err(|e| CliError::read_file(path, e))?;
+    let bytes = canopener_files::read(path).map_err(|e| CliError::read_file(path, e))?;
     let text = String::from_utf8_lossy(&bytes);
     log::read(&text)
         .map_err(|e| CliError::InvalidInput(format!("{}:{}: {}", path.display(), e.line, e.message)))

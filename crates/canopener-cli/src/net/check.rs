@@ -4,7 +4,7 @@
 use canopener_check::Finding;
 use canopener_description::{Checker, Selection};
 use canopener_report::{FileReport, HumanOptions, Report};
-use canopener_runtime::system::files::SystemFiles;
+use canopener_sim::system::files::SystemFiles;
 
 use crate::error::{CliError, CliResult};
 use crate::net::args::{NetCheckArgs, NetCheckFormat};

@@ -1,7 +1,7 @@
 //! `canopener net convert`: nodelist.cpj ⇄ Nodelist.graphml, and DOT.
 
+use canopener_files::write_atomic;
 use canopener_network::convert::{Target, convert};
-use canopener_runtime::files::write_atomic;
 
 use crate::error::CliResult;
 use crate::net::args::{NetConvertArgs, NetTarget};

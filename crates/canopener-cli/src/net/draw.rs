@@ -1,6 +1,6 @@
 //! `canopener net draw`: the system as an SVG drawing.
 
-use canopener_runtime::files::write_atomic;
+use canopener_files::write_atomic;
 
 use crate::error::CliResult;
 use crate::net::args::NetDrawArgs;

@@ -3,9 +3,9 @@
 
 use std::path::Path;
 
-use canopener_runtime::files::same_file;
+use canopener_files::same_file;
 
-use canopener_runtime::system::files::SystemFiles;
+use canopener_sim::system::files::SystemFiles;
 
 use crate::error::{CliError, CliResult};
 

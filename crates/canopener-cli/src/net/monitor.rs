@@ -3,10 +3,10 @@
 
 use std::io::{IsTerminal, Write};
 
+use canopener_link::link::{BusLink, Flow, Link};
+use canopener_link::system_watch::SystemWatch;
 use canopener_network::Topology;
 use canopener_network::monitor::{Event, Health, MonitorConfig, SystemMonitor};
-use canopener_runtime::link::{BusLink, Flow, Link};
-use canopener_runtime::system::watch::SystemWatch;
 
 use crate::args::{bus_values, buses_by_network};
 use crate::bus_open::open_bus;

@@ -6,9 +6,9 @@
 use std::collections::BTreeMap;
 
 use canopener_can::Instant;
+use canopener_link::link::Flow;
 use canopener_network::Topology;
 use canopener_network::monitor::{DeviceState, Event, SystemMonitor};
-use canopener_runtime::link::Flow;
 use ratatui::DefaultTerminal;
 use ratatui::crossterm::event::{self, KeyCode, KeyModifiers};
 use ratatui::layout::{Constraint, Layout};

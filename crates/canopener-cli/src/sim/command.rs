@@ -1,7 +1,7 @@
 //! `canopener sim`: simulated CANopen devices built from EDS/DCF files, on a real bus, in real time.
 //!
 //! The runtime builds the devices and runs them on the bus
-//! ([`canopener_runtime::simulator`]); this module turns the options into that setup and prints what
+//! ([`canopener_sim`]); this module turns the options into that setup and prints what
 //! the devices report: one line per event on stderr, or one JSON object per event on stdout with
 //! `--format json`.
 
@@ -9,10 +9,10 @@ use std::time::Duration;
 
 use canopener_device::energybus::station::{DeviceFault, EnergyBusFault};
 use canopener_device::faults::Fault;
-use canopener_runtime::simulator::device::ApplicationKind;
-use canopener_runtime::simulator::event_log::{FieldValue, LogEntry};
-use canopener_runtime::simulator::host::{HostReport, SimHost};
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_sim::device::ApplicationKind;
+use canopener_sim::event_log::{FieldValue, LogEntry};
+use canopener_sim::host::{HostReport, SimHost};
+use canopener_sim::simulation::Simulation;
 use serde_json::{Map, Value, json};
 
 use crate::bus_open::open_bus;

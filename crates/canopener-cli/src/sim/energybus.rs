@@ -5,12 +5,12 @@
 use std::time::Duration;
 
 use canopener_can::{Bitrate, Instant};
-use canopener_runtime::energybus::serve::serve;
-use canopener_runtime::energybus::system::{
+use canopener_link::link::BusLink;
+use canopener_sim::energybus::serve::serve;
+use canopener_sim::energybus::system::{
     BOOT_LIMIT, BootReport, EnergyBusSystem, Station, StationEvent, SystemError, boot, controller,
 };
-use canopener_runtime::energybus::telegrams::{Telegram, TelegramDecoder, line};
-use canopener_runtime::link::BusLink;
+use canopener_sim::energybus::telegrams::{Telegram, TelegramDecoder, line};
 use canopener_wire::{NodeId, Service};
 use serde_json::json;
 

@@ -5,10 +5,10 @@
 
 use std::path::Path;
 
-use canopener_runtime::link::BusLink;
-use canopener_runtime::system::files::{SystemError, SystemFiles};
-use canopener_runtime::system::serve::{ServeReport, serve, stdin_commands};
-use canopener_runtime::system::sim::SystemSim;
+use canopener_link::link::BusLink;
+use canopener_sim::system::files::{SystemError, SystemFiles};
+use canopener_sim::system::serve::{ServeReport, serve, stdin_commands};
+use canopener_sim::system::sim::SystemSim;
 
 use crate::args::{bus_values, buses_by_network};
 use crate::bus_open::open_bus;

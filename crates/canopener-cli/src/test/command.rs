@@ -14,10 +14,10 @@ use canopener_conformance::performance::{Criteria, Performance};
 use canopener_conformance::render::{candump, html, human, junit};
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_conformance::stimulus::{Hook, Stimulus};
-use canopener_runtime::files::{create_dir_all, same_file, write_atomic};
-use canopener_runtime::link::{BusLink, Link};
-use canopener_runtime::simulator::simulation::Simulation;
-use canopener_runtime::stimulus_program::StimulusProgram;
+use canopener_files::{create_dir_all, same_file, write_atomic};
+use canopener_link::link::{BusLink, Link};
+use canopener_link::stimulus_program::StimulusProgram;
+use canopener_sim::simulation::Simulation;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
@@ -135,7 +135,7 @@ pub(crate) fn run(args: TestArgs) -> CliResult {
 fn performance(args: &TestArgs) -> CliResult<Performance> {
     let criteria = match &args.criteria {
         Some(path) => {
-            let bytes = canopener_runtime::files::read(path).map_err(|err| CliError::read_file(path, err))?;
+            let bytes = canopener_files::read(path).map_err(|err| CliError::read_file(path, err))?;
             let text = String::from_utf8(bytes).map_err(|_| {
                 CliError::InvalidInput(format!(
                     "{}: not UTF-8 text; a criteria file is TOML",
@@ -161,7 +161,7 @@ fn eds_errors(path: &Path) -> CliResult<Option<Vec<String>>> {
     if !is_eds {
         return Ok(None);
     }
-    let bytes = canopener_runtime::files::read(path).map_err(|err| CliError::read_file(path, err))?;
+    let bytes = canopener_files::read(path).map_err(|err| CliError::read_file(path, err))?;
     let loaded = canopener_eds::load(&bytes);
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
     Ok(Some(canopener_conformance::cia301::eds::errors(

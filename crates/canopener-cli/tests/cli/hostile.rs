@@ -10,8 +10,8 @@ use std::time::Duration;
 
 use canopener_can::{Core, Instant};
 use canopener_eds::model::Eds;
-use canopener_runtime::simulator::device::SimulatedDevice;
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_sim::device::SimulatedDevice;
+use canopener_sim::simulation::Simulation;
 use canopener_testkit::fixture::ScratchDir;
 use canopener_testkit::hostile::{Behaviour, Entropy, Hostile, JunkNode};
 use canopener_transport::WallClock;

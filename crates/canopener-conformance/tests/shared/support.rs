@@ -10,9 +10,9 @@ use canopener_conformance::model::Report;
 use canopener_conformance::performance::Performance;
 use canopener_conformance::runner::{self, RunSpec};
 use canopener_device::faults::Fault;
-use canopener_runtime::cancel::Cancel;
-use canopener_runtime::link::{Link, LinkError, Stamped, Timestamps};
-use canopener_runtime::simulator::simulation::Simulation;
+use canopener_link::cancel::Cancel;
+use canopener_link::link::{Link, LinkError, Stamped, Timestamps};
+use canopener_sim::simulation::Simulation;
 
 /// The node every simulated device under test has.
 pub(crate) const NODE: u8 = 5;
@@ -208,7 +208,7 @@ pub(crate) fn run_then_read(
         &|f, _| *f,
         &mut |link| {
             let mut session =
-                canopener_runtime::sdo_session::SdoSession::new(link, NODE, Duration::from_millis(500))
+                canopener_link::sdo_session::SdoSession::new(link, NODE, Duration::from_millis(500))
                     .expect("session");
             left = session.read(entry.0, entry.1).ok();
         },
