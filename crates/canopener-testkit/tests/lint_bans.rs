@@ -151,9 +151,7 @@ const BAN_KEYS: &[&str] = &["disallowed-methods", "disallowed-types", "disallowe
 const CONFIG_NAMES: &[&str] = &["clippy.toml", ".clippy.toml"];
 
 fn workspace_root() -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    root.canonicalize()
-        .unwrap_or_else(|e| panic!("{}: {e}", root.display()))
+    canopener_testkit::corpus::workspace_root()
 }
 
 fn read_table(path: &Path) -> Table {
