@@ -35,8 +35,7 @@ fn last_nmt_command_is_stop(json: &Value) -> bool {
         .into_iter()
         .flatten()
         .filter_map(Value::as_str)
-        .filter(|i| i.starts_with("?NMT ") && (i.ends_with("!0x22") || i.ends_with("!0x00")))
-        .next_back()
+        .rfind(|i| i.starts_with("?NMT ") && (i.ends_with("!0x22") || i.ends_with("!0x00")))
         .is_some_and(|i| i.starts_with("?NMT !0x02 "))
 }
 
