@@ -245,7 +245,7 @@ pub fn history(rows: &[RunRow], kept: &str) -> String {
             device = Some(&row.device);
             let _ = write!(
                 body,
-                r#"<section class="device" data-device="{0}"><h2>{0}</h2><table class="runs"><thead><tr><th>run</th><th>started</th><th>revision</th><th>node</th><th>bus</th><th>description</th><th>fault</th><th>status</th><th>pass</th><th>fail</th><th>inconcl.</th><th>n/a</th><th></th></tr></thead><tbody>"#,
+                r#"<section class="device" data-device="{0}"><h2>{0}</h2><table class="runs"><thead><tr><th>run</th><th>started</th><th>revision</th><th>node</th><th>bus</th><th>description</th><th>fault</th><th>status</th><th>pass</th><th>measured, no criterion</th><th>fail</th><th>inconcl.</th><th>n/a</th><th></th></tr></thead><tbody>"#,
                 esc(&row.device)
             );
         }
@@ -262,7 +262,7 @@ pub fn history(rows: &[RunRow], kept: &str) -> String {
             .unwrap_or_default();
         let _ = write!(
             body,
-            r#"<tr data-run="{id}" data-status="{status}"><td><a href="/runs/{id}">{id}</a></td><td>{started}</td><td>{revision}</td><td>{node}</td><td>{bus}</td><td>{eds}</td><td>{fault}</td><td class="status">{status}</td><td class="n">{pass}</td><td class="n">{fail}</td><td class="n">{inconclusive}</td><td class="n">{na}</td><td>{previous}</td></tr>"#,
+            r#"<tr data-run="{id}" data-status="{status}"><td><a href="/runs/{id}">{id}</a></td><td>{started}</td><td>{revision}</td><td>{node}</td><td>{bus}</td><td>{eds}</td><td>{fault}</td><td class="status">{status}</td><td class="n">{pass}</td><td class="n">{measured}</td><td class="n">{fail}</td><td class="n">{inconclusive}</td><td class="n">{na}</td><td>{previous}</td></tr>"#,
             id = row.id,
             status = esc(&row.status),
             started = esc(&row.started),
@@ -272,6 +272,7 @@ pub fn history(rows: &[RunRow], kept: &str) -> String {
             eds = esc(&row.eds),
             fault = esc(row.fault.as_deref().unwrap_or("")),
             pass = row.pass,
+            measured = row.measured,
             fail = row.fail,
             inconclusive = row.inconclusive,
             na = row.not_applicable,
@@ -394,6 +395,7 @@ mod tests {
             fault: fault.map(str::to_owned),
             suites: "cia301".to_owned(),
             pass: 70 - fail,
+            measured: 2,
             fail,
             inconclusive: 0,
             not_applicable: 6,

@@ -354,9 +354,15 @@ impl Runs {
             Ok(outcome) => ("done", None, Some(outcome.report)),
             Err(err) => ("failed", Some(err.to_string()), None),
         };
-        let counts = report.as_ref().map_or([0; 4], |r| {
+        let counts = report.as_ref().map_or([0; 5], |r| {
             let s = r.summary;
-            [s.pass, s.fail, s.inconclusive, s.not_applicable]
+            [
+                s.pass.saturating_sub(s.measured_no_criterion),
+                s.measured_no_criterion,
+                s.fail,
+                s.inconclusive,
+                s.not_applicable,
+            ]
         });
         let identity = report.as_ref().and_then(|r| r.device.identity);
         let with_identity = identity.and_then(|i| {

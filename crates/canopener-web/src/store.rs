@@ -55,8 +55,10 @@ pub struct RunRow {
     pub fault: Option<String>,
     /// The suites run, comma-separated.
     pub suites: String,
-    /// Verdict counts.
+    /// Passes a criterion or a CiA requirement decided.
     pub pass: i64,
+    /// Measurements judged against no criterion: reported apart, never as conformance passes.
+    pub measured: i64,
     /// Failed.
     pub fail: i64,
     /// Undecided.
@@ -95,8 +97,9 @@ pub struct Ended<'a> {
     pub device: Option<&'a str>,
     /// The revision read.
     pub revision: Option<&'a str>,
-    /// Verdict counts: pass, fail, inconclusive, not applicable.
-    pub counts: [usize; 4],
+    /// Verdict counts: pass (decided by a criterion or a CiA requirement), measured with no
+    /// criterion, fail, inconclusive, not applicable.
+    pub counts: [usize; 5],
     /// The report as JSON (version 1) and as the HTML page.
     pub report: Option<(&'a str, &'a str)>,
 }
@@ -158,6 +161,7 @@ impl Store {
                     fail INTEGER NOT NULL DEFAULT 0,
                     inconclusive INTEGER NOT NULL DEFAULT 0,
                     not_applicable INTEGER NOT NULL DEFAULT 0,
+                    measured INTEGER NOT NULL DEFAULT 0,
                     report_json TEXT,
                     report_html TEXT);
                  CREATE INDEX IF NOT EXISTS runs_by_device ON runs (device, started);
@@ -168,6 +172,19 @@ impl Store {
                  PRAGMA user_version = 1;",
             )
             .map_err(sql)?;
+        // A history written before the "measured, no criterion" count had no column for it.
+        let has_measured = connection
+            .prepare("SELECT 1 FROM pragma_table_info('runs') WHERE name = 'measured'")
+            .and_then(|mut q| q.exists([]))
+            .map_err(sql)?;
+        if !has_measured {
+            connection
+                .execute(
+                    "ALTER TABLE runs ADD COLUMN measured INTEGER NOT NULL DEFAULT 0",
+                    [],
+                )
+                .map_err(sql)?;
+        }
         // A run that was running when an earlier server stopped without ending it.
         connection
             .execute(
@@ -212,13 +229,13 @@ impl Store {
 
     /// Records how run `id` ended.
     pub fn end(&self, id: i64, ended: &Ended<'_>) -> Result<(), StoreError> {
-        let [pass, fail, inconclusive, not_applicable] =
+        let [pass, measured, fail, inconclusive, not_applicable] =
             ended.counts.map(|n| i64::try_from(n).unwrap_or(i64::MAX));
         self.with(|c| {
             c.execute(
                 "UPDATE runs SET status = ?2, message = ?3, device = COALESCE(?4, device), revision = ?5, \
                  pass = ?6, fail = ?7, inconclusive = ?8, not_applicable = ?9, report_json = ?10, \
-                 report_html = ?11 WHERE id = ?1",
+                 report_html = ?11, measured = ?12 WHERE id = ?1",
                 params![
                     id,
                     ended.status,
@@ -230,7 +247,8 @@ impl Store {
                     inconclusive,
                     not_applicable,
                     ended.report.map(|r| r.0),
-                    ended.report.map(|r| r.1)
+                    ended.report.map(|r| r.1),
+                    measured
                 ],
             )?;
             Ok(())
@@ -329,7 +347,7 @@ impl Store {
 }
 
 const COLUMNS: &str = "id, started, status, message, node, bus, eds, device, revision, fault, suites, \
-                       pass, fail, inconclusive, not_applicable";
+                       pass, fail, inconclusive, not_applicable, measured";
 
 fn row(r: &rusqlite::Row<'_>) -> rusqlite::Result<RunRow> {
     Ok(RunRow {
@@ -348,6 +366,7 @@ fn row(r: &rusqlite::Row<'_>) -> rusqlite::Result<RunRow> {
         fail: r.get(12)?,
         inconclusive: r.get(13)?,
         not_applicable: r.get(14)?,
+        measured: r.get(15)?,
     })
 }
 
@@ -379,7 +398,7 @@ mod tests {
             message: None,
             device: None,
             revision: Some("0x00010002"),
-            counts: [3, 1, 0, 2],
+            counts: [3, 1, 1, 0, 2],
             report: Some(("{}", "<html></html>")),
         };
         store.end(a1, &ended("done")).unwrap();
@@ -397,7 +416,10 @@ mod tests {
             [("A".to_owned(), a2), ("A".to_owned(), a1), ("B".to_owned(), b1)]
         );
         let done = store.get(a1).unwrap().unwrap();
-        assert_eq!((done.pass, done.fail, done.not_applicable), (3, 1, 2));
+        assert_eq!(
+            (done.pass, done.measured, done.fail, done.not_applicable),
+            (3, 1, 1, 2)
+        );
         assert_eq!(store.report(a1, true).unwrap().as_deref(), Some("<html></html>"));
         assert_eq!(store.report(a2, false).unwrap(), None);
     }
@@ -417,5 +439,35 @@ mod tests {
         );
         assert_eq!(store.descriptions().unwrap().len(), 1);
         assert_eq!(store.description("nope").unwrap(), None);
+    }
+
+    /// A history written before the "measured, no criterion" column opens, and its runs read with 0.
+    #[test]
+    fn a_history_without_the_measured_column_gains_it() {
+        let dir = std::env::temp_dir().join(format!("canopener-web-store-{}", std::process::id()));
+        canopener_files::create_dir_all(&dir).unwrap();
+        {
+            let old = Connection::open(dir.join(FILE)).unwrap();
+            old.execute_batch(
+                "CREATE TABLE runs (id INTEGER PRIMARY KEY, started TEXT NOT NULL, status TEXT NOT NULL,
+                    message TEXT, node INTEGER NOT NULL, bus TEXT NOT NULL, eds TEXT NOT NULL,
+                    device TEXT NOT NULL, revision TEXT, fault TEXT, suites TEXT NOT NULL,
+                    pass INTEGER NOT NULL DEFAULT 0, fail INTEGER NOT NULL DEFAULT 0,
+                    inconclusive INTEGER NOT NULL DEFAULT 0, not_applicable INTEGER NOT NULL DEFAULT 0,
+                    report_json TEXT, report_html TEXT);
+                 INSERT INTO runs (started, status, node, bus, eds, device, suites, pass)
+                    VALUES ('2026-01-01T00:00:00Z', 'done', 5, 'simulated', 'io.eds', 'A', 'cia301', 7);
+                 PRAGMA user_version = 1;",
+            )
+            .unwrap();
+        }
+        let store = Store::open(Some(&dir)).unwrap();
+        let runs = store.list().unwrap();
+        assert_eq!(
+            runs.iter().map(|r| (r.pass, r.measured)).collect::<Vec<_>>(),
+            [(7, 0)]
+        );
+        drop(store);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
