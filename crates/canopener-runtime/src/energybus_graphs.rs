@@ -81,10 +81,12 @@ pub fn model(name: &str, node: u8, eds: &Eds) -> Result<Model, String> {
         origin: name.to_owned(),
         text: text.to_owned(),
     }];
+    // An EnergyBus device forgets its LSS node-ID at reset node (docs/energybus.md): the CANopen
+    // models start with reset communication and never send reset node.
     let options = Options {
         node_id: node,
         eds: Some(eds),
-        set: Vec::new(),
+        set: vec![("KEEPS_NODE_ID".to_owned(), 0)],
     };
     let (model, report) = compile(&sources, &options, &|n| shipped::text(n).map(str::to_owned));
     model.ok_or_else(|| {
