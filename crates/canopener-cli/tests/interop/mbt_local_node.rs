@@ -39,12 +39,11 @@ fn last_nmt_command_is_stop(json: &Value) -> bool {
         .is_some_and(|i| i.starts_with("?NMT !0x02 "))
 }
 
-fn mbt_run(hub: &HubProc, eds: &Path, model: &str, seed: u64) -> (Option<i32>, Value) {
+fn mbt_run(hub: &HubProc, eds: &Path, models: &[&str], seed: u64) -> (Option<i32>, Value) {
     let mut command: Command = canopener();
+    command.args(["mbt", "run"]);
+    command.args(models);
     command.args([
-        "mbt",
-        "run",
-        model,
         "--node",
         NODE,
         "--steps",
@@ -54,7 +53,7 @@ fn mbt_run(hub: &HubProc, eds: &Path, model: &str, seed: u64) -> (Option<i32>, V
         "--format",
         "json",
     ]);
-    if model == "sdo" {
+    if models.contains(&"sdo") {
         command.args(["--set", "SDO_T=1s"]);
     }
     command.args([
@@ -126,7 +125,7 @@ fn nmt_and_sdo_models_report_local_node_gaps_and_no_false_failure() {
     // NMT: boot-up after both resets, every transition; with 1017h = 0 the state is not observable,
     // so what is judged is the boot-up and the silence around it. No failure.
     for seed in 1..=2 {
-        let (code, json) = mbt_run(&hub, &eds, "nmt", seed);
+        let (code, json) = mbt_run(&hub, &eds, &["nmt"], seed);
         assert_eq!(code, Some(0), "nmt seed {seed}: {json}");
     }
     // SDO: every failure is LocalNode answering in Stopped, and it shows up. Since the model has the
@@ -134,7 +133,7 @@ fn nmt_and_sdo_models_report_local_node_gaps_and_no_false_failure() {
     // over more requests: eight seeds, of which seeds 6 and 7 stop the device and then read.
     let mut answered_in_stopped = false;
     for seed in 1..=8 {
-        let (code, json) = mbt_run(&hub, &eds, "sdo", seed);
+        let (code, json) = mbt_run(&hub, &eds, &["sdo"], seed);
         eprintln!("sdo seed {seed}: {} {}", json["verdict"], json["reason"]);
         if code == Some(0) {
             continue;
@@ -169,7 +168,7 @@ fn the_nmt_model_reports_that_a_bare_local_node_sends_no_boot_up() {
     let _peer = local_node(&python, &hub, NODE, &eds, &["--bare"]);
     // With 1017h = 0 and no boot-up, LocalNode sends nothing at all: the verdict is `fail`, and the
     // exit code says that the device never answered (7).
-    let (code, json) = mbt_run(&hub, &eds, "nmt", 1);
+    let (code, json) = mbt_run(&hub, &eds, &["nmt"], 1);
     assert_eq!(code, Some(7), "{json}");
     assert_eq!(json["verdict"], "fail", "{json}");
     let reason = json["reason"].as_str().unwrap_or_default();
@@ -194,38 +193,16 @@ fn the_composition_nmt_heartbeat_sdo_fails_local_node_only_on_its_known_gap() {
     let _peer = local_node(&python, &hub, NODE, &eds, &[]);
     let mut verdicts = Vec::new();
     for seed in 1..=5u64 {
-        let mut command: Command = canopener();
-        command.args([
-            "mbt",
-            "run",
-            "nmt",
-            "heartbeat",
-            "sdo",
-            "--node",
-            NODE,
-            "--steps",
-            "60",
-        ]);
-        command.args(["--tolerance", "50ms", "--format", "json", "--set", "SDO_T=1s"]);
-        command.args([
-            "--eds",
-            eds.to_str().expect("UTF-8 path"),
-            "--seed",
-            &seed.to_string(),
-        ]);
-        command.args(["--bus", &hub.spec("can0"), "--time-limit", "60s"]);
-        let output = command.output().expect("run canopener");
-        let json: Value = serde_json::from_slice(&output.stdout)
-            .unwrap_or_else(|_| panic!("no JSON: {}", String::from_utf8_lossy(&output.stderr)));
+        let (code, json) = mbt_run(&hub, &eds, &["nmt", "heartbeat", "sdo"], seed);
         eprintln!(
             "nmt heartbeat sdo seed {seed}: {} {}",
             json["verdict"], json["reason"]
         );
         verdicts.push(json["verdict"].as_str().unwrap_or_default().to_owned());
-        if output.status.code() == Some(0) {
+        if code == Some(0) {
             continue;
         }
-        assert_eq!(output.status.code(), Some(6), "seed {seed}: {json}");
+        assert_eq!(code, Some(6), "seed {seed}: {json}");
         // An SDO answer the composition refuses because nmt has the device Stopped.
         let reason = json["reason"].as_str().unwrap_or_default();
         assert!(
