@@ -46,7 +46,11 @@ fn measure(browser: &Path, dir: &Path, svg: &str) -> Value {
     let page = dir.join("page.html");
     std::fs::write(
         &page,
-        format!("<!doctype html><html><body>{svg}{MEASURE}</body></html>"),
+        // Without a declared charset Chromium guesses from the machine's locale, and the ellipsis of
+        // a shortened name comes back as Latin-1 mojibake on some machines.
+        format!(
+            "<!doctype html><html><head><meta charset=\"utf-8\"></head><body>{svg}{MEASURE}</body></html>"
+        ),
     )
     .expect("page");
     let dom = chromium_run(
