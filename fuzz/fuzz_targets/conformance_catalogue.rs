@@ -19,7 +19,7 @@
 use std::sync::OnceLock;
 use std::time::Duration;
 
-use canopener_bus_engine::network::Timing;
+use canopener_bus_engine::virtual_bus::Timing;
 use canopener_can::{CanFrame, Instant};
 use canopener_conformance::catalogue::{TestDef, catalogue};
 use canopener_conformance::device_model::DeviceModel;
@@ -47,7 +47,7 @@ struct Fixed {
 fn fixed() -> &'static Fixed {
     static FIXED: OnceLock<Fixed> = OnceLock::new();
     FIXED.get_or_init(|| {
-        let eds = canopener_eds::load(canopener_conformance::demo::EDS).eds;
+        let eds = canopener_eds::load(canopener_conformance::tour::EDS).eds;
         let model = DeviceModel::new(&eds, NODE);
         Fixed {
             eds,
@@ -124,7 +124,7 @@ fuzz_target!(|data: &[u8]| {
     let spec = RunSpec {
         node: NODE,
         model: &fixed.model,
-        eds: canopener_conformance::demo::EDS_NAME.to_owned(),
+        eds: canopener_conformance::tour::EDS_NAME.to_owned(),
         bus: "fuzz".to_owned(),
         started: "2024-01-01T00:00:00Z".to_owned(),
         sdo_timeout: Duration::from_millis(20),
@@ -153,7 +153,7 @@ fuzz_target!(|data: &[u8]| {
     );
     let unjudged = canopener_conformance::junk::unjudged(NODE, report);
     assert!(unjudged.is_empty(), "{unjudged:#?}");
-    let hostile = link.inner.network().node(station).expect("the device");
+    let hostile = link.inner.virtual_bus().node(station).expect("the device");
     let first_test = report
         .tests
         .iter()

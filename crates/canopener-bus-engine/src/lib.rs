@@ -57,6 +57,6 @@
 #![warn(missing_docs)]
 
 mod engine;
-pub mod network;
+pub mod virtual_bus;
 
 pub use engine::{BusConfig, BusEngine, BusStats, Delivery, Port, SubmitError};

@@ -63,7 +63,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
-        Command::Demo(args) if args.monitor => bus::demo::run(bus::args::DemoArgs {
+        Command::Demo(args) if args.monitor => bus::session_replay::run(bus::args::SessionReplayArgs {
             bus: args.bus,
             speed: args.speed,
             format: args.format,

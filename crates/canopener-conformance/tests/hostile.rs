@@ -38,7 +38,7 @@ const MAX_FRAMES: usize = 2_000_000;
 const REPETITIONS: usize = 20;
 
 fn demo_eds() -> Eds {
-    canopener_eds::load(canopener_conformance::demo::EDS).eds
+    canopener_eds::load(canopener_conformance::tour::EDS).eds
 }
 
 /// The demo device (the bundled CiA 401 EDS) on node [`NODE`], powered on at virtual time zero.
@@ -113,7 +113,7 @@ fn run_on(link: &mut dyn Link, eds: &Eds, tests: &[TestDef], sdo_timeout: Durati
     let spec = RunSpec {
         node: NODE,
         model: &model,
-        eds: canopener_conformance::demo::EDS_NAME.to_owned(),
+        eds: canopener_conformance::tour::EDS_NAME.to_owned(),
         bus: link.describe(),
         started: "2024-01-01T00:00:00Z".to_owned(),
         sdo_timeout,
@@ -130,7 +130,7 @@ fn run_on(link: &mut dyn Link, eds: &Eds, tests: &[TestDef], sdo_timeout: Durati
 /// The whole catalogue against `core` alone on a simulated bus.
 fn run_all<C: Core>(core: C) -> FinishedRun {
     let eds = demo_eds();
-    let mut bus = VirtualLink::new(canopener_bus_engine::network::Timing::Ideal);
+    let mut bus = VirtualLink::new(canopener_bus_engine::virtual_bus::Timing::Ideal);
     bus.attach(core);
     run_on(
         &mut Bounded::new(bus),
@@ -287,13 +287,13 @@ fn a_junk_node_beside_a_correct_device_adds_no_not_applicable_verdict() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(5);
     for seed in 1..=seeds {
-        let mut bus = VirtualLink::new(canopener_bus_engine::network::Timing::Ideal);
+        let mut bus = VirtualLink::new(canopener_bus_engine::virtual_bus::Timing::Ideal);
         // The junk node first: at one instant its answer goes out before the device's.
         let junk = bus.attach(Station::Junk(JunkNode::new(NODE, 30, Entropy::seeded(seed))));
         bus.attach(Station::Device(device(&eds)));
         let mut link = Bounded::new(bus);
         let outcome = run_on(&mut link, &eds, &catalogue(), Duration::from_millis(500));
-        let answered = match link.inner.network().node(junk) {
+        let answered = match link.inner.virtual_bus().node(junk) {
             Some(Station::Junk(node)) => node.answered(),
             _ => 0,
         };
@@ -343,7 +343,7 @@ fn a_frame_the_tester_cannot_build_is_inconclusive_and_the_run_goes_on() {
     };
     let mut tests = vec![unsendable];
     tests.extend(selection.pick(&catalogue()).expect("sdo.1"));
-    let mut bus = VirtualLink::new(canopener_bus_engine::network::Timing::Ideal);
+    let mut bus = VirtualLink::new(canopener_bus_engine::virtual_bus::Timing::Ideal);
     bus.attach(device(&eds));
     let outcome = run_on(&mut Bounded::new(bus), &eds, &tests, Duration::from_millis(500));
     let report = &outcome.report;
@@ -422,7 +422,7 @@ fn a_server_sending_block_segments_without_end_cannot_hold_up_a_test() {
         ..Selection::default()
     };
     let tests = selection.pick(&catalogue()).expect("sdo.21");
-    let mut bus = VirtualLink::new(canopener_bus_engine::network::Timing::Ideal);
+    let mut bus = VirtualLink::new(canopener_bus_engine::virtual_bus::Timing::Ideal);
     bus.attach(EndlessBlock {
         device: device(&eds),
         next: None,

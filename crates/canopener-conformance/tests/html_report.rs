@@ -4,9 +4,9 @@
 //! device with a jittering heartbeat is open with its limits drawn. Screenshots are left in
 //! `CARGO_TARGET_TMPDIR` for people to look at.
 
-use canopener_conformance::demo;
 use canopener_conformance::model::{Report, Verdict, VerdictCounts};
 use canopener_conformance::render::html;
+use canopener_conformance::tour;
 use canopener_device::faults::Fault;
 use canopener_testkit::browser::{self, png_size, tags};
 use canopener_testkit::fixture::{self, ScratchDir};
@@ -14,7 +14,7 @@ use canopener_testkit::fixture::{self, ScratchDir};
 /// A run of every suite against the demo's device (`test_data/cia401_full_io.eds`, so every suite
 /// applies) with `faults`, as `canopener demo` runs it.
 fn run(faults: &[Fault]) -> Report {
-    demo::run(faults, "2024-01-01T00:00:00Z", None, |_| {})
+    tour::run(faults, "2024-01-01T00:00:00Z", None, |_| {})
         .expect("the demo device runs")
         .report
 }

@@ -13,7 +13,7 @@
 use std::time::Duration;
 
 use canopener_bus_engine::SubmitError;
-use canopener_bus_engine::network::SendError;
+use canopener_bus_engine::virtual_bus::SendError;
 use canopener_can::{CanFrame, Core, Instant};
 use canopener_transport::{BusSpec, CanBus, TransportError, WallClock};
 

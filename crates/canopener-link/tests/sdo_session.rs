@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use canopener_bus_engine::network::Timing;
+use canopener_bus_engine::virtual_bus::Timing;
 use canopener_can::{Bitrate, Instant};
 use canopener_device::application::NoApplication;
 use canopener_device::device::Device;
@@ -31,7 +31,7 @@ fn link(timing: Timing, nodes: &[u8]) -> VirtualLink<Device> {
     for &node in nodes {
         link.attach(device(node));
     }
-    link.network_mut().record();
+    link.virtual_bus_mut().record();
     link
 }
 
@@ -40,7 +40,7 @@ fn hex(bytes: &[u8]) -> String {
 }
 
 fn bus_lines(link: &mut VirtualLink<Device>) -> Vec<String> {
-    link.network_mut()
+    link.virtual_bus_mut()
         .take_recording()
         .iter()
         .map(|f| format!("{} {}", f.at.as_micros(), f.frame))
@@ -126,7 +126,7 @@ fn refusals_and_silence_are_transfer_errors_with_the_abort_on_the_bus() {
 fn a_cancelled_link_aborts_the_transfer_on_the_bus() {
     let cancel = Cancel::new();
     let mut link = link(Timing::Ideal, &[]).with_cancel(cancel.clone());
-    link.network_mut().record();
+    link.virtual_bus_mut().record();
     cancel.cancel();
     let mut session = SdoSession::new(&mut link, 5, Duration::from_millis(300)).unwrap();
     let error = session

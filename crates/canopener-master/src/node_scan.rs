@@ -259,7 +259,7 @@ pub fn identify(results: &[ScanResult]) -> Vec<ScanRow> {
 
 #[cfg(test)]
 mod tests {
-    use canopener_bus_engine::network::{BusFrame, Timing};
+    use canopener_bus_engine::virtual_bus::{BusFrame, Timing};
     use canopener_device::application::NoApplication;
     use canopener_device::device::Device;
     use canopener_testkit::net::Net;

@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use canopener_bus_engine::network::StationId;
+use canopener_bus_engine::virtual_bus::StationId;
 use canopener_can::Instant;
 use canopener_device::energybus::EDS;
 use canopener_device::energybus::station::{DeviceFault, EnergyBusDevice, EnergyBusFault};
@@ -99,7 +99,7 @@ fn a_lost_heartbeat_is_answered_with_reset_node_and_the_device_comes_back() {
     let (mut net, stations, mut controller) = system(2, None);
     net.drive(&mut controller, at(30), |c, _| c.operating().len() == 2);
     // Node 3 is cut off the bus: its heartbeat stops, and it misses the reset.
-    net.network_mut().disconnect(stations[1]);
+    net.virtual_bus_mut().disconnect(stations[1]);
     let lost = net.now();
     let events = net.drive(&mut controller, lost + Duration::from_secs(1), |_, events| {
         events.contains(&ControllerEvent::ResetSent { node: node(3) })
@@ -115,7 +115,7 @@ fn a_lost_heartbeat_is_answered_with_reset_node_and_the_device_comes_back() {
     );
     assert_eq!(controller.operating(), [node(2)]);
     // Back on the bus with its old node-ID: reset once, found again, walked again.
-    net.network_mut().reconnect(stations[1]);
+    net.virtual_bus_mut().reconnect(stations[1]);
     let events = net.drive(&mut controller, net.now() + Duration::from_secs(20), |c, _| {
         c.operating().len() == 2
     });

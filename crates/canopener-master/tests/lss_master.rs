@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use canopener_bus_engine::network::{BusFrame, StationId, Timing};
+use canopener_bus_engine::virtual_bus::{BusFrame, StationId, Timing};
 use canopener_can::Instant;
 use canopener_device::application::NoApplication;
 use canopener_device::device::{self, Device};

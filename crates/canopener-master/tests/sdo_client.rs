@@ -6,7 +6,7 @@
 use canopener_can::Core;
 use std::time::Duration;
 
-use canopener_bus_engine::network::StationId;
+use canopener_bus_engine::virtual_bus::StationId;
 use canopener_can::{CanFrame, Instant};
 use canopener_device::application::NoApplication;
 use canopener_device::device::Device;
@@ -71,7 +71,9 @@ impl Net {
 
     /// The bus loses every frame `lose` says yes to.
     fn losing(mut self, mut lose: impl FnMut(&CanFrame) -> bool + Send + 'static) -> Net {
-        self.net.network_mut().lose_when(move |seen| lose(&seen.frame));
+        self.net
+            .virtual_bus_mut()
+            .lose_when(move |seen| lose(&seen.frame));
         self
     }
 

@@ -8,7 +8,7 @@
 use std::sync::LazyLock;
 use std::time::Duration;
 
-use canopener_bus_engine::network::{NodeEvent, StationId};
+use canopener_bus_engine::virtual_bus::{NodeEvent, StationId};
 use canopener_can::Instant;
 use canopener_device::application::NoApplication;
 use canopener_device::device::{Device, DeviceEvent};
@@ -173,9 +173,9 @@ impl Net {
     fn plug(&mut self, index: usize, plugged: bool) {
         let station = self.devices[index];
         if plugged {
-            self.net.network_mut().reconnect(station);
+            self.net.virtual_bus_mut().reconnect(station);
         } else {
-            self.net.network_mut().disconnect(station);
+            self.net.virtual_bus_mut().disconnect(station);
         }
     }
 

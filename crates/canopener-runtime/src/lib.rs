@@ -33,11 +33,11 @@ pub mod mbt_sim;
 
 pub mod candump_file;
 pub mod capture;
-pub mod demo;
 pub mod generate;
 pub mod hub;
 mod pacing;
 pub mod replay;
 pub mod send;
+pub mod session_replay;
 #[cfg(test)]
 mod test_support;

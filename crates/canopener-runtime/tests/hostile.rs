@@ -7,7 +7,7 @@
 
 use std::time::Duration;
 
-use canopener_bus_engine::network::Timing;
+use canopener_bus_engine::virtual_bus::Timing;
 use canopener_can::Instant;
 use canopener_eds::model::Eds;
 use canopener_link::link::{Flow, LinkError};

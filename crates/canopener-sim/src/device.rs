@@ -319,7 +319,7 @@ impl Core for SimulatedDevice {
 
 #[cfg(test)]
 mod tests {
-    use canopener_bus_engine::network::Timing;
+    use canopener_bus_engine::virtual_bus::Timing;
 
     use super::*;
     use crate::plan::{Description, plan};
@@ -372,7 +372,7 @@ mod tests {
         let eds = base_eds_with(&dir, "time.eds", TIME_1012);
         let mut bus = Simulation::new(Timing::Ideal).device(&eds, 5).start().unwrap();
         bus.run_until(Instant::ZERO + Duration::from_millis(500)).unwrap();
-        bus.network_mut().record();
+        bus.virtual_bus_mut().record();
         SdoSession::new(&mut bus, 5, Duration::from_millis(100))
             .unwrap()
             .write(0x1012, 0, 0x4000_0100u32.to_le_bytes().to_vec())
@@ -380,7 +380,7 @@ mod tests {
         bus.run_until(Instant::ZERO + Duration::from_millis(2600))
             .unwrap();
         let time: Vec<String> = bus
-            .network_mut()
+            .virtual_bus_mut()
             .take_recording()
             .iter()
             .filter(|f| f.frame.to_string().starts_with("100#"))

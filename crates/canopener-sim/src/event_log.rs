@@ -364,8 +364,8 @@ mod tests {
 
     fn entries(bus: &mut SimulatedBus) -> Vec<LogEntry> {
         let mut entries = Vec::new();
-        while let Some(event) = bus.network_mut().poll_event() {
-            let sim = bus.network().node(event.node).expect("a device");
+        while let Some(event) = bus.virtual_bus_mut().poll_event() {
+            let sim = bus.virtual_bus().node(event.node).expect("a device");
             entries.extend(LogEntry::event(sim, &event.event));
         }
         entries
@@ -407,7 +407,7 @@ mod tests {
     #[test]
     fn the_start_names_file_bus_and_an_unconfigured_node() {
         let mut bus = Simulation::ideal().file(base_eds()).start().unwrap();
-        let (_, sim) = bus.network_mut().nodes().next().expect("one device");
+        let (_, sim) = bus.virtual_bus_mut().nodes().next().expect("one device");
         let started = LogEntry::started(sim, "simulated bus (ideal timing)");
         assert_eq!(started.node, Some(UNCONFIGURED));
         assert!(

@@ -20,7 +20,7 @@
 
 use std::path::{Path, PathBuf};
 
-use canopener_bus_engine::network::Timing;
+use canopener_bus_engine::virtual_bus::Timing;
 use canopener_can::{Bitrate, Instant};
 use canopener_device::faults::Fault;
 
@@ -195,7 +195,7 @@ impl Simulation {
 mod tests {
     use std::time::Duration;
 
-    use canopener_bus_engine::network::NodeEvent;
+    use canopener_bus_engine::virtual_bus::NodeEvent;
     use canopener_device::device::DeviceEvent;
     use canopener_device::faults::DEFAULT_SDO_DELAY;
 
@@ -207,11 +207,11 @@ mod tests {
 
     fn described(bus: &mut SimulatedBus) -> Vec<(Instant, LogEntry)> {
         let events: Vec<NodeEvent<DeviceEvent>> =
-            std::iter::from_fn(|| bus.network_mut().poll_event()).collect();
+            std::iter::from_fn(|| bus.virtual_bus_mut().poll_event()).collect();
         events
             .iter()
             .filter_map(|event| {
-                let sim = bus.network().node(event.node)?;
+                let sim = bus.virtual_bus().node(event.node)?;
                 LogEntry::event(sim, &event.event).map(|entry| (event.at, entry))
             })
             .collect()
@@ -228,7 +228,7 @@ mod tests {
             .first_node_id(Some(5))
             .start()
             .unwrap();
-        bus.network_mut().record();
+        bus.virtual_bus_mut().record();
         // Node 5 consumes node 6's heartbeat (1016h:01 = node 6, 1000 ms); node 6 beats every 100 ms.
         let timeout = Duration::from_millis(100);
         SdoSession::new(&mut bus, 5, timeout)
@@ -242,7 +242,7 @@ mod tests {
         bus.run_until(Instant::ZERO + Duration::from_millis(250)).unwrap();
 
         let frames: Vec<String> = bus
-            .network_mut()
+            .virtual_bus_mut()
             .take_recording()
             .iter()
             .map(|f| format!("{} {}", f.at.as_micros(), f.frame))
@@ -287,7 +287,7 @@ mod tests {
             "CANopenNode__CANopenSocket__examples__basicDevice__basicDevice.eds",
         );
         let mut bus = Simulation::ideal().device(&eds, 5).start().unwrap();
-        let (_, sim) = bus.network().nodes().next().expect("one device");
+        let (_, sim) = bus.virtual_bus().nodes().next().expect("one device");
         assert_eq!(sim.application(), ApplicationKind::Cia401);
         assert!(sim.application_is_auto());
         let started = LogEntry::started(sim, "virtual:test");
@@ -298,7 +298,7 @@ mod tests {
             "{}",
             started.text
         );
-        bus.network_mut().record();
+        bus.virtual_bus_mut().record();
         bus.send(&frame("000#0105")).unwrap();
         let timeout = Duration::from_millis(100);
         let mut session = SdoSession::new(&mut bus, 5, timeout).unwrap();
@@ -306,7 +306,7 @@ mod tests {
         session.write(0x2001, 0, vec![0xF0]).unwrap();
         assert_eq!(session.read(0x6000, 1).unwrap(), [0xF0]);
         let tpdos: Vec<String> = bus
-            .network_mut()
+            .virtual_bus_mut()
             .take_recording()
             .iter()
             .filter(|f| f.frame.id().as_raw() == 0x185)
@@ -323,7 +323,7 @@ mod tests {
             .application(ApplicationKind::None)
             .start()
             .unwrap();
-        let (_, sim) = bus.network().nodes().next().expect("one device");
+        let (_, sim) = bus.virtual_bus().nodes().next().expect("one device");
         assert_eq!(sim.application(), ApplicationKind::None);
         assert!(
             sim.device().od().object(0x2000).is_empty(),
@@ -332,7 +332,7 @@ mod tests {
         // A description of another profile runs nothing, and says why.
         let other = canopener_testkit::corpus::eds("CANopenNode__CANopenNode__example__DS301_profile.eds");
         let bus = Simulation::ideal().device(&other, 5).start().unwrap();
-        let (_, sim) = bus.network().nodes().next().expect("one device");
+        let (_, sim) = bus.virtual_bus().nodes().next().expect("one device");
         assert_eq!(sim.application(), ApplicationKind::None);
         assert!(
             LogEntry::started(sim, "virtual:test")
@@ -353,7 +353,7 @@ mod tests {
             .start()
             .unwrap();
         let stores: Vec<PathBuf> = bus
-            .network()
+            .virtual_bus()
             .nodes()
             .filter_map(|(_, sim)| sim.store_path().map(Path::to_owned))
             .collect();

@@ -10,7 +10,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 use std::time::Duration;
 
-use canopener_bus_engine::network::Timing;
+use canopener_bus_engine::virtual_bus::Timing;
 use canopener_can::Instant;
 use canopener_link::link::{Flow, LinkError};
 use canopener_link::system_watch::SystemWatch;

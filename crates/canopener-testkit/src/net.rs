@@ -1,7 +1,7 @@
 //! The one multi-core test harness: cores on a simulated bus on virtual time, every frame recorded as a
 //! timestamped trace line.
 //!
-//! It is a thin layer over [`Network`] (the same loop the runtime's virtual bus uses): a tap to inject
+//! It is a thin layer over [`VirtualBus`] (the same loop the runtime's virtual bus uses): a tap to inject
 //! frames written in candump compact form, the recording rendered as `"<ms>.<µs> <frame>"` lines, and
 //! [`Net::drive`] to run a core under test (a master core, say) against the nodes through the tap.
 //! Several kinds of core on one bus are one enum made with [`cores!`](crate::cores).
@@ -9,20 +9,20 @@
 use std::fmt::Debug;
 use std::time::Duration;
 
-use canopener_bus_engine::network::{BusFrame, Network, NodeEvent, StationId, Timing};
+use canopener_bus_engine::virtual_bus::{BusFrame, NodeEvent, StationId, Timing, VirtualBus};
 use canopener_can::{CanFrame, Core, Instant};
 
 use crate::trace::{frame, stamp};
 
 /// Cores on one simulated bus, with a tap for the test (see the [module docs](self)).
 pub struct Net<N: Core> {
-    network: Network<N>,
+    bus: VirtualBus<N>,
     tap: StationId,
 }
 
 impl<N: Core + Debug> Debug for Net<N> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Net").field("network", &self.network).finish()
+        f.debug_struct("Net").field("bus", &self.bus).finish()
     }
 }
 
@@ -34,15 +34,15 @@ impl<N: Core> Net<N> {
 
     /// An empty bus with `timing`, recording every frame, at virtual time zero.
     pub fn new(timing: Timing) -> Net<N> {
-        let mut network = Network::new(timing);
-        let tap = network.tap();
-        network.record();
-        Net { network, tap }
+        let mut bus = VirtualBus::new(timing);
+        let tap = bus.tap();
+        bus.record();
+        Net { bus, tap }
     }
 
     /// Puts a core on the bus; frames it already has waiting go out first.
     pub fn attach(&mut self, node: N) -> StationId {
-        self.network.attach(node)
+        self.bus.attach(node)
     }
 
     /// The test's own station (frames it injects come from here).
@@ -52,12 +52,12 @@ impl<N: Core> Net<N> {
 
     /// The virtual time.
     pub fn now(&self) -> Instant {
-        self.network.now()
+        self.bus.now()
     }
 
     /// Runs everything due up to and including `until`.
     pub fn advance(&mut self, until: Instant) {
-        self.network
+        self.bus
             .run_until(until, None)
             .expect("the simulated bus takes the frames");
     }
@@ -76,10 +76,10 @@ impl<N: Core> Net<N> {
 
     /// Sends `frame` from the tap now and lets everything due at this instant happen.
     pub fn send(&mut self, frame: CanFrame) {
-        self.network
+        self.bus
             .send(self.tap, frame)
             .expect("the simulated bus takes the frame");
-        self.network.settle().expect("the simulated bus takes the frames");
+        self.bus.settle().expect("the simulated bus takes the frames");
     }
 
     /// The frames on the bus since the last call, as `"<ms>.<µs> <frame>"` (` (lost)` appended to
@@ -90,17 +90,17 @@ impl<N: Core> Net<N> {
 
     /// The frames on the bus since the last call.
     pub fn bus_frames(&mut self) -> Vec<BusFrame> {
-        self.network.take_recording()
+        self.bus.take_recording()
     }
 
     /// The nodes' events since the last call.
     pub fn events(&mut self) -> Vec<NodeEvent<N::Event>> {
-        std::iter::from_fn(|| self.network.poll_event()).collect()
+        std::iter::from_fn(|| self.bus.poll_event()).collect()
     }
 
     /// What the tap received since the last call.
     pub fn received(&mut self) -> Vec<(Instant, CanFrame)> {
-        std::iter::from_fn(|| self.network.take_received(self.tap)).collect()
+        std::iter::from_fn(|| self.bus.take_received(self.tap)).collect()
     }
 
     /// The node at `id`.
@@ -108,7 +108,7 @@ impl<N: Core> Net<N> {
     /// # Panics
     /// When `id` is the tap or not on this bus: a mistake in the test.
     pub fn node(&self, id: StationId) -> &N {
-        self.network.node(id).expect("a node of this bus")
+        self.bus.node(id).expect("a node of this bus")
     }
 
     /// The node at `id`, mutably (see [`Net::node`]).
@@ -116,12 +116,12 @@ impl<N: Core> Net<N> {
     /// # Panics
     /// When `id` is the tap or not on this bus.
     pub fn node_mut(&mut self, id: StationId) -> &mut N {
-        self.network.node_mut(id).expect("a node of this bus")
+        self.bus.node_mut(id).expect("a node of this bus")
     }
 
-    /// The network, for wiring faults ([`Network::disconnect`], [`Network::lose_when`]) and statistics.
-    pub fn network_mut(&mut self) -> &mut Network<N> {
-        &mut self.network
+    /// The virtual bus, for wiring faults ([`VirtualBus::disconnect`], [`VirtualBus::lose_when`]) and statistics.
+    pub fn virtual_bus_mut(&mut self) -> &mut VirtualBus<N> {
+        &mut self.bus
     }
 
     /// Runs `core` (outside the bus, on the tap) against the nodes until `done` says so or `limit`
@@ -148,7 +148,7 @@ impl<N: Core> Net<N> {
                 continue;
             }
             events.extend(std::iter::from_fn(|| core.poll_event()));
-            let settled = !self.network.frames_in_flight();
+            let settled = !self.bus.frames_in_flight();
             if (settled && done(core, &events)) || self.now() >= limit {
                 while let Some(frame) = core.poll_transmit() {
                     self.send(frame);
@@ -161,7 +161,7 @@ impl<N: Core> Net<N> {
                 continue;
             }
             let until = core.poll_timeout().map_or(limit, |due| due.min(limit));
-            self.network
+            self.bus
                 .run_until(until, Some(self.tap))
                 .expect("the simulated bus takes the frames");
         }

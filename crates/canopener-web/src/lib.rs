@@ -17,13 +17,13 @@ pub mod assets;
 pub mod backend;
 pub mod check;
 pub mod compare;
-pub mod demo;
 pub mod events;
 pub mod monitor;
 pub mod pages;
 pub mod runs;
 pub mod server;
 pub mod store;
+pub mod tour;
 pub mod upload;
 
 pub use server::{Ready, ServeConfig, ServeError, SystemConfig, serve};

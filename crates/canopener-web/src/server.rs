@@ -462,8 +462,8 @@ async fn api_start(State(app): State<App>, Json(body): Json<StartBody>) -> Respo
     };
     let (eds_name, eds_bytes) = if body.eds == "bundled" {
         (
-            canopener_conformance::demo::EDS_NAME.to_owned(),
-            canopener_conformance::demo::EDS.to_vec(),
+            canopener_conformance::tour::EDS_NAME.to_owned(),
+            canopener_conformance::tour::EDS.to_vec(),
         )
     } else {
         match app.runs.store().description(&body.eds) {

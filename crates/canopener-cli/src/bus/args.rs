@@ -161,7 +161,7 @@ pub(crate) struct DecodeArgs {
 
 /// What `canopener demo --monitor` was asked (`demo/args.rs` parses the `demo` command).
 #[derive(Debug)]
-pub(crate) struct DemoArgs {
+pub(crate) struct SessionReplayArgs {
     /// The bus instead of an in-process hub.
     pub(crate) bus: Option<String>,
     /// Replay speed factor (0 = as fast as possible).

@@ -1,7 +1,7 @@
 //! `canopener demo`: the product tour. A simulated CiA 401 device from the bundled EDS on the embedded
 //! virtual bus: its EDS checked, every conformance suite run against it and the HTML report written; then
 //! the same with one fault switched on. Prints a short narrative (or one JSON summary) naming the files.
-//! The work is `canopener_conformance::demo`'s; this module only writes the files and talks.
+//! The work is `canopener_conformance::tour`'s; this module only writes the files and talks.
 //!
 //! Exit status: 0 the clean device passed and the faulty one failed (the tour showed what it should),
 //! 6 otherwise, 5 a report could not be written, 130 interrupted.
@@ -10,9 +10,9 @@ use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
-use canopener_conformance::demo::{self, EdsCheck};
 use canopener_conformance::model::{Report, Verdict, rfc3339_utc};
 use canopener_conformance::render::html;
+use canopener_conformance::tour::{self, EdsCheck};
 use canopener_device::faults::Fault;
 use canopener_files::{self as files, create_dir_all, write_atomic};
 use canopener_runtime::clock::wall_time;
@@ -34,10 +34,10 @@ pub(crate) fn run(args: DemoArgs) -> CliResult {
     let dir = args.dir.as_path();
     create_dir_all(dir).map_err(write_failed)?;
     let mut written = Written::default();
-    written.write(&dir.join(demo::EDS_NAME), demo::EDS)?;
-    let check = demo::check_eds();
+    written.write(&dir.join(tour::EDS_NAME), tour::EDS)?;
+    let check = tour::check_eds();
     if text {
-        print_stdout(&intro(&check, &dir.join(demo::EDS_NAME)))?;
+        print_stdout(&intro(&check, &dir.join(tour::EDS_NAME)))?;
     }
     let started = wall_time();
     let scenarios = [(None, "clean"), (Some(args.fault), "fault")];
@@ -47,7 +47,7 @@ pub(crate) fn run(args: DemoArgs) -> CliResult {
     for (step, (fault, name)) in scenarios.into_iter().enumerate() {
         let faults: Vec<Fault> = fault.into_iter().collect();
         let offset = (step * tests) as u64;
-        let outcome = demo::run(&faults, &rfc3339_utc(wall_time()), Some(stop.token()), |p| {
+        let outcome = tour::run(&faults, &rfc3339_utc(wall_time()), Some(stop.token()), |p| {
             bar.set_position(offset + p.done as u64);
             if let Some(test) = p.current {
                 bar.set_message(format!("{name}: {}", test.id));
@@ -135,7 +135,7 @@ impl Run {
                 let _ = writeln!(
                     out,
                     "{step}. Every conformance suite against the simulated device (node {}, on virtual time):",
-                    demo::NODE
+                    tour::NODE
                 );
             }
             Some(fault) => {
@@ -262,7 +262,7 @@ fn summary_json(check: &EdsCheck, runs: &[Run], written: &Written, took: f64) ->
     let paths = |list: &[PathBuf]| -> Vec<String> { list.iter().map(|p| p.display().to_string()).collect() };
     let summary = json!({
         "eds": {
-            "file": demo::EDS_NAME,
+            "file": tour::EDS_NAME,
             "objects": check.objects,
             "errors": check.errors,
             "warnings": check.warnings,

@@ -65,13 +65,13 @@ pub(crate) fn run(args: ServeArgs) -> CliResult {
 
 /// `canopener demo --serve`: the tour's system written into `dir`, served.
 pub(crate) fn demo(dir: &Path, listen: std::net::SocketAddr) -> CliResult {
-    let (config, extra) = canopener_web::demo::prepare(dir, listen, None).map_err(serve_error)?;
+    let (config, extra) = canopener_web::tour::prepare(dir, listen, None).map_err(serve_error)?;
     let stop = StopFlag::install()?;
     eprintln!(
         "the tour: a forwarder's two CANopen networks simulated from {}, a cable cut and repaired every {} s, \
          the demo's conformance runs in the history ({})",
         dir.join("system").display(),
-        canopener_web::demo::CUT_FOR.as_secs(),
+        canopener_web::tour::CUT_FOR.as_secs(),
         dir.display()
     );
     canopener_web::serve(config, stop.token(), Some(extra), announce).map_err(serve_error)

@@ -95,7 +95,7 @@ fn virtual_boot(
     let report = boot(&mut bus, limit, linger)?;
     if let Some(node) = options.hand_over.and_then(NodeId::new)
         && let Some((id, _)) = controller(&bus)
-        && let Some(Station::Controller(c)) = bus.network_mut().node_mut(id)
+        && let Some(Station::Controller(c)) = bus.virtual_bus_mut().node_mut(id)
     {
         c.hand_over(node);
     }

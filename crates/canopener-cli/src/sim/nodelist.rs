@@ -52,7 +52,11 @@ pub(crate) fn run(path: &Path, args: &SimArgs) -> CliResult {
             BusLink::new(open_bus(Some(spec), "sim --nodelist")?, stop.token())?,
         ));
     }
-    let devices: usize = sim.nets().iter().map(|n| n.link.network().nodes().count()).sum();
+    let devices: usize = sim
+        .nets()
+        .iter()
+        .map(|n| n.link.virtual_bus().nodes().count())
+        .sum();
     eprintln!(
         "simulating {devices} device(s) on {} network(s) of {}; type `cut CABLE`, `repair CABLE`, `kill DEVICE`, \
          `revive DEVICE`, `power-off DOMAIN`, `power-on DOMAIN` or `repair-all`; Ctrl-C ends",

@@ -2,7 +2,7 @@
 
 use std::collections::VecDeque;
 
-use canopener_bus_engine::network::{StationId, Timing};
+use canopener_bus_engine::virtual_bus::{StationId, Timing};
 use canopener_can::{CanFrame, Core, Instant, StandardId};
 use canopener_device::application::NoApplication;
 use canopener_device::device::Device;
@@ -106,14 +106,14 @@ impl Core for Node {
 /// A bus on ideal timing with `nodes`, recording from the start.
 pub(crate) fn bus(nodes: Vec<Node>) -> (VirtualLink<Node>, Vec<StationId>) {
     let mut link = VirtualLink::new(Timing::Ideal);
-    link.network_mut().record();
+    link.virtual_bus_mut().record();
     let stations = nodes.into_iter().map(|node| link.attach(node)).collect();
     (link, stations)
 }
 
 /// The frames recorded since the last call as `"<ms> <frame>"`, only those on `ids`.
 pub(crate) fn trace(link: &mut VirtualLink<Node>, ids: &[u32]) -> Vec<String> {
-    link.network_mut()
+    link.virtual_bus_mut()
         .take_recording()
         .iter()
         .filter(|f| ids.contains(&f.frame.id().as_raw()))
@@ -123,7 +123,7 @@ pub(crate) fn trace(link: &mut VirtualLink<Node>, ids: &[u32]) -> Vec<String> {
 
 /// The value of `index`:`sub` in the device at `station`.
 pub(crate) fn value(link: &VirtualLink<Node>, station: StationId, index: u16, sub: u8) -> Vec<u8> {
-    let device = match link.network().node(station) {
+    let device = match link.virtual_bus().node(station) {
         Some(Node::Device(device) | Node::SilentAfter { device, .. }) => device,
         _ => panic!("no device at {station:?}"),
     };

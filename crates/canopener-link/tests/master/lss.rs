@@ -136,7 +136,7 @@ fn scanning_a_device_that_never_leaves_waiting_configures_nothing() {
         "{found:?} {outcome:?}"
     );
     assert!(matches!(outcome, ScanOutcome::Failed(_)), "{outcome:?}");
-    let configured = match session.link_mut().network().node(stations[0]) {
+    let configured = match session.link_mut().virtual_bus().node(stations[0]) {
         Some(Node::Device(device)) => device.is_configured(),
         _ => panic!("no device"),
     };

@@ -37,7 +37,7 @@ pub fn serve(
         while let Some((_, frame)) = system.recv_until(Instant::ZERO + elapsed)? {
             bus.send(&frame)?;
         }
-        while let Some(event) = system.network_mut().poll_event() {
+        while let Some(event) = system.virtual_bus_mut().poll_event() {
             let operating = match &event.event {
                 StationEvent::Controller(ControllerEvent::Operating { node }) => Some(*node),
                 _ => None,
@@ -47,7 +47,7 @@ pub fn serve(
                 hand(system, operating);
             }
         }
-        system.network_mut().take_recording();
+        system.virtual_bus_mut().take_recording();
         let until = bus.now() + POLL;
         while let Some((_, frame)) = bus.recv_until(until)? {
             system.send(&frame)?;
@@ -60,7 +60,7 @@ fn hand(system: &mut EnergyBusBus, node: Option<NodeId>) {
     let (Some(node), Some((id, _))) = (node, controller(system)) else {
         return;
     };
-    if let Some(Station::Controller(c)) = system.network_mut().node_mut(id) {
+    if let Some(Station::Controller(c)) = system.virtual_bus_mut().node_mut(id) {
         c.hand_over(node);
     }
 }

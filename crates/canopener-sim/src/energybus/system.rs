@@ -7,7 +7,7 @@
 
 use std::time::Duration;
 
-use canopener_bus_engine::network::{StationId, Timing};
+use canopener_bus_engine::virtual_bus::{StationId, Timing};
 use canopener_can::{Bitrate, CanFrame, Core, Instant};
 use canopener_device::device::DeviceEvent;
 use canopener_device::energybus::station::{DeviceFault, EnergyBusDevice, StationError};
@@ -236,7 +236,7 @@ impl EnergyBusSystem {
     /// records every frame.
     pub fn start(&self) -> Result<EnergyBusBus, SystemError> {
         let mut bus = VirtualLink::new(self.timing);
-        bus.network_mut().record();
+        bus.virtual_bus_mut().record();
         for station in self.build()? {
             bus.attach(power_on(station, Instant::ZERO));
         }
@@ -279,7 +279,7 @@ pub struct BootReport {
 
 /// The controller's station on `bus`.
 pub fn controller(bus: &EnergyBusBus) -> Option<(StationId, &EnergyBusController)> {
-    bus.network().nodes().find_map(|(id, station)| match station {
+    bus.virtual_bus().nodes().find_map(|(id, station)| match station {
         Station::Controller(c) => Some((id, c.as_ref())),
         Station::Device(_) => None,
     })
@@ -287,7 +287,7 @@ pub fn controller(bus: &EnergyBusBus) -> Option<(StationId, &EnergyBusController
 
 /// The devices on `bus`, in order.
 pub fn devices(bus: &EnergyBusBus) -> Vec<(StationId, &EnergyBusDevice)> {
-    bus.network()
+    bus.virtual_bus()
         .nodes()
         .filter_map(|(id, station)| match station {
             Station::Device(d) => Some((id, d.as_ref())),
@@ -310,7 +310,7 @@ pub fn boot(bus: &mut EnergyBusBus, limit: Instant, linger: Duration) -> Result<
     while bus.now() < until {
         let next = (bus.now() + BOOT_SLICE).min(until);
         bus.idle_until(next)?;
-        while let Some(event) = bus.network_mut().poll_event() {
+        while let Some(event) = bus.virtual_bus_mut().poll_event() {
             let at = event.at;
             let StationEvent::Controller(event) = event.event else {
                 continue;
@@ -333,7 +333,7 @@ pub fn boot(bus: &mut EnergyBusBus, limit: Instant, linger: Duration) -> Result<
         }
     }
     report.frames = bus
-        .network_mut()
+        .virtual_bus_mut()
         .take_recording()
         .into_iter()
         .map(|f| (f.at, f.frame))
@@ -354,7 +354,7 @@ pub fn ready_for_test(
     let mut bus = system.start()?;
     if !system.has_controller() {
         bus.idle_until(Instant::ZERO + Duration::from_millis(100))?;
-        bus.network_mut().take_recording();
+        bus.virtual_bus_mut().take_recording();
         return Ok((bus, None));
     }
     if system.device_count() == 0 {
@@ -367,7 +367,7 @@ pub fn ready_for_test(
     });
     match (node, handed) {
         (Some(_), Some((id, node))) => {
-            if let Some(Station::Controller(c)) = bus.network_mut().node_mut(id) {
+            if let Some(Station::Controller(c)) = bus.virtual_bus_mut().node_mut(id) {
                 c.hand_over(node);
             }
         }
@@ -390,7 +390,7 @@ pub fn ready_for_test(
         }
         (None, _) => {}
     }
-    while bus.network_mut().poll_event().is_some() {}
+    while bus.virtual_bus_mut().poll_event().is_some() {}
     Ok((bus, Some(report)))
 }
 

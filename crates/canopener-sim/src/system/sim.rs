@@ -9,7 +9,7 @@
 
 use std::path::PathBuf;
 
-use canopener_bus_engine::network::{StationId, Timing};
+use canopener_bus_engine::virtual_bus::{StationId, Timing};
 use canopener_network::wiring::{Faults, Wiring};
 use canopener_network::{Topology, VertexKind};
 
@@ -57,7 +57,7 @@ impl SystemSim {
                 devices.push((files.dcf_of(device.vertex, net)?, device.node_id));
             }
             let link = Simulation::new(timing).devices(&devices).start()?;
-            let stations: Vec<StationId> = link.network().nodes().map(|(id, _)| id).collect();
+            let stations: Vec<StationId> = link.virtual_bus().nodes().map(|(id, _)| id).collect();
             let off = vec![false; stations.len()];
             nets.push(SimNet {
                 net,
@@ -107,8 +107,8 @@ impl SystemSim {
     pub fn set_faults(&mut self, faults: Faults) {
         for sim in &mut self.nets {
             let partition = sim.wiring.partition(&faults);
-            let now = sim.link.network().now();
-            let network = sim.link.network_mut();
+            let now = sim.link.virtual_bus().now();
+            let network = sim.link.virtual_bus_mut();
             for (index, &station) in sim.stations.iter().enumerate() {
                 match partition.devices[index] {
                     None => {
@@ -128,7 +128,7 @@ impl SystemSim {
             }
             let tap = sim.link.station();
             let root = partition.root.map_or(NOBODY, |segment| segment as u32);
-            sim.link.network_mut().set_segment(tap, root);
+            sim.link.virtual_bus_mut().set_segment(tap, root);
         }
         self.faults = faults;
     }

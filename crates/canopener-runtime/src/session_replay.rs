@@ -1,4 +1,4 @@
-//! The demo: a recorded CANopen session played by a traffic source while a second endpoint watches the
+//! The session replay behind `canopener demo --monitor`: a recorded CANopen session played by a traffic source while a second endpoint watches the
 //! same bus, by default through an in-process socketcand hub, so that every layer from the transports up
 //! runs end to end without hardware.
 
@@ -26,7 +26,7 @@ const POLL: Duration = Duration::from_millis(50);
 
 /// Why a demo could not run to its end.
 #[derive(Debug, thiserror::Error)]
-pub enum DemoError {
+pub enum ReplayError {
     /// The embedded session does not parse (a build problem, not a user's).
     #[error("the embedded demo log is broken at {0}")]
     BrokenLog(String),
@@ -48,17 +48,17 @@ pub enum DemoError {
 }
 
 /// The frames of [`DEMO_LOG`] with their recorded times.
-pub fn demo_session() -> Result<Vec<TimedFrame>, DemoError> {
+pub fn recorded_session() -> Result<Vec<TimedFrame>, ReplayError> {
     let (records, errors) = parse_log(DEMO_LOG);
     if let Some(err) = errors.first() {
-        return Err(DemoError::BrokenLog(err.to_string()));
+        return Err(ReplayError::BrokenLog(err.to_string()));
     }
     Ok(frames_of(records, None).0)
 }
 
 /// How a demo went.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DemoOutcome {
+pub struct ReplayReport {
     /// Frames the source sent.
     pub sent: u64,
     /// Frames the watcher received.
@@ -70,22 +70,22 @@ pub struct DemoOutcome {
 /// A bus with two endpoints open on it, a traffic source and a watcher; with an in-process hub serving
 /// it when no bus was given.
 #[derive(Debug)]
-pub struct Demo {
+pub struct SessionReplay {
     hub: Option<HubHandle>,
     spec: BusSpec,
     source: Box<dyn CanBus>,
     watcher: Box<dyn CanBus>,
 }
 
-impl Demo {
+impl SessionReplay {
     /// Opens both endpoints on `bus`; without one, starts a hub on a free loopback port and uses its bus
     /// `can0`.
-    pub fn open(bus: Option<BusSpec>) -> Result<Demo, DemoError> {
+    pub fn open(bus: Option<BusSpec>) -> Result<SessionReplay, ReplayError> {
         let (hub, spec) = match bus {
             Some(spec) => (None, spec),
             None => {
                 let hub = canopener_hub::spawn(HubConfig::new(SocketAddr::from(([127, 0, 0, 1], 0))))
-                    .map_err(DemoError::Hub)?;
+                    .map_err(ReplayError::Hub)?;
                 let addr = hub.local_addr();
                 let spec = BusSpec::Socketcand {
                     host: addr.ip().to_string(),
@@ -97,7 +97,7 @@ impl Demo {
         };
         let watcher = open(&spec)?;
         let source = open(&spec)?;
-        Ok(Demo {
+        Ok(SessionReplay {
             hub,
             spec,
             source,
@@ -125,8 +125,8 @@ impl Demo {
         pace: Pace,
         cancel: &Cancel,
         mut on_frame: impl FnMut(&Received) -> io::Result<()>,
-    ) -> Result<DemoOutcome, DemoError> {
-        let Demo {
+    ) -> Result<ReplayReport, ReplayError> {
+        let SessionReplay {
             hub,
             spec: _,
             mut source,
@@ -143,7 +143,7 @@ impl Demo {
                 .spawn_scoped(scope, || {
                     replay(&mut *source, frames, pace, 1, &source_stop, |_| {})
                 })
-                .map_err(DemoError::Thread)?;
+                .map_err(ReplayError::Thread)?;
             let watched = watch(
                 &mut *watcher,
                 expected,
@@ -153,8 +153,8 @@ impl Demo {
                 || source_thread.is_finished(),
             );
             source_stop.cancel();
-            let sent = source_thread.join().map_err(|_| DemoError::SourcePanicked)?;
-            Ok::<_, DemoError>((sent, watched))
+            let sent = source_thread.join().map_err(|_| ReplayError::SourcePanicked)?;
+            Ok::<_, ReplayError>((sent, watched))
         })?;
         let elapsed = started.elapsed();
         drop(source);
@@ -165,7 +165,7 @@ impl Demo {
         // A source failure explains a watcher's shortfall, so it is reported first.
         let sent = sent?.sent;
         let received = watched?;
-        Ok(DemoOutcome {
+        Ok(ReplayReport {
             sent,
             received,
             elapsed,
@@ -182,7 +182,7 @@ fn watch(
     source_stop: &Cancel,
     on_frame: &mut impl FnMut(&Received) -> io::Result<()>,
     source_done: impl Fn() -> bool,
-) -> Result<u64, DemoError> {
+) -> Result<u64, ReplayError> {
     let mut received = 0;
     let mut drain_deadline: Option<Instant> = None;
     while received < expected {
@@ -198,7 +198,7 @@ fn watch(
         }
         if let Some(frame) = bus.recv(POLL)? {
             received += 1;
-            on_frame(&frame).map_err(DemoError::Output)?;
+            on_frame(&frame).map_err(ReplayError::Output)?;
         }
     }
     Ok(received)
@@ -209,12 +209,12 @@ mod tests {
     use super::*;
 
     fn first_frames(count: usize) -> Vec<TimedFrame> {
-        demo_session().unwrap().into_iter().take(count).collect()
+        recorded_session().unwrap().into_iter().take(count).collect()
     }
 
     #[test]
     fn the_embedded_session_parses() {
-        let frames = demo_session().unwrap();
+        let frames = recorded_session().unwrap();
         assert!(frames.len() > 100, "{} frames", frames.len());
         assert!(
             frames.windows(2).all(|pair| pair[0].0 <= pair[1].0),
@@ -224,7 +224,7 @@ mod tests {
 
     #[test]
     fn every_frame_reaches_the_watcher_on_a_virtual_bus() {
-        let demo = Demo::open(Some("virtual:demo-rt-all".parse().unwrap())).unwrap();
+        let demo = SessionReplay::open(Some("virtual:demo-rt-all".parse().unwrap())).unwrap();
         assert_eq!(demo.hub_addr(), None);
         assert_eq!(demo.spec().to_string(), "virtual:demo-rt-all");
         let frames = first_frames(50);
@@ -242,7 +242,7 @@ mod tests {
 
     #[test]
     fn the_in_process_hub_carries_the_session() {
-        let demo = Demo::open(None).unwrap();
+        let demo = SessionReplay::open(None).unwrap();
         let addr = demo.hub_addr().expect("an in-process hub");
         assert_eq!(
             demo.spec().to_string(),
@@ -260,16 +260,16 @@ mod tests {
 
     #[test]
     fn a_failing_front_end_stops_the_source_and_reports_its_error() {
-        let demo = Demo::open(Some("virtual:demo-rt-output".parse().unwrap())).unwrap();
+        let demo = SessionReplay::open(Some("virtual:demo-rt-output".parse().unwrap())).unwrap();
         // Recorded timing: without the stop the source would take the whole session's seconds.
-        let frames = demo_session().unwrap();
+        let frames = recorded_session().unwrap();
         let started = Instant::now();
         let err = demo
             .run(&frames, Pace::recorded(1.0).unwrap(), &Cancel::new(), |_| {
                 Err(io::Error::from(io::ErrorKind::BrokenPipe))
             })
             .unwrap_err();
-        assert!(matches!(err, DemoError::Output(_)), "{err}");
+        assert!(matches!(err, ReplayError::Output(_)), "{err}");
         assert!(
             started.elapsed() < Duration::from_secs(3),
             "{:?}",
@@ -279,8 +279,8 @@ mod tests {
 
     #[test]
     fn a_cancel_ends_the_demo_early() {
-        let demo = Demo::open(Some("virtual:demo-rt-cancel".parse().unwrap())).unwrap();
-        let frames = demo_session().unwrap();
+        let demo = SessionReplay::open(Some("virtual:demo-rt-cancel".parse().unwrap())).unwrap();
+        let frames = recorded_session().unwrap();
         let cancel = Cancel::new();
         let outcome = demo
             .run(&frames, Pace::recorded(1.0).unwrap(), &cancel, |_| {

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::sync::mpsc::channel;
 use std::time::Duration;
 
-use canopener_conformance::demo::DEFAULT_FAULT;
+use canopener_conformance::tour::DEFAULT_FAULT;
 
 use crate::backend::{self, Cancel, Target};
 use crate::runs::{Runs, StartRun};
@@ -98,9 +98,9 @@ fn tour(file: &Path, runs: &Arc<Runs>, cancel: &Cancel) {
         let start = runs.start(StartRun {
             target: Target::Simulated(faults),
             bus_label: "simulated".to_owned(),
-            node: canopener_conformance::demo::NODE,
-            eds_name: canopener_conformance::demo::EDS_NAME.to_owned(),
-            eds_bytes: canopener_conformance::demo::EDS.to_vec(),
+            node: canopener_conformance::tour::NODE,
+            eds_name: canopener_conformance::tour::EDS_NAME.to_owned(),
+            eds_bytes: canopener_conformance::tour::EDS.to_vec(),
             suites: canopener_conformance::catalogue::SUITES
                 .iter()
                 .map(|s| (*s).to_owned())

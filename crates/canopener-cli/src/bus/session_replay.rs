@@ -1,4 +1,4 @@
-//! `canopener demo`: the embedded default. An in-process socketcand hub, a traffic source replaying a recorded
+//! `canopener demo --monitor`: the recorded session replayed. An in-process socketcand hub, a traffic source replaying a recorded
 //! CANopen session (four nodes: boot-up, NMT, SDO expedited/segmented/block, PDOs with SYNC, EMCY, heartbeat,
 //! node guarding, LSS, TIME) and the decoding monitor as a second client, so that every layer of the
 //! foundation runs end to end with no hardware. It exits non-zero if the monitor missed a frame or decoded
@@ -10,18 +10,18 @@ use std::time::Duration;
 use canopener_can::bits::frame_bits;
 use canopener_can::{Bitrate, CanFrame};
 use canopener_runtime::capture::interface_name;
-use canopener_runtime::demo::{Demo, DemoError, DemoOutcome, demo_session};
 use canopener_runtime::replay::Pace;
+use canopener_runtime::session_replay::{ReplayError, ReplayReport, SessionReplay, recorded_session};
 use canopener_transport::{BusSpec, spec_from_env_or};
 
 use crate::args::OutputFormat;
-use crate::bus::args::DemoArgs;
+use crate::bus::args::SessionReplayArgs;
 use crate::bus::monitor::{Monitor, service_key};
 use crate::error::{CliError, CliResult, stdout_error};
 use crate::output::print_stdout;
 use crate::stop::StopFlag;
 
-pub(crate) fn run(args: DemoArgs) -> CliResult {
+pub(crate) fn run(args: SessionReplayArgs) -> CliResult {
     let pace = if args.speed == 0.0 {
         Pace::BACK_TO_BACK
     } else {
@@ -32,14 +32,14 @@ pub(crate) fn run(args: DemoArgs) -> CliResult {
             ))
         })?
     };
-    let frames = demo_session().map_err(demo_error)?;
+    let frames = recorded_session().map_err(demo_error)?;
     let stop = StopFlag::install()?;
     let bus = args
         .bus
         .as_deref()
         .map(|arg| spec_from_env_or(Some(arg)))
         .transpose()?;
-    let demo = Demo::open(bus).map_err(demo_error)?;
+    let demo = SessionReplay::open(bus).map_err(demo_error)?;
     let spec = demo.spec().clone();
     let interface = interface_name(&spec);
 
@@ -85,10 +85,10 @@ pub(crate) fn run(args: DemoArgs) -> CliResult {
 }
 
 /// The demo's failures as the exit codes it has always had: the bus is the user's, the rest are ours.
-fn demo_error(err: DemoError) -> CliError {
+fn demo_error(err: ReplayError) -> CliError {
     match err {
-        DemoError::Bus(err) => CliError::Bus(err),
-        DemoError::Output(err) => stdout_error(err),
+        ReplayError::Bus(err) => CliError::Bus(err),
+        ReplayError::Output(err) => stdout_error(err),
         other => CliError::Internal(anyhow::anyhow!(other)),
     }
 }
@@ -101,7 +101,7 @@ fn session_span(frames: &[(canopener_can::Instant, CanFrame)]) -> Duration {
 }
 
 struct Summary<'a> {
-    outcome: DemoOutcome,
+    outcome: ReplayReport,
     monitor: &'a Monitor,
     frames: &'a [(canopener_can::Instant, CanFrame)],
     spec: &'a BusSpec,

@@ -1,10 +1,10 @@
 //! Sans-IO cores on one simulated bus, on virtual time: the single loop behind the runtime's virtual
 //! bus and the test harness.
 //!
-//! A [`Network`] owns *nodes* (any [`Core`]: simulated devices, master cores) and *taps* (endpoints
-//! without a core, whose received frames queue up for whoever drives the network from outside, such as a
+//! A [`VirtualBus`] owns *nodes* (any [`Core`]: simulated devices, master cores) and *taps* (endpoints
+//! without a core, whose received frames queue up for whoever drives the bus from outside, such as a
 //! master session or a recorder). Every frame a station sends reaches every other station, as on a real
-//! bus. Time only moves when the driver calls [`Network::run_until`]; it then jumps from deadline to
+//! bus. Time only moves when the driver calls [`VirtualBus::run_until`]; it then jumps from deadline to
 //! deadline, so a run is a pure function of its inputs.
 //!
 //! Three timings: [`Timing::Ideal`] delivers a frame at the instant it is sent (exact, readable traces
@@ -12,10 +12,10 @@
 //! arbitration), [`Timing::BitAccurate`] arbitrates and times every frame with [`BusEngine`] at a bit
 //! rate (what a real wire would allow).
 //!
-//! Faults of the wiring are part of the model: a station can be [disconnected](Network::disconnect)
+//! Faults of the wiring are part of the model: a station can be [disconnected](VirtualBus::disconnect)
 //! (an unplugged connector or a broken drop cable: it neither sends nor receives), and frames can be
-//! [lost](Network::lose_when) by a predicate (recorded as lost, delivered to nobody). A cut cable
-//! splits the bus into [segments](Network::set_segment): stations hear only the stations of their own
+//! [lost](VirtualBus::lose_when) by a predicate (recorded as lost, delivered to nobody). A cut cable
+//! splits the bus into [segments](VirtualBus::set_segment): stations hear only the stations of their own
 //! segment, so devices beyond a cut keep talking among themselves.
 
 use std::collections::VecDeque;
@@ -37,7 +37,7 @@ pub enum Timing {
     BitAccurate(Bitrate),
 }
 
-/// A station of a [`Network`]: a node or a tap, numbered in the order they were added.
+/// A station of a [`VirtualBus`]: a node or a tap, numbered in the order they were added.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct StationId(usize);
 
@@ -57,7 +57,7 @@ pub struct BusFrame {
     pub from: StationId,
     /// The frame.
     pub frame: CanFrame,
-    /// Whether the bus lost it ([`Network::lose_when`]): nobody received it.
+    /// Whether the bus lost it ([`VirtualBus::lose_when`]): nobody received it.
     pub lost: bool,
 }
 
@@ -76,7 +76,7 @@ pub struct NodeEvent<E> {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum SendError {
     /// The station is a node (nodes send through their core) or does not exist.
-    #[error("station {0:?} is not a tap of this network")]
+    #[error("station {0:?} is not a tap of this bus")]
     NotATap(StationId),
     /// The bus engine refused the frame.
     #[error(transparent)]
@@ -84,7 +84,7 @@ pub enum SendError {
 }
 
 /// Sans-IO cores and taps on one simulated bus, on virtual time (see the [module docs](self)).
-pub struct Network<N: Core> {
+pub struct VirtualBus<N: Core> {
     timing: Timing,
     engine: Option<BusEngine>,
     now: Instant,
@@ -101,9 +101,9 @@ pub struct Network<N: Core> {
 /// Decides which frames the bus loses.
 type LossFilter = Box<dyn FnMut(&BusFrame) -> bool + Send>;
 
-impl<N: Core + std::fmt::Debug> std::fmt::Debug for Network<N> {
+impl<N: Core + std::fmt::Debug> std::fmt::Debug for VirtualBus<N> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Network")
+        f.debug_struct("VirtualBus")
             .field("timing", &self.timing)
             .field("now", &self.now)
             .field("stations", &self.stations)
@@ -126,20 +126,20 @@ enum StationKind<N> {
     Tap(VecDeque<(Instant, CanFrame)>),
 }
 
-impl<N: Core> Network<N> {
+impl<N: Core> VirtualBus<N> {
     /// Frames delivered at one instant without bit timing before the rest waits for the next call of
-    /// [`Network::run_until`]: a guard against two cores answering each other forever, which no correct
-    /// core does, but a network must not hang its driver.
+    /// [`VirtualBus::run_until`]: a guard against two cores answering each other forever, which no correct
+    /// core does, but a virtual bus must not hang its driver.
     pub const MAX_FRAMES_PER_INSTANT: usize = 100_000;
 
-    /// An empty network at virtual time zero.
-    pub fn new(timing: Timing) -> Network<N> {
+    /// An empty bus at virtual time zero.
+    pub fn new(timing: Timing) -> VirtualBus<N> {
         let (engine, delay) = match timing {
             Timing::Ideal => (None, Duration::ZERO),
             Timing::Delayed(delay) => (None, delay),
             Timing::BitAccurate(bitrate) => (Some(BusEngine::new(BusConfig { bitrate })), Duration::ZERO),
         };
-        Network {
+        VirtualBus {
             timing,
             engine,
             now: Instant::ZERO,
@@ -159,7 +159,7 @@ impl<N: Core> Network<N> {
         self.lose = Some(Box::new(lose));
     }
 
-    /// Unplugs a station: until [`Network::reconnect`] it neither sends (its frames are dropped before
+    /// Unplugs a station: until [`VirtualBus::reconnect`] it neither sends (its frames are dropped before
     /// the bus) nor receives. A node keeps running its timers meanwhile, as a powered device behind a
     /// broken cable does.
     pub fn disconnect(&mut self, station: StationId) {
@@ -184,7 +184,7 @@ impl<N: Core> Network<N> {
         }
     }
 
-    /// The segment a station is on ([`Network::set_segment`]).
+    /// The segment a station is on ([`VirtualBus::set_segment`]).
     pub fn segment(&self, station: StationId) -> Option<u32> {
         self.stations.get(station.0).map(|station| station.segment)
     }
@@ -196,7 +196,7 @@ impl<N: Core> Network<N> {
             .is_some_and(|station| station.connected)
     }
 
-    /// The timing the network was made with.
+    /// The timing the bus was made with.
     pub fn timing(&self) -> Timing {
         self.timing
     }
@@ -212,12 +212,12 @@ impl<N: Core> Network<N> {
     }
 
     /// Adds an endpoint without a core: frames other stations send queue up for
-    /// [`Network::take_received`], and [`Network::send`] puts frames on the bus from it.
+    /// [`VirtualBus::take_received`], and [`VirtualBus::send`] puts frames on the bus from it.
     pub fn tap(&mut self) -> StationId {
         self.add(StationKind::Tap(VecDeque::new()))
     }
 
-    /// Keeps every frame that goes over the bus from now on, for [`Network::take_recording`].
+    /// Keeps every frame that goes over the bus from now on, for [`VirtualBus::take_recording`].
     pub fn record(&mut self) {
         self.recording.get_or_insert_with(Vec::new);
     }
@@ -236,7 +236,7 @@ impl<N: Core> Network<N> {
     }
 
     /// The node at `id`, mutably. A core changed from outside may have frames to send or a new deadline:
-    /// the next [`Network::run_until`] collects them.
+    /// the next [`VirtualBus::run_until`] collects them.
     pub fn node_mut(&mut self, id: StationId) -> Option<&mut N> {
         match &mut self.stations.get_mut(id.0)?.kind {
             StationKind::Node(node) => Some(node),
@@ -319,7 +319,7 @@ impl<N: Core> Network<N> {
                 .is_some_and(|engine| engine.poll_timeout().is_some())
     }
 
-    /// Runs the network up to and including `until`: every frame sent, every timer and every frame
+    /// Runs the bus up to and including `until`: every frame sent, every timer and every frame
     /// end due by then, in time order. With `stop_at` a tap, it returns as soon as that tap has a frame
     /// to take (the time is then that frame's arrival), so a driver can answer it. Returns whether it
     /// stopped for the tap. Time never runs backwards: an `until` in the past only settles what is due now.
@@ -555,7 +555,7 @@ mod tests {
 
     #[test]
     fn ideal_timing_answers_at_the_core_deadline_and_the_tap_hears_it() {
-        let mut net = Network::new(Timing::Ideal);
+        let mut net = VirtualBus::new(Timing::Ideal);
         let echo = net.attach(Echo::new(0x601, 0x581, Duration::from_millis(3)));
         let tap = net.tap();
         net.record();
@@ -578,7 +578,7 @@ mod tests {
 
     #[test]
     fn bit_accurate_timing_delays_each_frame_by_its_length() {
-        let mut net = Network::new(Timing::BitAccurate(Bitrate::K500));
+        let mut net = VirtualBus::new(Timing::BitAccurate(Bitrate::K500));
         net.attach(Echo::new(0x601, 0x581, Duration::ZERO));
         let tap = net.tap();
         net.send(tap, frame(0x601, &[0x40, 0, 0, 0, 0, 0, 0, 0])).unwrap();
@@ -595,7 +595,7 @@ mod tests {
     #[test]
     fn runs_are_deterministic_and_time_never_goes_back() {
         let run = || {
-            let mut net = Network::new(Timing::BitAccurate(Bitrate::M1));
+            let mut net = VirtualBus::new(Timing::BitAccurate(Bitrate::M1));
             let tap = net.tap();
             for node in 0..4u16 {
                 net.attach(Echo::new(
@@ -618,7 +618,7 @@ mod tests {
 
     #[test]
     fn nodes_cannot_be_sent_from_as_taps() {
-        let mut net = Network::new(Timing::Ideal);
+        let mut net = VirtualBus::new(Timing::Ideal);
         let echo = net.attach(Echo::new(1, 2, Duration::ZERO));
         assert_eq!(net.send(echo, frame(1, &[])), Err(SendError::NotATap(echo)));
         assert_eq!(net.take_received(echo), None);
@@ -626,7 +626,7 @@ mod tests {
 
     #[test]
     fn delayed_timing_takes_the_delay_each_way() {
-        let mut net = Network::new(Timing::Delayed(Duration::from_millis(1)));
+        let mut net = VirtualBus::new(Timing::Delayed(Duration::from_millis(1)));
         net.attach(Echo::new(0x601, 0x581, Duration::from_millis(2)));
         let tap = net.tap();
         net.send(tap, frame(0x601, &[])).unwrap();
@@ -639,7 +639,7 @@ mod tests {
 
     #[test]
     fn an_unplugged_station_neither_sends_nor_receives_until_plugged_back() {
-        let mut net = Network::new(Timing::Ideal);
+        let mut net = VirtualBus::new(Timing::Ideal);
         let echo = net.attach(Echo::new(0x601, 0x581, Duration::ZERO));
         let tap = net.tap();
         net.disconnect(echo);
@@ -655,7 +655,7 @@ mod tests {
 
     #[test]
     fn stations_on_other_segments_do_not_hear_each_other_but_their_own_segment_does() {
-        let mut net = Network::new(Timing::Ideal);
+        let mut net = VirtualBus::new(Timing::Ideal);
         let near = net.attach(Echo::new(0x601, 0x581, Duration::ZERO));
         let far = net.attach(Echo::new(0x601, 0x582, Duration::ZERO));
         let tap = net.tap();
@@ -680,7 +680,7 @@ mod tests {
 
     #[test]
     fn lost_frames_are_recorded_and_reach_nobody() {
-        let mut net = Network::new(Timing::Ideal);
+        let mut net = VirtualBus::new(Timing::Ideal);
         let echo = net.attach(Echo::new(0x601, 0x581, Duration::ZERO));
         let tap = net.tap();
         net.record();

@@ -47,7 +47,7 @@ pub struct EdsCheck {
 
 /// Why the tour could not run.
 #[derive(Debug, thiserror::Error)]
-pub enum DemoError {
+pub enum TourError {
     /// The simulated device could not be built from the EDS (a build problem: the EDS is bundled).
     #[error("cannot simulate the bundled EDS: {0}")]
     Simulation(#[from] SimError),
@@ -83,7 +83,7 @@ pub fn run(
     started: &str,
     cancel: Option<Cancel>,
     on_progress: impl FnMut(Progress<'_>),
-) -> Result<FinishedRun, DemoError> {
+) -> Result<FinishedRun, TourError> {
     let loaded = canopener_eds::load(EDS);
     let eds_errors = Some(crate::cia301::eds::errors(&loaded, Some(EDS_NAME)));
     let model = DeviceModel::new(&loaded.eds, NODE);
