@@ -1,6 +1,13 @@
 //! Writing result files without losing data: a temporary file in the same directory, then a rename,
 //! so a crash or a full disk never leaves a half-written file; optionally the old file kept as `.bak`.
 
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does).
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
+
 use std::fs;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};

@@ -20,6 +20,12 @@
 //! - [`stimulus_program`]: the user's program that changes a device's inputs on a test rig.
 
 #![warn(missing_docs)]
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does).
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
 
 pub mod cancel;
 pub mod heartbeat_watch;

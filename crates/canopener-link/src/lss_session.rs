@@ -287,9 +287,9 @@ impl<L: Link> LssSession<L> {
     /// `Err(timeout)` when the device did not answer that inquiry.
     pub fn inquire_selected(&mut self, global: bool) -> Result<(LssAddress, Result<u8, Duration>), LssError> {
         let mut values = [0u32; 4];
-        for (idx, part) in LssAddressPart::ALL.into_iter().enumerate() {
+        for (idx, (slot, part)) in values.iter_mut().zip(LssAddressPart::ALL).enumerate() {
             match self.service(|master, now| master.inquire_address(now, part))? {
-                LssEvent::Inquired { value, .. } => values[idx] = value,
+                LssEvent::Inquired { value, .. } => *slot = value,
                 LssEvent::TimedOut { service, after } if idx == 0 && global => {
                     return Err(LssError::NoDevice { service, after });
                 }

@@ -93,7 +93,9 @@ pub fn execute<L: Link>(
     mut on_step: impl FnMut(&MapReport, usize),
 ) -> Result<(), SdoError> {
     for step in 0..report.steps.len() {
-        let (write, _) = &report.steps[step];
+        let Some((write, _)) = report.steps.get(step) else {
+            break;
+        };
         let outcome = match session.write(write.index, write.sub, write.data.clone()) {
             Ok(()) => StepOutcome::Ok,
             Err(SdoError::Transfer(error)) => StepOutcome::Failed(error),
@@ -101,7 +103,9 @@ pub fn execute<L: Link>(
             Err(other) => return Err(other),
         };
         let stop = outcome != StepOutcome::Ok;
-        report.steps[step].1 = outcome;
+        if let Some((_, recorded)) = report.steps.get_mut(step) {
+            *recorded = outcome;
+        }
         on_step(report, step);
         if stop {
             break;

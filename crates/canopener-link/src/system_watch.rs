@@ -81,7 +81,8 @@ impl SystemWatch {
                     }
                 }
             }
-            now = links[0].1.now().max(deadline);
+            // `links` is not empty (checked above); its first link's clock is the watch's.
+            now = links.first().map_or(now, |(_, link)| link.now()).max(deadline);
             self.monitor.handle_timeout(now);
             let events: Vec<Event> = std::iter::from_fn(|| self.monitor.poll_event()).collect();
             if let Flow::Done(()) = on_slice(now, &self.monitor, events)? {

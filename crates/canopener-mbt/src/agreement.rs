@@ -47,15 +47,21 @@ pub fn disagreements(model: &Model, max_states: usize) -> (Vec<Disagreement>, bo
     let mut found: Vec<Disagreement> = Vec::new();
     let mut truncated = false;
     while let Some(s) = queue.pop_front() {
-        let state = states[s].clone();
+        // Only positions in `states` are queued.
+        let Some(state) = states.get(s).cloned() else {
+            continue;
+        };
         let Ok(steps) = model.joint_steps(&state) else {
             continue;
         };
         // A state with an internal step due at once is left before anything can be observed.
         let transient = !steps.is_empty()
-            && steps
-                .iter()
-                .all(|(ts, label, _)| label.is_none() && model.transitions[ts[0]].window.is_none());
+            && steps.iter().all(|(ts, label, _)| {
+                label.is_none()
+                    && ts
+                        .first()
+                        .is_some_and(|t| model.transition_at(*t).window.is_none())
+            });
         for d in if transient {
             Vec::new()
         } else {
@@ -63,13 +69,13 @@ pub fn disagreements(model: &Model, max_states: usize) -> (Vec<Disagreement>, bo
         } {
             let (required, label, refuser) = d;
             let (path, trace) = path_to(&parent, s);
-            let own = model.component_of(&model.transitions[required]);
+            let own = model.component_of(model.transition_at(required));
             let last_of = |component: usize| {
                 path.iter()
                     .rev()
                     .flat_map(|ts| ts.iter())
                     .copied()
-                    .find(|t| model.component_of(&model.transitions[*t]) == component)
+                    .find(|t| model.component_of(model.transition_at(*t)) == component)
             };
             let led_by = path
                 .iter()
@@ -77,25 +83,31 @@ pub fn disagreements(model: &Model, max_states: usize) -> (Vec<Disagreement>, bo
                 .flat_map(|ts| ts.iter())
                 .copied()
                 .find(|t| {
-                    let t = &model.transitions[*t];
+                    let t = model.transition_at(*t);
                     t.kind == Kind::Input && model.component_of(t) == own
                 })
                 .or_else(|| last_of(own));
             let refuser_state = model.component_state(refuser, &state);
             // The refuser's step that moved it to the location it refuses in.
-            let slots: Vec<usize> = model.components[refuser]
+            let slots: Vec<usize> = model
+                .component_at(refuser)
                 .processes
                 .iter()
-                .map(|p| model.processes[*p].location_slot)
+                .map(|p| model.process_at(*p).location_slot)
                 .collect();
             let mut at = s;
             let mut refuser_entered_by = None;
-            while let Some((p, ts, _)) = &parent[at] {
-                if slots.iter().any(|slot| states[*p][*slot] != states[at][*slot]) {
+            while let Some(Some((p, ts, _))) = parent.get(at) {
+                let (before, after) = (states.get(*p), states.get(at));
+                let value = |state: Option<&Vec<i64>>, slot: usize| state.and_then(|s| s.get(slot)).copied();
+                if slots
+                    .iter()
+                    .any(|&slot| value(before, slot) != value(after, slot))
+                {
                     refuser_entered_by = ts
                         .iter()
                         .copied()
-                        .find(|t| model.component_of(&model.transitions[*t]) == refuser);
+                        .find(|t| model.component_of(model.transition_at(*t)) == refuser);
                     break;
                 }
                 at = *p;
@@ -124,9 +136,13 @@ pub fn disagreements(model: &Model, max_states: usize) -> (Vec<Disagreement>, bo
                 truncated = true;
                 continue;
             }
+            // A step is taken by at least one transition.
+            let Some(&first) = transitions.first() else {
+                continue;
+            };
             index.insert(next.clone(), states.len());
             states.push(next);
-            let kind = model.transitions[transitions[0]].kind;
+            let kind = model.transition_at(first).kind;
             parent.push(Some((s, transitions, model.aut_label(kind, label.as_ref()))));
             queue.push_back(states.len() - 1);
         }
@@ -138,7 +154,7 @@ pub fn disagreements(model: &Model, max_states: usize) -> (Vec<Disagreement>, bo
 fn path_to(parent: &[Option<(usize, Vec<usize>, String)>], mut s: usize) -> (Vec<Vec<usize>>, Vec<String>) {
     let mut steps = Vec::new();
     let mut labels = Vec::new();
-    while let Some((p, ts, label)) = &parent[s] {
+    while let Some(Some((p, ts, label))) = parent.get(s) {
         steps.push(ts.clone());
         labels.push(label.clone());
         s = *p;
@@ -166,7 +182,7 @@ fn unmet(model: &Model, state: &[i64]) -> Vec<(usize, String, usize)> {
     for (_, ts) in owed {
         let mut refusal: Option<(usize, String, usize)> = None;
         let answerable = ts.iter().any(|&t| {
-            let tr = &model.transitions[t];
+            let tr = model.transition_at(t);
             if tr.kind == Kind::Signal {
                 return match model.signal_joint(state, t) {
                     Ok(j) => !j.is_empty(),
@@ -217,13 +233,13 @@ pub fn check(model: &Model, max_states: usize) -> Vec<(usize, MbtDiagnostic)> {
         return out;
     }
     let place = |t: usize| {
-        let t = &model.transitions[t];
-        let file = &model.files[model.component_of(t)];
+        let t = model.transition_at(t);
+        let file = model.file_at(model.component_of(t));
         format!("{}:{}", file.origin, t.span.line)
     };
     let (found, _) = disagreements(model, max_states);
     for d in found {
-        let t = &model.transitions[d.required];
+        let t = model.transition_at(d.required);
         let file = model.component_of(t);
         let after = d
             .led_by
@@ -240,7 +256,7 @@ pub fn check(model: &Model, max_states: usize) -> Vec<(usize, MbtDiagnostic)> {
                 "in the composition {}: {after}this transition requires {} but {} refuses it in {}{entered}; no device can satisfy both",
                 model.name(),
                 d.label,
-                model.files[d.refuser].name,
+                model.file_at(d.refuser).name,
                 d.refuser_state,
             ),
         );
@@ -248,24 +264,24 @@ pub fn check(model: &Model, max_states: usize) -> Vec<(usize, MbtDiagnostic)> {
         diagnostic.help = Some(format!(
             "the tester never sends the input that leads there ({}{}); guard it with the state the other model reads (e.g. `when nmt@{{PreOperational, Operational}}`) or let the other model accept the output",
             if from > 0 { "... " } else { "" },
-            d.trace[from..].join(", ")
+            d.trace.get(from..).unwrap_or_default().join(", ")
         ));
         out.push((file, diagnostic));
     }
     // Resets: each component's initial state assumes its own reset stimuli only, so two that share
     // a gate must reset it alike.
     for (a, ca) in model.components.iter().enumerate() {
-        for cb in &model.components[a + 1..] {
+        for cb in model.components.iter().skip(a + 1) {
             // A component concerns a gate it holds or resets with.
             let concerns = |c: &crate::model::Component, key| {
-                c.gates.iter().any(|g| model.gates[*g].frame_key() == key)
-                    || c.resets.iter().any(|r| model.gates[r.gate].frame_key() == key)
+                c.gates.iter().any(|g| model.gate_at(*g).frame_key() == key)
+                    || c.resets.iter().any(|r| model.gate_at(r.gate).frame_key() == key)
             };
             let on_shared = |c: &crate::model::Component, other: &crate::model::Component| -> Vec<String> {
                 c.resets
                     .iter()
                     .filter(|r| {
-                        let key = model.gates[r.gate].frame_key();
+                        let key = model.gate_at(r.gate).frame_key();
                         concerns(c, key) && concerns(other, key)
                     })
                     .map(|r| model.label_text(r))
@@ -275,13 +291,13 @@ pub fn check(model: &Model, max_states: usize) -> Vec<(usize, MbtDiagnostic)> {
             if ra != rb {
                 let message = format!(
                     "{} resets with {} and {} with {} on a gate they share; each starts from the state after its own reset, and the run sends both",
-                    model.files[ca.file].name,
+                    model.file_at(ca.file).name,
                     if ra.is_empty() {
                         "nothing".to_owned()
                     } else {
                         ra.join(", ")
                     },
-                    model.files[cb.file].name,
+                    model.file_at(cb.file).name,
                     if rb.is_empty() {
                         "nothing".to_owned()
                     } else {

@@ -99,7 +99,7 @@ pub fn compile(
         let mut seen = vec![i];
         let mut work: Vec<usize> = vec![i];
         while let Some(f) = work.pop() {
-            for used in &files[f].1.uses {
+            for used in files.get(f).into_iter().flat_map(|(_, file)| &file.uses) {
                 if let Some(j) = files.iter().position(|(s, _)| s.origin == used.text)
                     && !seen.contains(&j)
                 {
@@ -124,8 +124,11 @@ pub fn compile(
     // Definitions next, each file's after those of the files it uses, so that a parameter may be
     // computed from a used model's (the files are loaded users first).
     for index in definition_order(&files) {
+        let Some((_, file)) = files.get(index) else {
+            continue;
+        };
         compiler.file = index;
-        compiler.declare_definitions(&files[index].1);
+        compiler.declare_definitions(file);
     }
     for (index, (_, file)) in files.iter().enumerate() {
         compiler.file = index;
@@ -135,8 +138,10 @@ pub fn compile(
         compiler.file = index;
         compiler.define(file);
     }
-    for (i, diagnostics) in compiler.diagnostics.into_iter().enumerate() {
-        report[i].diagnostics.extend(diagnostics);
+    for (i, diagnostics) in compiler.diagnostics {
+        if let Some(r) = report.get_mut(i) {
+            r.diagnostics.extend(diagnostics);
+        }
     }
     for r in &mut report {
         r.diagnostics.sort_by_key(|d| d.span);
@@ -157,18 +162,24 @@ pub fn compile(
     let mut model = compiler.model;
     model.components = (0..files.len())
         .map(|file| {
-            let processes: Vec<usize> = (0..model.processes.len())
-                .filter(|p| model.processes[*p].file == file)
-                .collect();
-            let transitions = processes
+            let processes: Vec<usize> = model
+                .processes
                 .iter()
-                .flat_map(|p| model.processes[*p].transitions.iter().copied())
+                .enumerate()
+                .filter(|(_, p)| p.file == file)
+                .map(|(p, _)| p)
+                .collect();
+            let transitions = model
+                .processes
+                .iter()
+                .filter(|p| p.file == file)
+                .flat_map(|p| p.transitions.iter().copied())
                 .collect();
             crate::model::Component {
                 file,
-                gates: compiler.file_gates.get(file).cloned().unwrap_or_default(),
-                events: compiler.file_events.get(file).cloned().unwrap_or_default(),
-                resets: compiler.file_resets.get(file).cloned().unwrap_or_default(),
+                gates: compiler.file_gates.get(&file).cloned().unwrap_or_default(),
+                events: compiler.file_events.get(&file).cloned().unwrap_or_default(),
+                resets: compiler.file_resets.get(&file).cloned().unwrap_or_default(),
                 processes,
                 transitions,
             }
@@ -182,10 +193,13 @@ pub fn compile(
 /// otherwise).
 fn definition_order(files: &[(Source, File)]) -> Vec<usize> {
     fn visit(index: usize, files: &[(Source, File)], done: &mut Vec<bool>, order: &mut Vec<usize>) {
-        if std::mem::replace(&mut done[index], true) {
+        let Some((flag, (_, file))) = done.get_mut(index).zip(files.get(index)) else {
+            return;
+        };
+        if std::mem::replace(flag, true) {
             return;
         }
-        for used in &files[index].1.uses {
+        for used in &file.uses {
             if let Some(u) = files.iter().position(|(s, _)| s.origin == used.text) {
                 visit(u, files, done, order);
             }
@@ -211,7 +225,8 @@ struct Compiler<'a> {
     options: &'a Options<'a>,
     model: Model,
     file: usize,
-    diagnostics: Vec<Vec<MbtDiagnostic>>,
+    /// Per file, what compiling it found.
+    diagnostics: BTreeMap<usize, Vec<MbtDiagnostic>>,
     /// Per file, its definitions by name (`NODEID` is in every file's).
     globals: Vec<BTreeMap<String, Binding>>,
     /// Per file, the files whose definitions it sees, its own first.
@@ -219,11 +234,11 @@ struct Compiler<'a> {
     /// Clocks by file and name.
     clock_index: BTreeMap<(usize, String), usize>,
     /// Per file, the gates it declares.
-    file_gates: Vec<Vec<usize>>,
+    file_gates: BTreeMap<usize, Vec<usize>>,
     /// Per file, the hidden events it declares.
-    file_events: Vec<Vec<usize>>,
+    file_events: BTreeMap<usize, Vec<usize>>,
     /// Per file, its `reset` stimuli.
-    file_resets: Vec<Vec<Label>>,
+    file_resets: BTreeMap<usize, Vec<Label>>,
     quiescence_declared: bool,
 }
 
@@ -258,29 +273,28 @@ impl<'a> Compiler<'a> {
                 hash: String::new(),
             },
             file: 0,
-            diagnostics: Vec::new(),
+            diagnostics: BTreeMap::new(),
             globals,
             visible,
             clock_index: BTreeMap::new(),
-            file_gates: Vec::new(),
-            file_events: Vec::new(),
-            file_resets: Vec::new(),
+            file_gates: BTreeMap::new(),
+            file_events: BTreeMap::new(),
+            file_resets: BTreeMap::new(),
             quiescence_declared: false,
         }
     }
 
     /// The clock called `name` that the current file sees: its own, else one of a file it uses.
     fn clock(&self, name: &str) -> Option<usize> {
-        self.visible[self.file]
-            .iter()
+        self.visible
+            .get(self.file)
+            .into_iter()
+            .flatten()
             .find_map(|f| self.clock_index.get(&(*f, name.to_owned())).copied())
     }
 
     fn report(&mut self, d: MbtDiagnostic) {
-        while self.diagnostics.len() <= self.file {
-            self.diagnostics.push(Vec::new());
-        }
-        self.diagnostics[self.file].push(d);
+        self.diagnostics.entry(self.file).or_default().push(d);
     }
 
     fn error(&mut self, code: MbtCode, span: Span, message: impl Into<String>) {
@@ -296,7 +310,11 @@ impl<'a> Compiler<'a> {
             depth: 0,
         };
         for def in &file.definitions {
-            if self.globals[self.file].contains_key(&def.name.text) {
+            if self
+                .globals
+                .get(self.file)
+                .is_some_and(|g| g.contains_key(&def.name.text))
+            {
                 self.error(
                     MbtCode::Duplicate,
                     def.name.span,
@@ -320,7 +338,7 @@ impl<'a> Compiler<'a> {
                     let Some(value) = value else { continue };
                     if def.kind == DefKind::Param {
                         // Parameters belong to their file: `nmt.TOL` and `sync.TOL` may differ.
-                        let file = &self.model.files[self.file].name;
+                        let file = &self.model.file_at(self.file).name;
                         self.model
                             .params
                             .push((format!("{file}.{}", def.name.text), value));
@@ -328,7 +346,10 @@ impl<'a> Compiler<'a> {
                     Binding::Value(value)
                 }
             };
-            self.globals[self.file].insert(def.name.text.clone(), binding);
+            // One table per file was made with the compiler.
+            if let Some(globals) = self.globals.get_mut(self.file) {
+                globals.insert(def.name.text.clone(), binding);
+            }
         }
     }
 
@@ -358,10 +379,6 @@ impl<'a> Compiler<'a> {
                 self.model.clocks.push(clock.text.clone());
             }
         }
-        while self.file_gates.len() <= self.file {
-            self.file_gates.push(Vec::new());
-            self.file_events.push(Vec::new());
-        }
         for decl in &file.gates {
             self.gate(decl, global);
         }
@@ -373,14 +390,18 @@ impl<'a> Compiler<'a> {
                     self.model.events.len() - 1
                 }
             };
-            if self.file_events[self.file].contains(&e) {
+            if self
+                .file_events
+                .get(&self.file)
+                .is_some_and(|events| events.contains(&e))
+            {
                 self.error(
                     MbtCode::Duplicate,
                     event.span,
                     format!("the event `{}` is declared twice", event.text),
                 );
             } else {
-                self.file_events[self.file].push(e);
+                self.file_events.entry(self.file).or_default().push(e);
             }
         }
         for decl in &file.processes {
@@ -439,15 +460,25 @@ impl<'a> Compiler<'a> {
             fields,
             dlc: dlc as u8,
         };
-        if let Some(existing) = self.model.gates.iter().position(|g| g.name == gate.name) {
-            if self.model.gates[existing] != gate {
+        if let Some((existing, differs)) = self
+            .model
+            .gates
+            .iter()
+            .enumerate()
+            .find(|(_, g)| g.name == gate.name)
+            .map(|(existing, g)| (existing, *g != gate))
+        {
+            if differs {
                 let message = format!(
                     "the gate `{}` is declared differently in another model",
                     gate.name
                 );
                 self.error(MbtCode::GateClash, decl.name.span, message);
-            } else if !self.file_gates[self.file].contains(&existing) {
-                self.file_gates[self.file].push(existing);
+            } else {
+                let gates = self.file_gates.entry(self.file).or_default();
+                if !gates.contains(&existing) {
+                    gates.push(existing);
+                }
             }
             return;
         }
@@ -464,7 +495,10 @@ impl<'a> Compiler<'a> {
             );
             self.error(MbtCode::AmbiguousGates, decl.name.span, message);
         }
-        self.file_gates[self.file].push(self.model.gates.len());
+        self.file_gates
+            .entry(self.file)
+            .or_default()
+            .push(self.model.gates.len());
         self.model.gates.push(gate);
     }
 
@@ -579,10 +613,7 @@ impl<'a> Compiler<'a> {
             {
                 // Each distinct stimulus once: composed models that reset alike reset once.
                 let label = Label::concrete(gate, &values);
-                while self.file_resets.len() <= self.file {
-                    self.file_resets.push(Vec::new());
-                }
-                self.file_resets[self.file].push(label.clone());
+                self.file_resets.entry(self.file).or_default().push(label.clone());
                 if !self.model.resets.contains(&label) {
                     self.model.resets.push(label);
                 }
@@ -614,14 +645,17 @@ impl<'a> Compiler<'a> {
     }
 
     fn location(&mut self, p: usize, name: &Name) -> Option<i64> {
-        let found = self.model.processes[p]
+        let found = self
+            .model
+            .process_at(p)
             .locations
             .iter()
             .position(|l| l.name == name.text);
         if found.is_none() {
             let message = format!(
                 "the process `{}` has no location `{}`",
-                self.model.processes[p].name, name.text
+                self.model.process_at(p).name,
+                name.text
             );
             self.error(MbtCode::UnknownName, name.span, message);
         }
@@ -654,10 +688,13 @@ impl<'a> Compiler<'a> {
         let event = match &t.event {
             None => None,
             Some(name) => {
-                let declared = self.file_events[self.file]
-                    .iter()
+                let declared = self
+                    .file_events
+                    .get(&self.file)
+                    .into_iter()
+                    .flatten()
                     .copied()
-                    .find(|e| self.model.events[*e] == name.text);
+                    .find(|e| self.model.events.get(*e) == Some(&name.text));
                 if declared.is_none() {
                     self.error(
                         MbtCode::UnknownName,
@@ -688,8 +725,9 @@ impl<'a> Compiler<'a> {
                     Some((g, patterns, fields)) => {
                         // A gate a transition uses is in its component's alphabet, even if only a
                         // used model declares it.
-                        if !self.file_gates[self.file].contains(&g) {
-                            self.file_gates[self.file].push(g);
+                        let gates = self.file_gates.entry(self.file).or_default();
+                        if !gates.contains(&g) {
+                            gates.push(g);
                         }
                         (Some(g), patterns, Some(fields))
                     }
@@ -740,7 +778,9 @@ impl<'a> Compiler<'a> {
         }
         let mut updates = Vec::new();
         for (name, value) in &t.updates {
-            let Some(var) = self.model.processes[p]
+            let Some(var) = self
+                .model
+                .process_at(p)
                 .vars
                 .iter()
                 .find(|v| v.name == name.text)
@@ -839,7 +879,9 @@ impl<'a> Compiler<'a> {
             tags: t.tags.clone(),
             span: t.span,
         });
-        self.model.processes[p].transitions.push(id);
+        crate::model::at_mut(&mut self.model.processes, p)
+            .transitions
+            .push(id);
     }
 
     /// Resolves an action: the gate (checked for direction), one pattern per field.
@@ -857,7 +899,7 @@ impl<'a> Compiler<'a> {
             );
             return None;
         };
-        let gate = self.model.gates[g].clone();
+        let gate = self.model.gate_at(g).clone();
         if gate.direction != direction {
             let (is, used) = match gate.direction {
                 Direction::Input => ("an input", "an output"),
@@ -903,7 +945,7 @@ impl<'a> Compiler<'a> {
             } else {
                 (1i64 << (8 * field.size)) - 1
             };
-            patterns[index] = match &arg.pattern {
+            let pattern = match &arg.pattern {
                 Pattern::Any(_) => CPattern::Any,
                 Pattern::Value(e) => match self.named_set(e) {
                     Some(set) => CPattern::Set(self.set_in_field(set?, e.span, max)?),
@@ -937,12 +979,16 @@ impl<'a> Compiler<'a> {
                     CPattern::Range(lo, hi)
                 }
             };
-            if field.opaque && patterns[index] != CPattern::Any {
+            if field.opaque && pattern != CPattern::Any {
                 self.error(
                     MbtCode::Syntax,
                     action.span,
                     format!("the field `{}` is bytes(N): only `_` matches it", field.name),
                 );
+            }
+            // `field` is the gate's, and there is a pattern per field.
+            if let Some(slot) = patterns.get_mut(index) {
+                *slot = pattern;
             }
         }
         Some((g, patterns, gate.fields))
@@ -1023,15 +1069,20 @@ impl<'a> Compiler<'a> {
 
     /// A value known at compile time; reports why not.
     fn constant(&mut self, e: &Expr, scope: Scope<'_>, fallback: Option<&Expr>) -> Option<i64> {
-        let before = self.diagnostics.get(self.file).map_or(0, Vec::len);
+        let before = self.diagnostics.get(&self.file).map_or(0, Vec::len);
         let compiled = self.expr(e, scope);
-        let after = self.diagnostics.get(self.file).map_or(0, Vec::len);
+        let after = self.diagnostics.get(&self.file).map_or(0, Vec::len);
         let needs_eds = after > before
-            && self.diagnostics[self.file][before..]
-                .iter()
+            && self
+                .diagnostics
+                .get(&self.file)
+                .into_iter()
+                .flat_map(|d| d.iter().skip(before))
                 .all(|d| d.code == MbtCode::ParamUnresolved);
         if needs_eds && let Some(fallback) = fallback {
-            self.diagnostics[self.file].truncate(before);
+            if let Some(found) = self.diagnostics.get_mut(&self.file) {
+                found.truncate(before);
+            }
             return self.constant(fallback, scope, None);
         }
         let c = compiled?;
@@ -1102,7 +1153,7 @@ impl<'a> Compiler<'a> {
                 for l in locations {
                     numbers.push(self.location(p, l)?);
                 }
-                CExpr::At(self.model.processes[p].location_slot, numbers)
+                CExpr::At(self.model.process_at(p).location_slot, numbers)
             }
             ExprKind::Unary(op, inner) => {
                 let op = if *op == "!" { UnOp::Not } else { UnOp::Neg };
@@ -1144,13 +1195,16 @@ impl<'a> Compiler<'a> {
             return Some(CExpr::Field(i));
         }
         if let Some(p) = scope.process
-            && let Some(v) = self.model.processes[p].vars.iter().find(|v| v.name == name)
+            && let Some(v) = self.model.process_at(p).vars.iter().find(|v| v.name == name)
         {
             return Some(CExpr::Slot(v.slot));
         }
-        let binding = self.visible[self.file]
-            .iter()
-            .find_map(|f| self.globals[*f].get(name).cloned());
+        let binding = self
+            .visible
+            .get(self.file)
+            .into_iter()
+            .flatten()
+            .find_map(|f| self.globals.get(*f)?.get(name).cloned());
         match binding {
             Some(Binding::Value(v)) => Some(CExpr::Const(v)),
             Some(Binding::Let(e, file)) => {
@@ -1240,13 +1294,15 @@ impl<'a> Compiler<'a> {
             return None;
         };
         let node = self.options.node_id;
-        let index = u16::try_from(values[0]).unwrap_or(0);
+        // The arity was checked above: two arguments for od and exists, one for pdo_bytes.
+        let argument = |i: usize| values.get(i).copied().unwrap_or(0);
+        let index = u16::try_from(argument(0)).unwrap_or(0);
         let result = match f {
-            "od" => crate::device_facts::value(eds, node, index, u8::try_from(values[1]).unwrap_or(0)),
+            "od" => crate::device_facts::value(eds, node, index, u8::try_from(argument(1)).unwrap_or(0)),
             "exists" => Ok(i64::from(crate::device_facts::exists(
                 eds,
                 index,
-                u8::try_from(values[1]).unwrap_or(0),
+                u8::try_from(argument(1)).unwrap_or(0),
             ))),
             _ => crate::device_facts::pdo_bytes(eds, node, index),
         };
@@ -1261,7 +1317,7 @@ impl<'a> Compiler<'a> {
 
     /// τ-cycles (internal transitions that can loop without a window) and unreachable locations.
     fn check_process(&mut self, p: usize, decl: &ProcessDecl) {
-        let process = self.model.processes[p].clone();
+        let process = self.model.process_at(p).clone();
         let n = process.locations.len();
         let targets = |t: &Transition| -> Vec<(usize, usize)> {
             let from: Vec<usize> = if t.from.is_empty() {
@@ -1275,9 +1331,11 @@ impl<'a> Compiler<'a> {
         };
         let mut tau = vec![Vec::new(); n];
         let mut reached = vec![false; n];
-        reached[0] = true;
+        if let Some(initial) = reached.first_mut() {
+            *initial = true;
+        }
         for &t in &process.transitions {
-            let t = &self.model.transitions[t];
+            let t = self.model.transition_at(t);
             // A step that stays where it is and writes a variable its guard reads changes its own
             // condition (`when foreign do foreign := false`): not a loop by itself.
             let mut read = Vec::new();
@@ -1289,8 +1347,9 @@ impl<'a> Compiler<'a> {
                 if matches!(t.kind, Kind::Internal | Kind::Signal)
                     && t.window.is_none()
                     && !(settles && f == to)
+                    && let Some(out) = tau.get_mut(f)
                 {
-                    tau[f].push(to);
+                    out.push(to);
                 }
             }
         }
@@ -1298,16 +1357,19 @@ impl<'a> Compiler<'a> {
         let mut stack = vec![0];
         while let Some(l) = stack.pop() {
             for &t in &process.transitions {
-                for (f, to) in targets(&self.model.transitions[t]) {
-                    if f == l && !reached[to] {
-                        reached[to] = true;
+                for (f, to) in targets(self.model.transition_at(t)) {
+                    if f == l
+                        && let Some(reached) = reached.get_mut(to)
+                        && !*reached
+                    {
+                        *reached = true;
                         stack.push(to);
                     }
                 }
             }
         }
-        for (l, decl_l) in decl.locations.iter().enumerate().take(n) {
-            if !reached[l] {
+        for (decl_l, reached) in decl.locations.iter().zip(&reached) {
+            if !reached {
                 self.error(
                     MbtCode::UnreachableLocation,
                     decl_l.name.span,
@@ -1317,24 +1379,30 @@ impl<'a> Compiler<'a> {
         }
         // A cycle of immediate internal steps: depth-first search with colours.
         let mut colour = vec![0u8; n];
+        // Locations and the targets in `tau` are below `n`, the length of `tau` and `colour`.
         fn cyclic(l: usize, tau: &[Vec<usize>], colour: &mut [u8]) -> bool {
-            colour[l] = 1;
-            for &to in &tau[l] {
-                if colour[to] == 1 || (colour[to] == 0 && cyclic(to, tau, colour)) {
+            if let Some(c) = colour.get_mut(l) {
+                *c = 1;
+            }
+            for &to in tau.get(l).into_iter().flatten() {
+                let c = colour.get(to).copied();
+                if c == Some(1) || (c == Some(0) && cyclic(to, tau, colour)) {
                     return true;
                 }
             }
-            colour[l] = 2;
+            if let Some(c) = colour.get_mut(l) {
+                *c = 2;
+            }
             false
         }
-        for l in 0..n {
-            if colour[l] == 0 && cyclic(l, &tau, &mut colour) {
+        for (l, location) in process.locations.iter().enumerate() {
+            if colour.get(l) == Some(&0) && cyclic(l, &tau, &mut colour) {
                 self.error(
                     MbtCode::TauCycle,
                     decl.name.span,
                     format!(
                         "internal transitions of `{}` can loop forever without a window through `{}`",
-                        process.name, process.locations[l].name
+                        process.name, location.name
                     ),
                 );
                 break;
@@ -1379,7 +1447,7 @@ impl<'a> Compiler<'a> {
                         );
                         continue;
                     };
-                    let dir = self.model.gates[g].direction;
+                    let dir = self.model.gate_at(g).direction;
                     let Some((_, patterns, fields)) = self.action(
                         action,
                         dir,

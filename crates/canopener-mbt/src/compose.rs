@@ -54,27 +54,27 @@ impl Blocked {
 impl Model {
     /// The component a transition belongs to.
     pub fn component_of(&self, t: &Transition) -> usize {
-        self.processes[t.process].file
+        self.process_at(t.process).file
     }
 
     /// Whether `t` is an action on a gate that names the frames of `key`.
     pub fn on_frames(&self, t: &Transition, key: (u16, bool, u8, crate::syntax::ast::Direction)) -> bool {
-        t.gate.is_some_and(|g| self.gates[g].frame_key() == key)
+        t.gate.is_some_and(|g| self.gate_at(g).frame_key() == key)
     }
 
     /// The gates naming the same frames as `gate` (itself included).
     pub fn aliases(&self, gate: usize) -> impl Iterator<Item = usize> + '_ {
-        let key = self.gates[gate].frame_key();
-        (0..self.gates.len()).filter(move |g| self.gates[*g].frame_key() == key)
+        let key = self.gate_at(gate).frame_key();
+        (0..self.gates.len()).filter(move |g| self.gate_at(*g).frame_key() == key)
     }
 
     /// The components whose alphabet holds the frames of `gate`.
     pub fn holders_of_gate(&self, gate: usize) -> Vec<usize> {
-        let key = self.gates[gate].frame_key();
+        let key = self.gate_at(gate).frame_key();
         self.components
             .iter()
             .enumerate()
-            .filter(|(_, c)| c.gates.iter().any(|g| self.gates[*g].frame_key() == key))
+            .filter(|(_, c)| c.gates.iter().any(|g| self.gate_at(*g).frame_key() == key))
             .map(|(i, _)| i)
             .collect()
     }
@@ -93,16 +93,16 @@ impl Model {
     /// its explicit ones, or, if none does, its `otherwise` ones.
     pub fn input_moves(&self, component: usize, state: &[i64], gate: usize, values: &[i64]) -> Vec<usize> {
         let takes = |otherwise: bool| -> Vec<usize> {
-            self.components[component]
+            self.component_at(component)
                 .transitions
                 .iter()
                 .copied()
                 .filter(|t| {
-                    let t = &self.transitions[*t];
+                    let t = self.transition_at(*t);
                     t.kind == Kind::Input
                         && t.otherwise == otherwise
                         && t.gate
-                            .is_some_and(|g| self.gates[g].frame_key() == self.gates[gate].frame_key())
+                            .is_some_and(|g| self.gate_at(g).frame_key() == self.gate_at(gate).frame_key())
                         && self.located(t, state)
                         && self.patterns_match(t, state, values).unwrap_or(false)
                         && self.guard_holds(t, state, values).unwrap_or(false)
@@ -128,11 +128,11 @@ impl Model {
         values: &[Option<i64>],
         admit: &mut dyn FnMut(&Transition) -> bool,
     ) -> Vec<usize> {
-        let key = self.gates[gate].frame_key();
+        let key = self.gate_at(gate).frame_key();
         let known: Vec<i64> = values.iter().map(|v| v.unwrap_or(0)).collect();
         let mut out = Vec::new();
-        for &t in &self.components[component].transitions {
-            let tr = &self.transitions[t];
+        for &t in &self.component_at(component).transitions {
+            let tr = self.transition_at(t);
             if !tr.kind.is_output()
                 || !self.on_frames(tr, key)
                 || !self.located(tr, state)
@@ -149,12 +149,12 @@ impl Model {
 
     /// The `signal`/`on` transitions of `component` for `event` enabled in `state`.
     pub fn event_moves(&self, component: usize, state: &[i64], event: usize) -> Vec<usize> {
-        self.components[component]
+        self.component_at(component)
             .transitions
             .iter()
             .copied()
             .filter(|t| {
-                let t = &self.transitions[*t];
+                let t = self.transition_at(*t);
                 matches!(t.kind, Kind::Signal | Kind::On)
                     && t.event == Some(event)
                     && self.located(t, state)
@@ -192,10 +192,10 @@ impl Model {
                 for &t in transitions {
                     let mut after = after.clone();
                     for (slot, value) in self
-                        .writes(&self.transitions[t], state, fields)
+                        .writes(self.transition_at(t), state, fields)
                         .map_err(|e| Blocked::Error(t, e))?
                     {
-                        after[slot] = value;
+                        *crate::model::at_mut(&mut after, slot) = value;
                     }
                     let mut taken = taken.clone();
                     taken.push(t);
@@ -247,7 +247,7 @@ impl Model {
     /// The joint steps of the hidden event a `signal` transition `initiator` starts, or the first
     /// other holder that cannot take part.
     pub fn signal_joint(&self, state: &[i64], initiator: usize) -> Result<Vec<Joint>, Blocked> {
-        let t = &self.transitions[initiator];
+        let t = self.transition_at(initiator);
         let own = self.component_of(t);
         let Some(event) = t.event else {
             return self.join(state, &[(vec![initiator], Vec::new())]);
@@ -268,11 +268,11 @@ impl Model {
 
     /// A component's part of a state in words: `nmt@Stopped`.
     pub fn component_state(&self, component: usize, state: &[i64]) -> String {
-        self.components[component]
+        self.component_at(component)
             .processes
             .iter()
             .map(|p| {
-                self.location_name(*p, state[self.processes[*p].location_slot])
+                self.location_name(*p, *crate::model::at(state, self.process_at(*p).location_slot))
                     .replacen('.', "@", 1)
             })
             .collect::<Vec<_>>()
@@ -290,7 +290,7 @@ impl Model {
             out.push((*slot, v));
         }
         if let Some(to) = t.to {
-            out.push((self.processes[t.process].location_slot, to));
+            out.push((self.process_at(t.process).location_slot, to));
         }
         Ok(out)
     }

@@ -21,7 +21,7 @@ use serde::Serialize;
 
 use crate::compose::Blocked;
 use crate::label::{Label, LabelText};
-use crate::model::{Kind, Model};
+use crate::model::{Kind, Model, at, at_mut};
 use crate::purpose::{Purpose, Seen};
 use crate::syntax::ast::{Direction, Marker};
 
@@ -326,7 +326,8 @@ impl<'m> Executor<'m> {
     fn visit(&mut self) {
         for c in &self.confs {
             for p in &self.model.processes {
-                self.locations.insert((p.location_slot, c.state[p.location_slot]));
+                self.locations
+                    .insert((p.location_slot, *at(&c.state, p.location_slot)));
             }
             self.states.insert(c.state.clone());
         }
@@ -395,7 +396,7 @@ impl<'m> Executor<'m> {
     fn opens_at(&self, t: &crate::model::Transition, c: &Conf) -> Option<i64> {
         let (lo, _, clock) = t.window.as_ref()?;
         let lo = lo.eval(&c.state, &[]).ok()?;
-        Some(c.clocks[*clock] + lo - self.config.tolerance_us)
+        Some(*at(&c.clocks, *clock) + lo - self.config.tolerance_us)
     }
 
     /// The next instant after `now` at which an internal step of some configuration becomes
@@ -438,8 +439,8 @@ impl<'m> Executor<'m> {
             if let Some((_, hi, clock)) = &t.window
                 && let Ok(hi) = hi.eval(&c.state, &[])
             {
-                let end = c.clocks[*clock] + hi + self.config.tolerance_us;
-                let slot = &mut per_process[t.process];
+                let end = *at(&c.clocks, *clock) + hi + self.config.tolerance_us;
+                let slot = at_mut(&mut per_process, t.process);
                 *slot = Some(slot.map_or(end, |l| l.max(end)));
             }
         }
@@ -462,7 +463,7 @@ impl<'m> Executor<'m> {
                     let label = self.model.label_text(&Label { gate, values });
                     let window = match &t.window {
                         Some((lo, hi, clock)) => {
-                            let base = c.clocks[*clock];
+                            let base = *at(&c.clocks, *clock);
                             match (lo.eval(&c.state, &[]), hi.eval(&c.state, &[])) {
                                 (Ok(lo), Ok(hi)) => {
                                     format!(" at {:.3}s..{:.3}s", self.t(base + lo), self.t(base + hi))
@@ -626,7 +627,7 @@ impl<'m> Executor<'m> {
                     let Some((lo, hi, clock)) = &t.window else {
                         return true;
                     };
-                    let since = now - c.clocks[*clock];
+                    let since = now - *at(&c.clocks, *clock);
                     let (Ok(lo), Ok(hi)) = (lo.eval(&c.state, values), hi.eval(&c.state, values)) else {
                         return false;
                     };
@@ -641,8 +642,8 @@ impl<'m> Executor<'m> {
                         for j in joint {
                             let mut clocks = c.clocks.clone();
                             for t in &j.transitions {
-                                for r in &self.model.transitions[*t].resets {
-                                    clocks[*r] = now;
+                                for r in &self.model.transition_at(*t).resets {
+                                    *at_mut(&mut clocks, *r) = now;
                                 }
                             }
                             self.taken.extend(j.transitions.iter().copied());
@@ -670,7 +671,7 @@ impl<'m> Executor<'m> {
                 (_, true) => "too early".to_owned(),
                 (Some((component, state)), false) if self.model.components.len() > 1 => format!(
                     "not allowed here ({} refuses it in {})",
-                    self.model.files[*component].name,
+                    self.model.file_at(*component).name,
                     self.model.component_state(*component, state)
                 ),
                 _ => "not allowed here".to_owned(),
@@ -758,8 +759,8 @@ impl<'m> Executor<'m> {
             .map(|j| {
                 let mut clocks = c.clocks.clone();
                 for t in &j.transitions {
-                    for r in &self.model.transitions[*t].resets {
-                        clocks[*r] = now;
+                    for r in &self.model.transition_at(*t).resets {
+                        *at_mut(&mut clocks, *r) = now;
                     }
                 }
                 (
@@ -797,7 +798,7 @@ impl<'m> Executor<'m> {
         for (_, ts) in owed {
             let mut first_refusal = None;
             let answerable = ts.iter().any(|&t| {
-                let t = &self.model.transitions[t];
+                let t = self.model.transition_at(t);
                 if t.kind == Kind::Signal {
                     return match self.model.signal_joint(&c.state, t.id) {
                         Ok(j) => !j.is_empty(),
@@ -811,7 +812,7 @@ impl<'m> Executor<'m> {
                 let window = |u: &crate::model::Transition| -> (i64, i64) {
                     match &u.window {
                         Some((lo, hi, clock)) => {
-                            let base = c.clocks[*clock];
+                            let base = *at(&c.clocks, *clock);
                             match (lo.eval(&c.state, &[]), hi.eval(&c.state, &[])) {
                                 (Ok(lo), Ok(hi)) => (base + lo - tol, base + hi + tol),
                                 _ => (i64::MIN, i64::MAX),
@@ -857,9 +858,9 @@ impl<'m> Executor<'m> {
     fn disagreement(&self, now: Option<i64>) -> Option<String> {
         self.confs.iter().find_map(|c| {
             let unmet = self.unanswerable(c, now)?;
-            let t = &self.model.transitions[unmet.required];
-            let file = &self.model.files[self.model.component_of(t)];
-            let refuser = &self.model.files[unmet.refuser];
+            let t = self.model.transition_at(unmet.required);
+            let file = self.model.file_at(self.model.component_of(t));
+            let refuser = self.model.file_at(unmet.refuser);
             let what = match t.gate {
                 Some(g) => {
                     let values = self.model.offers(t, &c.state).unwrap_or_default();
@@ -883,7 +884,7 @@ impl<'m> Executor<'m> {
     }
 
     fn send(&mut self, now: i64, label: &Label) {
-        let gate = &self.model.gates[label.gate];
+        let gate = self.model.gate_at(label.gate);
         let mut data = Vec::new();
         for (f, v) in gate.fields.iter().zip(&label.values) {
             let v = v.unwrap_or(0);
@@ -1055,21 +1056,24 @@ impl<'m> Executor<'m> {
                 .iter()
                 .flat_map(|(_, ts)| {
                     ts.iter()
-                        .map(|t| self.model.component_of(&self.model.transitions[*t]))
+                        .map(|t| self.model.component_of(self.model.transition_at(*t)))
                 })
                 .collect();
             owners.sort_unstable();
             owners.dedup();
-            let owner = owners[self.rand(owners.len())];
+            let owner = owners.get(self.rand(owners.len())).copied();
             let own: Vec<&&(Label, Vec<usize>)> = pool
                 .iter()
                 .filter(|(_, ts)| {
                     ts.iter()
-                        .any(|t| self.model.component_of(&self.model.transitions[*t]) == owner)
+                        .any(|t| Some(self.model.component_of(self.model.transition_at(*t))) == owner)
                 })
                 .collect();
-            let label = own[self.rand(own.len())].0.clone();
-            self.send(now, &label);
+            // The pool is not empty here, so neither are the owners and their inputs.
+            if let Some(choice) = own.get(self.rand(own.len())) {
+                let label = choice.0.clone();
+                self.send(now, &label);
+            }
         } else {
             self.observe_from(now);
         }
@@ -1080,7 +1084,7 @@ impl<'m> Executor<'m> {
             Phase::Start => {
                 for reset in self.model.resets.clone() {
                     // Resets are sent as they are: the initial state expects their consequences.
-                    let gate = &self.model.gates[reset.gate];
+                    let gate = self.model.gate_at(reset.gate);
                     let mut data = Vec::new();
                     for (f, v) in gate.fields.iter().zip(&reset.values) {
                         for i in 0..usize::from(f.size) {

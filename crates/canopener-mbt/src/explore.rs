@@ -52,7 +52,7 @@ pub struct StateSpace {
 impl Model {
     /// Whether `t` may start in `state` (location only).
     pub fn located(&self, t: &Transition, state: &[i64]) -> bool {
-        let loc = state[self.processes[t.process].location_slot];
+        let loc = *crate::model::at(state, self.process_at(t.process).location_slot);
         t.from.is_empty() || t.from.contains(&loc)
     }
 
@@ -94,10 +94,10 @@ impl Model {
             if v < *lo || v > *hi {
                 return Err(format!("an update sets a variable to {v}, outside {lo}..{hi}"));
             }
-            next[*slot] = v;
+            *crate::model::at_mut(&mut next, *slot) = v;
         }
         if let Some(to) = t.to {
-            next[self.processes[t.process].location_slot] = to;
+            *crate::model::at_mut(&mut next, self.process_at(t.process).location_slot) = to;
         }
         Ok(next)
     }
@@ -160,7 +160,7 @@ impl Model {
         Ok(self
             .joint_steps(state)?
             .into_iter()
-            .map(|(ts, label, next)| (ts[0], label, next))
+            .filter_map(|(ts, label, next)| Some((*ts.first()?, label, next)))
             .collect())
     }
 
@@ -248,7 +248,12 @@ impl Model {
         // one is left before anything else can happen (the executor's closure does the same).
         let urgent: Vec<JointStep> = out
             .iter()
-            .filter(|(ts, label, _)| label.is_none() && self.transitions[ts[0]].window.is_none())
+            .filter(|(ts, label, _)| {
+                label.is_none()
+                    && ts
+                        .first()
+                        .is_some_and(|t| self.transition_at(*t).window.is_none())
+            })
             .cloned()
             .collect();
         if !urgent.is_empty() {
@@ -274,7 +279,7 @@ impl Model {
     /// each read the same open label as a different frame (a confirmation and an abort).
     fn refine(&self, state: &[i64], gate: usize, values: Vec<Option<i64>>) -> Vec<Vec<Option<i64>>> {
         const MAX_LABELS: usize = 64;
-        let key = self.gates[gate].frame_key();
+        let key = self.gate_at(gate).frame_key();
         let mut choices: Vec<Vec<Option<i64>>> = Vec::new();
         for (field, value) in values.iter().enumerate() {
             if value.is_some() {
@@ -308,7 +313,7 @@ impl Model {
             }
             // A value no holder names: one past the largest, or below the smallest at the top of
             // the field's range.
-            let size = self.gates[gate].fields[field].size;
+            let size = crate::model::at(&self.gate_at(gate).fields, field).size;
             let max = if size >= 8 {
                 i64::MAX
             } else {
@@ -335,7 +340,7 @@ impl Model {
 
     /// The direction of a transition's label, if it has one.
     pub fn direction(&self, t: &Transition) -> Option<Direction> {
-        t.gate.map(|g| self.gates[g].direction)
+        t.gate.map(|g| self.gate_at(g).direction)
     }
 }
 
@@ -364,11 +369,14 @@ pub fn explore(model: &Model, max_states: usize) -> (StateSpace, Vec<MbtDiagnost
     let mut origins = Vec::new();
     let mut truncated = false;
     while let Some(s) = queue.pop_front() {
-        let state = vectors[s].clone();
+        // Only positions in `vectors` are queued.
+        let Some(state) = vectors.get(s).cloned() else {
+            continue;
+        };
         let steps = match model.steps(&state) {
             Ok(steps) => steps,
             Err((t, message)) => {
-                let t = &model.transitions[t];
+                let t = model.transition_at(t);
                 diagnostics.push(diag(
                     MbtCode::EvalError,
                     t.span,
@@ -394,7 +402,7 @@ pub fn explore(model: &Model, max_states: usize) -> (StateSpace, Vec<MbtDiagnost
             };
             transitions.push((
                 s,
-                model.aut_label(model.transitions[t].kind, label.as_ref()),
+                model.aut_label(model.transition_at(t).kind, label.as_ref()),
                 target,
             ));
             origins.push(t);
@@ -480,12 +488,12 @@ pub fn coverage_dot(model: &Model, taken: &[usize]) -> String {
         }
         out.push_str("  }\n");
         for &t in &process.transitions {
-            let transition = &model.transitions[t];
+            let transition = model.transition_at(t);
             let label = match transition.gate {
                 Some(g) => format!(
                     "{}{}",
                     if transition.kind == Kind::Input { "?" } else { "!" },
-                    model.gates[g].name
+                    model.gate_at(g).name
                 ),
                 None => "i".to_owned(),
             };

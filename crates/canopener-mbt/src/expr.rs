@@ -129,6 +129,8 @@ pub enum EvalError {
     Overflow,
     /// A field read where no label is being taken.
     NoField(usize),
+    /// A slot the state does not have (a state of another model).
+    NoSlot(usize),
 }
 
 impl fmt::Display for EvalError {
@@ -137,6 +139,7 @@ impl fmt::Display for EvalError {
             EvalError::DivisionByZero => f.write_str("division by zero"),
             EvalError::Overflow => f.write_str("arithmetic overflow"),
             EvalError::NoField(i) => write!(f, "field {i} read outside a label"),
+            EvalError::NoSlot(i) => write!(f, "slot {i} outside the state"),
         }
     }
 }
@@ -146,9 +149,11 @@ impl CExpr {
     pub fn eval(&self, state: &[i64], fields: &[i64]) -> Result<i64, EvalError> {
         Ok(match self {
             CExpr::Const(v) => *v,
-            CExpr::Slot(slot) => state[*slot],
+            CExpr::Slot(slot) => *state.get(*slot).ok_or(EvalError::NoSlot(*slot))?,
             CExpr::Field(i) => *fields.get(*i).ok_or(EvalError::NoField(*i))?,
-            CExpr::At(slot, locations) => i64::from(locations.contains(&state[*slot])),
+            CExpr::At(slot, locations) => {
+                i64::from(locations.contains(state.get(*slot).ok_or(EvalError::NoSlot(*slot))?))
+            }
             CExpr::Unary(UnOp::Not, e) => i64::from(e.eval(state, fields)? == 0),
             CExpr::Unary(UnOp::Neg, e) => e.eval(state, fields)?.checked_neg().ok_or(EvalError::Overflow)?,
             CExpr::Binary(op, a, b) => {

@@ -34,7 +34,7 @@ impl Model {
     /// The label as text: `GATE !v1 !v2`, values in hexadecimal with the width of their field,
     /// open fields as `_`.
     pub fn label_text(&self, label: &Label) -> String {
-        let gate = &self.gates[label.gate];
+        let gate = self.gate_at(label.gate);
         let mut text = gate.name.clone();
         for (field, value) in gate.fields.iter().zip(&label.values) {
             match value {

@@ -8,8 +8,12 @@
 //! verdict out. It never reads a clock, sleeps or touches a file: the runtime drives it.
 
 #![warn(missing_docs)]
-// A file or a frame must never panic this library: no unwrap or expect outside tests (as rustls does).
-#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does).
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
 
 pub mod agreement;
 pub mod aut;

@@ -100,6 +100,16 @@ pub struct LogError {
     pub message: String,
 }
 
+/// `value`'s members (none unless it is an object) and `kind` after them.
+fn with_kind(value: serde_json::Value, kind: &str) -> serde_json::Value {
+    let mut members = match value {
+        serde_json::Value::Object(members) => members,
+        _ => serde_json::Map::new(),
+    };
+    members.insert("kind".to_owned(), kind.into());
+    serde_json::Value::Object(members)
+}
+
 /// The log of a run as JSON Lines.
 pub fn write(header: &RunHeader, outcome: &Outcome) -> String {
     let mut out = String::new();
@@ -107,13 +117,9 @@ pub fn write(header: &RunHeader, outcome: &Outcome) -> String {
         out.push_str(&value.to_string());
         out.push('\n');
     };
-    let mut run = serde_json::to_value(header).unwrap_or_default();
-    run["kind"] = "run".into();
-    line(run);
+    line(with_kind(serde_json::to_value(header).unwrap_or_default(), "run"));
     for step in &outcome.trace {
-        let mut v = serde_json::to_value(step).unwrap_or_default();
-        v["kind"] = "step".into();
-        line(v);
+        line(with_kind(serde_json::to_value(step).unwrap_or_default(), "step"));
     }
     line(serde_json::json!({
         "kind": "verdict",

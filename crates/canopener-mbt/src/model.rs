@@ -229,7 +229,56 @@ pub struct Transition {
     pub span: Span,
 }
 
+/// The entry `id` names in one of a compiled model's tables, or in a table made to the size of one
+/// (a state vector, the instants of the clocks). Every id a [`Model`] holds (of a file, gate,
+/// component, process, transition, clock or state slot) is the position at which `compile` pushed
+/// that entry, only `compile` makes a `Model`, and the tables made beside it take its sizes
+/// (`initial` for states, `clocks` for instants) and keep them.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "a compiled model's ids are positions compile pushed to the table they name, and the tables made beside a model take its sizes"
+)]
+pub(crate) fn at<T>(table: &[T], id: usize) -> &T {
+    &table[id]
+}
+
+/// [`at`], to write.
+#[allow(
+    clippy::indexing_slicing,
+    reason = "a compiled model's ids are positions compile pushed to the table they name, and the tables made beside a model take its sizes"
+)]
+pub(crate) fn at_mut<T>(table: &mut [T], id: usize) -> &mut T {
+    &mut table[id]
+}
+
 impl Model {
+    /// Model file `f` (panics when this model has no such file; every file id it holds is one).
+    pub fn file_at(&self, f: usize) -> &ModelFile {
+        at(&self.files, f)
+    }
+
+    /// Gate `g` (panics when this model has no such gate; every gate id it holds is one).
+    pub fn gate_at(&self, g: usize) -> &Gate {
+        at(&self.gates, g)
+    }
+
+    /// Component `c` (panics when this model has no such component; every component id it holds is
+    /// one).
+    pub fn component_at(&self, c: usize) -> &Component {
+        at(&self.components, c)
+    }
+
+    /// Process `p` (panics when this model has no such process; every process id it holds is one).
+    pub fn process_at(&self, p: usize) -> &Process {
+        at(&self.processes, p)
+    }
+
+    /// Transition `t` (panics when this model has no such transition; every transition id it holds is
+    /// one).
+    pub fn transition_at(&self, t: usize) -> &Transition {
+        at(&self.transitions, t)
+    }
+
     /// The composed name: the model names joined with `+`.
     pub fn name(&self) -> String {
         self.files
@@ -267,7 +316,7 @@ impl Model {
 
     /// `process.location` for the location number `loc` of process `p`.
     pub fn location_name(&self, p: usize, loc: i64) -> String {
-        let process = &self.processes[p];
+        let process = self.process_at(p);
         let name = usize::try_from(loc)
             .ok()
             .and_then(|l| process.locations.get(l))
@@ -279,14 +328,14 @@ impl Model {
     pub fn describe_state(&self, state: &[i64]) -> String {
         let mut parts = Vec::new();
         for process in &self.processes {
-            let loc = state[process.location_slot];
+            let loc = *at(state, process.location_slot);
             let name = usize::try_from(loc)
                 .ok()
                 .and_then(|l| process.locations.get(l))
                 .map_or("?", |l| l.name.as_str());
             parts.push(format!("{}@{name}", process.name));
             for var in &process.vars {
-                let value = state[var.slot];
+                let value = *at(state, var.slot);
                 if var.boolean {
                     parts.push(format!("{}.{}={}", process.name, var.name, value != 0));
                 } else {
@@ -303,7 +352,7 @@ impl Model {
         self.processes
             .iter()
             .map(|p| {
-                usize::try_from(state[p.location_slot])
+                usize::try_from(*at(state, p.location_slot))
                     .ok()
                     .and_then(|loc| p.locations.get(loc)?.quiescence_us)
                     .unwrap_or(self.quiescence_us)

@@ -155,27 +155,34 @@ impl Purpose {
             if self.marker(t.from) != Marker::None && t.to != t.from {
                 problems.push(format!(
                     "state `{}` is {} but has a transition to `{}`: accepting and refusing states are sinks",
-                    self.states[t.from].0,
+                    self.state_name(t.from),
                     if self.marker(t.from) == Marker::Accept {
                         "accepting"
                     } else {
                         "refusing"
                     },
-                    self.states[t.to].0
+                    self.state_name(t.to)
                 ));
             }
         }
         for (i, a) in self.transitions.iter().enumerate() {
-            for b in &self.transitions[i + 1..] {
+            for b in self.transitions.iter().skip(i + 1) {
                 if a.from == b.from && a.to != b.to && overlap(&a.pattern, &b.pattern) {
                     problems.push(format!(
                         "state `{}` is not deterministic: two transitions (to `{}` and to `{}`) match the same labels",
-                        self.states[a.from].0, self.states[a.to].0, self.states[b.to].0
+                        self.state_name(a.from),
+                        self.state_name(a.to),
+                        self.state_name(b.to)
                     ));
                 }
             }
         }
         problems
+    }
+
+    /// The name of a state (`?` for a number the purpose does not have).
+    fn state_name(&self, state: usize) -> &str {
+        self.states.get(state).map_or("?", |(name, _)| name)
     }
 }
 
@@ -215,11 +222,14 @@ pub fn from_aut(name: &str, lts: &crate::explore::Lts) -> Result<Purpose, String
                         "`{label}` marks a state: it must be a loop, not {from} -> {to}"
                     ));
                 }
-                states[*from].1 = if label == "ACCEPT" {
-                    Marker::Accept
-                } else {
-                    Marker::Refuse
-                };
+                // `from` was checked to be a state above.
+                if let Some((_, marker)) = states.get_mut(*from) {
+                    *marker = if label == "ACCEPT" {
+                        Marker::Accept
+                    } else {
+                        Marker::Refuse
+                    };
+                }
                 continue;
             }
             "*" => LabelPattern::Otherwise,

@@ -17,7 +17,12 @@ pub fn ddmin<T: Clone>(items: &[T], mut fails: impl FnMut(&[T]) -> bool) -> (Vec
         // Complements first: dropping one chunk at a time.
         for start in (0..current.len()).step_by(chunk) {
             let end = (start + chunk).min(current.len());
-            let complement: Vec<T> = current[..start].iter().chain(&current[end..]).cloned().collect();
+            let complement: Vec<T> = current
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| !(start..end).contains(i))
+                .map(|(_, item)| item.clone())
+                .collect();
             runs += 1;
             if fails(&complement) {
                 current = complement;

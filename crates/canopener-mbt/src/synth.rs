@@ -74,7 +74,10 @@ pub fn synthesize(spec: &Lts, purpose: &Purpose) -> Option<Lts> {
     let mut edges: Vec<(usize, String, usize)> = Vec::new();
     let mut queue = VecDeque::from([0usize]);
     while let Some(n) = queue.pop_front() {
-        let (set, p) = nodes[n].clone();
+        // Only positions in `nodes` are queued.
+        let Some((set, p)) = nodes.get(n).cloned() else {
+            continue;
+        };
         if purpose.marker(p) != Marker::None {
             continue;
         }
@@ -125,27 +128,33 @@ pub fn synthesize(spec: &Lts, purpose: &Purpose) -> Option<Lts> {
         .iter()
         .map(|(_, p)| purpose.marker(*p) == Marker::Refuse)
         .collect();
+    // Edges join positions in `nodes`, which the flags are per.
+    let flag = |flags: &[bool], node: usize| flags.get(node).copied().unwrap_or(false);
     let mut reaches = accept.clone();
     let mut changed = true;
     while changed {
         changed = false;
         for (from, _, to) in &edges {
-            if reaches[*to] && !reaches[*from] && !refuse[*from] {
-                reaches[*from] = true;
+            if flag(&reaches, *to)
+                && !flag(&reaches, *from)
+                && !flag(&refuse, *from)
+                && let Some(reached) = reaches.get_mut(*from)
+            {
+                *reached = true;
                 changed = true;
             }
         }
     }
-    if !reaches[0] {
+    if !flag(&reaches, 0) {
         return None;
     }
     let mut kept = Vec::new();
     let mut inconclusive = BTreeSet::new();
     for (from, label, to) in edges {
-        if !reaches[from] || accept[from] {
+        if !flag(&reaches, from) || flag(&accept, from) {
             continue;
         }
-        if reaches[to] {
+        if flag(&reaches, to) {
             kept.push((from, label, to));
         } else if direction(&label) != Some(Direction::Input) {
             // An allowed observation that leaves the purpose behind: inconclusive, not fail.
@@ -153,8 +162,8 @@ pub fn synthesize(spec: &Lts, purpose: &Purpose) -> Option<Lts> {
             kept.push((from, label, to));
         }
     }
-    for (i, a) in accept.iter().enumerate() {
-        if *a && reaches[i] {
+    for (i, (a, r)) in accept.iter().zip(&reaches).enumerate() {
+        if *a && *r {
             kept.push((i, PASS.to_owned(), i));
         }
     }
@@ -182,13 +191,17 @@ pub fn canonical(lts: &Lts) -> Lts {
     let mut queue = VecDeque::from([lts.initial]);
     let mut transitions = Vec::new();
     while let Some(s) = queue.pop_front() {
+        // Every queued state was numbered first.
+        let Some(&from) = number.get(&s) else {
+            continue;
+        };
         for (label, t) in succ.get(&s).cloned().unwrap_or_default() {
             let next = number.len();
             let n = *number.entry(t).or_insert_with(|| {
                 queue.push_back(t);
                 next
             });
-            transitions.push((number[&s], label.to_owned(), n));
+            transitions.push((from, label.to_owned(), n));
         }
     }
     transitions.sort();

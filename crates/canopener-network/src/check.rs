@@ -4,10 +4,6 @@
 //! Pure: the caller finds and reads the DCF files ([`DcfLookup`]), so the same checks run on files,
 //! in a browser or in a test. Every finding points at the topology file (the DCF problems that matter
 //! to the topology — missing, other node-ID or network — are findings on the line naming the DCF).
-#![allow(
-    clippy::indexing_slicing,
-    reason = "graph code: the topology's own vertex, edge and device numbers index vectors built with one entry each; still to be rewritten (issue 25)"
-)]
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -307,25 +303,34 @@ fn cables(topology: &Topology, out: &mut Vec<NetDiagnostic>) {
 fn tree(topology: &Topology, net: u32, out: &mut Vec<NetDiagnostic>) {
     let ends = topology.cable_ends();
     let cables = topology.cables_of(net);
-    let mut parent: Vec<usize> = (0..topology.vertices.len() + cables.len() * 2).collect();
-    fn find(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
+    // Union-find over the vertices and, per cable, its two ends at an active vertex; an element
+    // without an entry is its own root.
+    let mut parent: BTreeMap<usize, usize> = BTreeMap::new();
+    fn find(parent: &mut BTreeMap<usize, usize>, mut x: usize) -> usize {
+        while let Some(&up) = parent.get(&x).filter(|&&up| up != x) {
+            let grand = parent.get(&up).copied().unwrap_or(up);
+            parent.insert(x, grand);
+            x = grand;
         }
         x
     }
     let mut degree: BTreeMap<usize, usize> = BTreeMap::new();
-    for (n, &c) in cables.iter().enumerate() {
-        let cable = &topology.cables[c];
-        let Some((a, b)) = ends[c] else { continue };
+    let cables = cables
+        .iter()
+        .filter_map(|&c| Some((topology.cables.get(c)?, *ends.get(c)?)));
+    for (n, (cable, ends)) in cables.enumerate() {
+        let Some((a, b)) = ends else { continue };
         if a == b {
             continue;
         }
         *degree.entry(a).or_default() += 1;
         *degree.entry(b).or_default() += 1;
         let node = |v: usize, slot: usize| {
-            if topology.vertices[v].kind() == VertexKind::Active {
+            if topology
+                .vertices
+                .get(v)
+                .is_some_and(|v| v.kind() == VertexKind::Active)
+            {
                 topology.vertices.len() + 2 * n + slot
             } else {
                 v
@@ -346,7 +351,7 @@ fn tree(topology: &Topology, net: u32, out: &mut Vec<NetDiagnostic>) {
                 .with_help("remove the cable, or mark the element that separates the segments as NodeType coupler"),
             );
         } else {
-            parent[ra] = rb;
+            parent.insert(ra, rb);
         }
     }
     if degree.is_empty() {
@@ -387,7 +392,11 @@ fn dcfs(topology: &Topology, lookup: &mut DcfLookup<'_>, out: &mut Vec<NetDiagno
             };
             let net = attachment.net.unwrap_or(1);
             let candidates = dcf_candidates(topology, net, name);
-            if !checked.insert((candidates[0].clone(), attachment.net, attachment.node_id)) {
+            // The candidates always end with the name itself.
+            let Some(first) = candidates.first() else {
+                continue;
+            };
+            if !checked.insert((first.clone(), attachment.net, attachment.node_id)) {
                 continue;
             }
             let summary = match lookup(&candidates) {

@@ -6,10 +6,6 @@
 //! row in a snake, so neighbours on a line stay neighbours on the page; a cell is wider than any label
 //! it holds (long names are shortened with `…`, the full name is in the `<title>`), so labels of an
 //! automatic layout never overlap, at 100 devices as at 3.
-#![allow(
-    clippy::indexing_slicing,
-    reason = "graph code: the topology's own vertex, edge and device numbers index vectors built with one entry each; still to be rewritten (issue 25)"
-)]
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::fmt::Write as _;
@@ -24,6 +20,7 @@ const PALETTE: [&str; 7] = [
 
 /// The colour network `net` is drawn in.
 pub fn network_colour(net: u32) -> &'static str {
+    #[allow(clippy::indexing_slicing, reason = "an index modulo the palette's length")]
     PALETTE[(net.saturating_sub(1) as usize) % PALETTE.len()]
 }
 
@@ -119,8 +116,10 @@ pub fn layout(topology: &Topology) -> Vec<Placed> {
 fn nearest_pair(topology: &Topology) -> f64 {
     let points: Vec<(f64, f64)> = topology.vertices.iter().filter_map(Vertex::position).collect();
     let mut nearest = f64::MAX;
-    for (i, a) in points.iter().enumerate() {
-        for b in &points[i + 1..] {
+    let mut rest = points.as_slice();
+    while let Some((a, others)) = rest.split_first() {
+        rest = others;
+        for b in others {
             // Positions on one row or column are apart by their larger offset, as boxes are laid out.
             let d = (a.0 - b.0).abs().max((a.1 - b.1).abs());
             if d > 0.0 {
@@ -133,24 +132,22 @@ fn nearest_pair(topology: &Topology) -> f64 {
 
 /// Vertices breadth-first along the cables, starting at the first vertex of each unvisited part.
 fn cable_order(topology: &Topology) -> Vec<usize> {
-    let mut adjacent: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); topology.vertices.len()];
+    let mut adjacent: BTreeMap<usize, BTreeSet<usize>> = BTreeMap::new();
     for (a, b) in topology.cable_ends().into_iter().flatten() {
-        adjacent[a].insert(b);
-        adjacent[b].insert(a);
+        adjacent.entry(a).or_default().insert(b);
+        adjacent.entry(b).or_default().insert(a);
     }
-    let mut seen = vec![false; topology.vertices.len()];
+    let mut seen = BTreeSet::new();
     let mut order = Vec::with_capacity(topology.vertices.len());
     for start in 0..topology.vertices.len() {
-        if seen[start] {
+        if !seen.insert(start) {
             continue;
         }
-        seen[start] = true;
         let mut queue = VecDeque::from([start]);
         while let Some(v) = queue.pop_front() {
             order.push(v);
-            for &w in &adjacent[v] {
-                if !seen[w] {
-                    seen[w] = true;
+            for &w in adjacent.get(&v).into_iter().flatten() {
+                if seen.insert(w) {
                     queue.push_back(w);
                 }
             }
@@ -197,11 +194,15 @@ pub fn svg(topology: &Topology) -> String {
 /// The drawing with `options`: the pictures at the addresses given (a front end that serves them),
 /// and state badges for a live view.
 pub fn svg_with(topology: &Topology, options: &DrawOptions) -> String {
-    let placed = layout(topology);
-    let at: BTreeMap<usize, (f64, f64)> = placed.iter().map(|p| (p.vertex, (p.x, p.y))).collect();
-    let width = placed.iter().map(|p| p.x).fold(0.0, f64::max) + BOX_W / 2.0 + MARGIN;
+    // The layout places positions in the vertex list, each once.
+    let placed: Vec<(&Vertex, Placed)> = layout(topology)
+        .into_iter()
+        .filter_map(|p| Some((topology.vertices.get(p.vertex)?, p)))
+        .collect();
+    let at: BTreeMap<usize, (f64, f64)> = placed.iter().map(|(_, p)| (p.vertex, (p.x, p.y))).collect();
+    let width = placed.iter().map(|(_, p)| p.x).fold(0.0, f64::max) + BOX_W / 2.0 + MARGIN;
     let height =
-        placed.iter().map(|p| p.y).fold(0.0, f64::max) + BOX_H / 2.0 + MARGIN + legend_height(topology);
+        placed.iter().map(|(_, p)| p.y).fold(0.0, f64::max) + BOX_H / 2.0 + MARGIN + legend_height(topology);
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -215,10 +216,7 @@ pub fn svg_with(topology: &Topology, options: &DrawOptions) -> String {
             escape(background)
         );
     }
-    let mut occupied: Vec<Rect> = placed
-        .iter()
-        .map(|p| footprint(&topology.vertices[p.vertex], p))
-        .collect();
+    let mut occupied: Vec<Rect> = placed.iter().map(|(vertex, p)| footprint(vertex, p)).collect();
     let mut cable_labels = String::new();
     out.push_str("<g class=\"cables\">\n");
     for (cable, ends) in topology.cables.iter().zip(topology.cable_ends()) {
@@ -274,8 +272,7 @@ pub fn svg_with(topology: &Topology, options: &DrawOptions) -> String {
         }
     }
     out.push_str("</g>\n<g class=\"devices\">\n");
-    for p in &placed {
-        let vertex = &topology.vertices[p.vertex];
+    for (vertex, p) in &placed {
         let (x, y) = (p.x, p.y);
         let nets = vertex.networks();
         let colour = nets.iter().next().map_or("#555555", |&n| network_colour(n));

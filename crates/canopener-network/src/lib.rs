@@ -17,9 +17,7 @@
 
 #![warn(missing_docs)]
 // A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
-// (as rustls does). The graph modules (check, draw, localise, wiring) still index their own vertex,
-// edge and device numbers into vectors built with one entry each (68 sites); each allows it at its top
-// until it is rewritten.
+// (as rustls does).
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)

@@ -11,16 +11,12 @@
 //! [`EXHAUSTIVE_SUPPLY_DOMAINS`], greedily beyond). Each covering set is reported once per kind with
 //! every hypothesis of that kind predicting exactly it: the ambiguity group of equivalent cables, the
 //! device (a drop cable or its device), the supply domain, the monitor.
-#![allow(
-    clippy::indexing_slicing,
-    reason = "graph code: the topology's own vertex, edge and device numbers index vectors built with one entry each; still to be rewritten (issue 25)"
-)]
 
 use std::collections::{BTreeMap, BTreeSet};
 
 use serde::Serialize;
 
-use crate::model::Topology;
+use crate::model::{Cable, Topology};
 use crate::wiring::{Faults, Wiring};
 
 /// Supply domains whose combinations are tried exhaustively (2^n); beyond, a greedy choice.
@@ -96,11 +92,15 @@ impl Localiser {
             }
         };
         for cable in wiring.cables() {
+            // The wiring's cables are positions in the topology it was built from.
+            let Some(label) = topology.cables.get(cable).map(Cable::label) else {
+                continue;
+            };
             let faults = Faults {
                 cut: [cable].into(),
                 ..Faults::none()
             };
-            add(Kind::Cable, topology.cables[cable].label(), faults);
+            add(Kind::Cable, label, faults);
         }
         let mut dead: Vec<usize> = wiring
             .devices()
@@ -110,11 +110,14 @@ impl Localiser {
             .collect();
         dead.extend(wiring.active_vertices());
         for vertex in dead {
+            let Some(label) = topology.vertices.get(vertex).map(|v| v.label().to_owned()) else {
+                continue;
+            };
             let faults = Faults {
                 dead: [vertex].into(),
                 ..Faults::none()
             };
-            add(Kind::Device, topology.vertices[vertex].label().to_owned(), faults);
+            add(Kind::Device, label, faults);
         }
         for domain in topology.supply_domains() {
             let faults = Faults {
@@ -124,11 +127,20 @@ impl Localiser {
             add(Kind::Supply, domain.to_owned(), faults);
         }
         if wiring.has_cables() {
-            let all: BTreeSet<usize> = (0..wiring.devices().len())
-                .filter(|&d| !wiring.devices()[d].is_monitor)
+            let all: BTreeSet<usize> = wiring
+                .devices()
+                .iter()
+                .enumerate()
+                .filter(|(_, d)| !d.is_monitor)
+                .map(|(index, _)| index)
                 .collect();
-            let monitor = topology.vertices[wiring.root_vertex()].label().to_owned();
-            if !all.is_empty() {
+            let monitor = topology
+                .vertices
+                .get(wiring.root_vertex())
+                .map(|v| v.label().to_owned());
+            if let Some(monitor) = monitor
+                && !all.is_empty()
+            {
                 hypotheses.push(Hypothesis {
                     kind: Kind::Monitor,
                     candidate: monitor,

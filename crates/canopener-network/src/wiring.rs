@@ -8,14 +8,10 @@
 //! T-pieces, terminators) always conduct; active ones (hubs, repeaters, couplers) conduct only while
 //! alive and powered. Devices a network's cables do not reach (every device of a cpj, which has no
 //! wiring) are joined to the root by wiring canopener cannot see, which no cable fault breaks.
-#![allow(
-    clippy::indexing_slicing,
-    reason = "graph code: the topology's own vertex, edge and device numbers index vectors built with one entry each; still to be rewritten (issue 25)"
-)]
 
-use std::collections::{BTreeSet, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
-use crate::model::{Topology, VertexKind};
+use crate::model::{Cable, Topology, VertexKind};
 
 /// What is broken: cut cables, dead vertices (devices or active couplers), supply domains off.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -53,28 +49,72 @@ pub struct Device {
     pub supply: Option<String>,
     /// Whether it is the monitor's own vertex (never reported silent).
     pub is_monitor: bool,
-    core: usize,
+    core: Node,
 }
 
+/// A vertex of the wiring graph, as numbered by [`Wiring::add_vertex`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Node(usize);
+
+/// One value per vertex of a wiring graph, made when the graph had as many vertices as it has now or
+/// fewer: vertices are only ever added, so a [`Node`] the graph handed out before the table was made
+/// has its entry.
 #[derive(Debug, Clone)]
-struct Edge {
-    cable: Option<usize>,
+struct PerNode<T>(Vec<T>);
+
+impl<T: Clone> PerNode<T> {
+    fn filled(value: T, count: usize) -> PerNode<T> {
+        PerNode(vec![value; count])
+    }
+}
+
+impl<T> PerNode<T> {
+    #[allow(
+        clippy::indexing_slicing,
+        reason = "a Node is only made by Wiring::add_vertex, which pushes one entry to every per-vertex vector of the graph, and a per-fault table is sized to the vertex count when made"
+    )]
+    fn at(&self, node: Node) -> &T {
+        &self.0[node.0]
+    }
+
+    #[allow(
+        clippy::indexing_slicing,
+        reason = "a Node is only made by Wiring::add_vertex, which pushes one entry to every per-vertex vector of the graph, and a per-fault table is sized to the vertex count when made"
+    )]
+    fn at_mut(&mut self, node: Node) -> &mut T {
+        &mut self.0[node.0]
+    }
+
+    fn push(&mut self, value: T) {
+        self.0.push(value);
+    }
+
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn iter(&self) -> impl Iterator<Item = (Node, &T)> {
+        self.0.iter().enumerate().map(|(n, value)| (Node(n), value))
+    }
 }
 
 /// One network's wiring (see the [module docs](self)).
 #[derive(Debug, Clone)]
 pub struct Wiring {
     net: u32,
-    adjacency: Vec<Vec<(usize, usize)>>,
-    edges: Vec<Edge>,
+    /// Per graph vertex: its neighbours, each with the cable between (`None`: a device's internal
+    /// edge or wiring the file does not show).
+    adjacency: PerNode<Vec<(Node, Option<usize>)>>,
+    /// Per edge: its cable.
+    edges: Vec<Option<usize>>,
     /// For every graph vertex: the topology vertex it stands for (cores: the device's).
-    owner: Vec<usize>,
+    owner: PerNode<usize>,
     /// Active graph vertices, with their supply domains.
-    active: Vec<Option<BTreeSet<String>>>,
+    active: PerNode<Option<BTreeSet<String>>>,
     devices: Vec<Device>,
-    root: usize,
+    root: Node,
     has_cables: bool,
-    reachable_without_faults: Vec<bool>,
+    reachable_without_faults: PerNode<bool>,
 }
 
 impl Wiring {
@@ -88,28 +128,34 @@ impl Wiring {
         }
         let mut wiring = Wiring {
             net,
-            adjacency: Vec::new(),
+            adjacency: PerNode(Vec::new()),
             edges: Vec::new(),
-            owner: Vec::new(),
-            active: Vec::new(),
+            owner: PerNode(Vec::new()),
+            active: PerNode(Vec::new()),
             devices: Vec::new(),
-            root: 0,
+            root: Node(0),
             has_cables: false,
-            reachable_without_faults: Vec::new(),
+            reachable_without_faults: PerNode(Vec::new()),
         };
         // One graph vertex (the connector) per topology vertex that is on this network.
-        let cables = topology.cables_of(net);
+        let cables: Vec<(usize, &Cable)> = topology
+            .cables_of(net)
+            .into_iter()
+            .filter_map(|index| Some((index, topology.cables.get(index)?)))
+            .collect();
         let mut on_net: BTreeSet<usize> = members.iter().map(|m| m.index).collect();
-        for &cable in &cables {
-            for end in [&topology.cables[cable].source, &topology.cables[cable].target] {
+        for (_, cable) in &cables {
+            for end in [&cable.source, &cable.target] {
                 if let Some(index) = topology.vertices.iter().position(|v| &v.id == end) {
                     on_net.insert(index);
                 }
             }
         }
-        let mut connector = vec![usize::MAX; topology.vertices.len()];
+        let mut connector: BTreeMap<usize, Node> = BTreeMap::new();
         for &index in &on_net {
-            let vertex = &topology.vertices[index];
+            let Some(vertex) = topology.vertices.get(index) else {
+                continue;
+            };
             let active = (vertex.kind() == VertexKind::Active).then(|| {
                 vertex
                     .supply_domains()
@@ -117,18 +163,19 @@ impl Wiring {
                     .map(str::to_owned)
                     .collect::<BTreeSet<String>>()
             });
-            connector[index] = wiring.add_vertex(index, active);
+            connector.insert(index, wiring.add_vertex(index, active));
         }
-        for &cable in &cables {
-            let c = &topology.cables[cable];
+        for &(cable, c) in &cables {
             let ends = (
                 topology.vertices.iter().position(|v| v.id == c.source),
                 topology.vertices.iter().position(|v| v.id == c.target),
             );
+            // Both ends were put on the network above, so both have a connector.
             if let (Some(a), Some(b)) = ends
                 && a != b
+                && let (Some(&a), Some(&b)) = (connector.get(&a), connector.get(&b))
             {
-                wiring.add_edge(connector[a], connector[b], Some(cable));
+                wiring.add_edge(a, b, Some(cable));
                 wiring.has_cables = true;
             }
         }
@@ -136,13 +183,16 @@ impl Wiring {
             .filter(|at| on_net.contains(at))
             .or_else(|| at.and_then(|at| nearest_on(topology, at, &on_net)))
             .or_else(|| topology.default_monitor(net))?;
-        wiring.root = connector.get(root_vertex).copied().filter(|c| *c != usize::MAX)?;
+        wiring.root = connector.get(&root_vertex).copied()?;
         for member in &members {
-            let Some(node_id) = member.attachment.valid_node_id() else {
+            // Every member was put on the network above, so it has a connector.
+            let (Some(node_id), Some(&connected)) =
+                (member.attachment.valid_node_id(), connector.get(&member.index))
+            else {
                 continue;
             };
             let core = wiring.add_vertex(member.index, None);
-            wiring.add_edge(connector[member.index], core, None);
+            wiring.add_edge(connected, core, None);
             let supply = member
                 .attachment
                 .supply_domain
@@ -167,14 +217,14 @@ impl Wiring {
         }
         // Devices the cables do not reach hang on wiring the file does not show.
         let reach = wiring.reach(&Faults::none());
-        let unreached: Vec<usize> = wiring
+        let unreached: Vec<Node> = wiring
             .devices
             .iter()
-            .filter(|d| !reach[d.core])
-            .map(|d| connector[d.vertex])
+            .filter(|d| !reach.at(d.core))
+            .filter_map(|d| connector.get(&d.vertex).copied())
             .collect();
         for node in unreached {
-            if !wiring.reach(&Faults::none())[node] {
+            if !wiring.reach(&Faults::none()).at(node) {
                 wiring.add_edge(wiring.root, node, None);
             }
         }
@@ -194,7 +244,7 @@ impl Wiring {
 
     /// The topology vertex where the monitor listens.
     pub fn root_vertex(&self) -> usize {
-        self.owner[self.root]
+        *self.owner.at(self.root)
     }
 
     /// Whether the network has cables (a cpj has none: only device faults can be told then).
@@ -204,14 +254,15 @@ impl Wiring {
 
     /// The cables of this network, by index in [`Topology::cables`].
     pub fn cables(&self) -> BTreeSet<usize> {
-        self.edges.iter().filter_map(|e| e.cable).collect()
+        self.edges.iter().filter_map(|&cable| cable).collect()
     }
 
     /// The active couplers of this network, by vertex.
     pub fn active_vertices(&self) -> Vec<usize> {
-        (0..self.owner.len())
-            .filter(|&n| self.active[n].is_some())
-            .map(|n| self.owner[n])
+        self.active
+            .iter()
+            .filter(|(_, active)| active.is_some())
+            .map(|(n, _)| *self.owner.at(n))
             .collect()
     }
 
@@ -233,7 +284,7 @@ impl Wiring {
             .enumerate()
             .filter(|(_, d)| !d.is_monitor)
             .filter(|(_, d)| {
-                self.is_off(d, faults) || (self.reachable_without_faults[d.core] && !reach[d.core])
+                self.is_off(d, faults) || (*self.reachable_without_faults.at(d.core) && !reach.at(d.core))
             })
             .map(|(index, _)| index)
             .collect()
@@ -244,18 +295,18 @@ impl Wiring {
     /// each other; segments do not hear each other.
     pub fn partition(&self, faults: &Faults) -> Partition {
         let blocked = self.blocked(faults);
-        let mut segment = vec![usize::MAX; self.owner.len()];
+        let mut segment: PerNode<Option<usize>> = PerNode::filled(None, self.owner.len());
         let mut next = 0;
-        for start in 0..self.owner.len() {
-            if segment[start] != usize::MAX || blocked.vertices[start] {
+        for (start, _) in self.owner.iter() {
+            if segment.at(start).is_some() || *blocked.at(start) {
                 continue;
             }
             let mut queue = VecDeque::from([start]);
-            segment[start] = next;
+            *segment.at_mut(start) = Some(next);
             while let Some(at) = queue.pop_front() {
-                for &(to, edge) in &self.adjacency[at] {
-                    if !blocked.edges[edge] && !blocked.vertices[to] && segment[to] == usize::MAX {
-                        segment[to] = next;
+                for &(to, cable) in self.adjacency.at(at) {
+                    if !is_cut(cable, faults) && !blocked.at(to) && segment.at(to).is_none() {
+                        *segment.at_mut(to) = Some(next);
                         queue.push_back(to);
                     }
                 }
@@ -265,58 +316,53 @@ impl Wiring {
         let devices = self
             .devices
             .iter()
-            .map(|d| (!self.is_off(d, faults) && segment[d.core] != usize::MAX).then_some(segment[d.core]))
+            .map(|d| (!self.is_off(d, faults)).then_some(*segment.at(d.core)).flatten())
             .collect();
-        let root = (segment[self.root] != usize::MAX).then_some(segment[self.root]);
+        let root = *segment.at(self.root);
         Partition { devices, root }
     }
 
-    fn add_vertex(&mut self, owner: usize, active: Option<BTreeSet<String>>) -> usize {
+    fn add_vertex(&mut self, owner: usize, active: Option<BTreeSet<String>>) -> Node {
         self.adjacency.push(Vec::new());
         self.owner.push(owner);
         self.active.push(active);
-        self.owner.len() - 1
+        Node(self.owner.len() - 1)
     }
 
-    fn add_edge(&mut self, a: usize, b: usize, cable: Option<usize>) {
-        let index = self.edges.len();
-        self.edges.push(Edge { cable });
-        self.adjacency[a].push((b, index));
-        self.adjacency[b].push((a, index));
+    fn add_edge(&mut self, a: Node, b: Node, cable: Option<usize>) {
+        self.edges.push(cable);
+        self.adjacency.at_mut(a).push((b, cable));
+        self.adjacency.at_mut(b).push((a, cable));
     }
 
-    fn blocked(&self, faults: &Faults) -> Blocked {
-        let mut vertices = vec![false; self.owner.len()];
-        for (node, active) in self.active.iter().enumerate() {
+    /// Which graph vertices `faults` switch off.
+    fn blocked(&self, faults: &Faults) -> PerNode<bool> {
+        let mut blocked = PerNode::filled(false, self.owner.len());
+        for (node, active) in self.active.iter() {
             if let Some(domains) = active {
-                vertices[node] = faults.dead.contains(&self.owner[node])
+                *blocked.at_mut(node) = faults.dead.contains(self.owner.at(node))
                     || domains.iter().any(|d| faults.unpowered.contains(d));
             }
         }
         for device in &self.devices {
-            vertices[device.core] = self.is_off(device, faults);
+            *blocked.at_mut(device.core) = self.is_off(device, faults);
         }
-        let edges = self
-            .edges
-            .iter()
-            .map(|e| e.cable.is_some_and(|c| faults.cut.contains(&c)))
-            .collect();
-        Blocked { vertices, edges }
+        blocked
     }
 
     /// Which graph vertices are reachable from the root under `faults`.
-    fn reach(&self, faults: &Faults) -> Vec<bool> {
+    fn reach(&self, faults: &Faults) -> PerNode<bool> {
         let blocked = self.blocked(faults);
-        let mut seen = vec![false; self.owner.len()];
-        if blocked.vertices[self.root] {
+        let mut seen = PerNode::filled(false, self.owner.len());
+        if *blocked.at(self.root) {
             return seen;
         }
-        seen[self.root] = true;
+        *seen.at_mut(self.root) = true;
         let mut queue = VecDeque::from([self.root]);
         while let Some(at) = queue.pop_front() {
-            for &(to, edge) in &self.adjacency[at] {
-                if !seen[to] && !blocked.edges[edge] && !blocked.vertices[to] {
-                    seen[to] = true;
+            for &(to, cable) in self.adjacency.at(at) {
+                if !seen.at(to) && !is_cut(cable, faults) && !blocked.at(to) {
+                    *seen.at_mut(to) = true;
                     queue.push_back(to);
                 }
             }
@@ -340,9 +386,9 @@ pub struct Partition {
     pub root: Option<usize>,
 }
 
-struct Blocked {
-    vertices: Vec<bool>,
-    edges: Vec<bool>,
+/// Whether an edge carrying `cable` is cut under `faults`.
+fn is_cut(cable: Option<usize>, faults: &Faults) -> bool {
+    cable.is_some_and(|c| faults.cut.contains(&c))
 }
 
 /// The vertex of `targets` closest to `from` over all cables of the system (any network).
@@ -354,7 +400,11 @@ fn nearest_on(topology: &Topology, from: usize, targets: &BTreeSet<usize>) -> Op
         if targets.contains(&at) {
             return Some(at);
         }
-        let id = &topology.vertices[at].id;
+        // Only positions in the vertex list are queued.
+        let Some(vertex) = topology.vertices.get(at) else {
+            continue;
+        };
+        let id = &vertex.id;
         for cable in &topology.cables {
             let other = if &cable.source == id {
                 &cable.target
@@ -364,9 +414,10 @@ fn nearest_on(topology: &Topology, from: usize, targets: &BTreeSet<usize>) -> Op
                 continue;
             };
             if let Some(next) = topology.vertices.iter().position(|v| &v.id == other)
-                && !seen[next]
+                && let Some(seen) = seen.get_mut(next)
+                && !*seen
             {
-                seen[next] = true;
+                *seen = true;
                 queue.push_back(next);
             }
         }

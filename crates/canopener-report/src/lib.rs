@@ -11,6 +11,12 @@
 //! - [`html`]: one page with a summary, filters (also from the URL hash) and the explanations.
 
 #![warn(missing_docs)]
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does).
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
 
 mod html;
 mod human;

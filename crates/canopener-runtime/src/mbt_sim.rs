@@ -58,8 +58,10 @@ pub fn run_simulated(
 /// verdict and reason: what a failing test prints.
 pub fn outcome_tail(o: &Outcome, n: usize) -> String {
     let skip = o.trace.len().saturating_sub(n);
-    let steps: Vec<String> = o.trace[skip..]
+    let steps: Vec<String> = o
+        .trace
         .iter()
+        .skip(skip)
         .map(|s| format!("{:.3} {:?} {}", s.t, s.dir, s.label))
         .collect();
     format!("{:?}: {}\n  {}", o.verdict, o.reason, steps.join("\n  "))

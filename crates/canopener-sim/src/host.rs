@@ -81,9 +81,8 @@ impl SimHost {
     {
         self.started = WallClock::now();
         let bus = self.bus.spec().to_string();
-        for index in 0..self.devices.len() {
-            let entry = LogEntry::started(&self.devices[index], &bus);
-            self.report(&mut on_report, entry)?;
+        for device in &self.devices {
+            self.report(&mut on_report, LogEntry::started(device, &bus))?;
         }
         let mut result = self.boot(WallClock::now(), &mut on_report);
         while result.is_ok() && !self.cancel.is_cancelled() {
@@ -179,12 +178,12 @@ impl SimHost {
         let mut queue: VecDeque<(usize, CanFrame)> = VecDeque::new();
         for _ in 0..MAX_FRAMES_PER_ROUND {
             for index in 0..self.devices.len() {
-                while let Some(event) = self.devices[index].poll_event() {
-                    if let Some(entry) = LogEntry::event(&self.devices[index], &event) {
+                while let Some(event) = self.devices.get_mut(index).and_then(|d| d.poll_event()) {
+                    if let Some(entry) = self.devices.get(index).and_then(|d| LogEntry::event(d, &event)) {
                         self.report(on_report, entry)?;
                     }
                 }
-                while let Some(frame) = self.devices[index].poll_transmit() {
+                while let Some(frame) = self.devices.get_mut(index).and_then(|d| d.poll_transmit()) {
                     self.bus.send(&frame).map_err(SimError::Bus)?;
                     queue.push_back((index, frame));
                 }

@@ -307,11 +307,14 @@ fn parse(text: &str) -> Result<BTreeMap<ParameterGroup, Snapshot>, (usize, Strin
             continue;
         }
         let fields: Vec<&str> = line.split_whitespace().collect();
+        // A line that is not blank has a first field.
+        let Some(&first) = fields.first() else {
+            continue;
+        };
         let fail = |message: String| (number + 1, message);
-        let group = group_of(fields[0]).ok_or_else(|| {
+        let group = group_of(first).ok_or_else(|| {
             fail(format!(
-                "unknown parameter group '{}' (communication, application or manufacturer)",
-                fields[0]
+                "unknown parameter group '{first}' (communication, application or manufacturer)"
             ))
         })?;
         let values = groups.entry(group).or_default();

@@ -178,10 +178,11 @@ fn probe_af_can() -> io::Result<()> {
     socket2::Socket::new(domain, socket2::Type::RAW, Some(protocol)).map(drop)
 }
 
+#[allow(
+    clippy::expect_used,
+    reason = "CanId guarantees 11 or 29 bits and CanFrame a DLC and data length of 0 to 8, exactly what the socketcan constructors accept: no expect here depends on input"
+)]
 fn to_socketcan(frame: &CanFrame) -> socketcan::CanFrame {
-    // `CanId` guarantees 11 or 29 bits, exactly the ranges the socketcan id constructors accept,
-    // and `CanFrame` guarantees a DLC and data length of 0 to 8, which both frame constructors
-    // accept; none of these `expect`s depends on input.
     let id: socketcan::Id = match frame.id() {
         CanId::Standard(id) => socketcan::StandardId::new(id.as_raw()).expect("11-bit id").into(),
         CanId::Extended(id) => socketcan::ExtendedId::new(id.as_raw()).expect("29-bit id").into(),

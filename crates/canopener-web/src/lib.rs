@@ -12,6 +12,13 @@
 //! The crate holds no protocol logic: every call into the runtime goes through [`backend`]. The page
 //! contract and the API are documented in `docs/web.md`.
 
+// A file or a frame must never panic this library: no unwrap, expect or unchecked index outside tests
+// (as rustls does).
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)
+)]
+
 pub mod access;
 pub mod assets;
 pub mod backend;

@@ -328,7 +328,13 @@ impl Runs {
                 verdict: test.verdict.as_str().to_owned(),
                 reason: test.reason.clone(),
             };
-            event["verdict"] = serde_json::to_value(&verdict).unwrap_or_default();
+            // `event` is the object made above.
+            if let Some(members) = event.as_object_mut() {
+                members.insert(
+                    "verdict".to_owned(),
+                    serde_json::to_value(&verdict).unwrap_or_default(),
+                );
+            }
             view.verdicts.push(verdict);
         }
         self.events.publish([event.to_string()]);

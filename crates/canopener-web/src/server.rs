@@ -494,9 +494,12 @@ async fn api_run(State(app): State<App>, Path(id): Path<i64>) -> Response {
     let previous = app.runs.store().previous(id).ok().flatten();
     match app.runs.view(id) {
         Ok(Some(view)) => {
-            let mut value = serde_json::to_value(view).unwrap_or_default();
-            value["previous"] = json!(previous);
-            Json(value).into_response()
+            let mut members = match serde_json::to_value(view) {
+                Ok(serde_json::Value::Object(members)) => members,
+                _ => serde_json::Map::new(),
+            };
+            members.insert("previous".to_owned(), json!(previous));
+            Json(serde_json::Value::Object(members)).into_response()
         }
         Ok(None) => error(StatusCode::NOT_FOUND, format!("there is no run {id}")),
         Err(err) => error(StatusCode::INTERNAL_SERVER_ERROR, err.to_string()),

@@ -112,9 +112,11 @@ fn tour(file: &Path, runs: &Arc<Runs>, cancel: &Cancel) {
             }
         }
     }
-    let mut turn = 0;
+    let mut cables = CUTS.iter().cycle();
     'tour: while !cancel.is_cancelled() {
-        let cable = CUTS[turn % CUTS.len()];
+        let Some(cable) = cables.next() else {
+            break;
+        };
         for command in [format!("cut {cable}"), format!("repair {cable}")] {
             if commands.send(command).is_err() {
                 break 'tour;
@@ -127,7 +129,6 @@ fn tour(file: &Path, runs: &Arc<Runs>, cancel: &Cancel) {
                 std::thread::sleep(Duration::from_millis(100));
             }
         }
-        turn += 1;
     }
     drop(commands);
     if let Ok(simulation) = simulation {

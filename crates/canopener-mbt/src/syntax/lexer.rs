@@ -259,7 +259,11 @@ impl Lexer {
     }
 
     fn text(&self, start: usize) -> String {
-        self.chars[start..self.pos].iter().collect()
+        self.chars
+            .get(start..self.pos)
+            .unwrap_or_default()
+            .iter()
+            .collect()
     }
 }
 

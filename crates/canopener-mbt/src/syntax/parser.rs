@@ -58,11 +58,20 @@ const ITEM_KEYWORDS: &[&str] = &[
 
 impl Parser {
     fn peek(&self) -> &Token {
-        &self.tokens[self.pos.min(self.tokens.len() - 1)]
+        self.token(0)
     }
 
     fn peek_at(&self, ahead: usize) -> &Tok {
-        &self.tokens[(self.pos + ahead).min(self.tokens.len() - 1)].tok
+        &self.token(ahead).tok
+    }
+
+    /// The token `ahead` past the current one, or the last (the end of the file) beyond it.
+    #[allow(
+        clippy::indexing_slicing,
+        reason = "lex ends every token list with Eof, so it is never empty and its last index is len - 1"
+    )]
+    fn token(&self, ahead: usize) -> &Token {
+        &self.tokens[(self.pos + ahead).min(self.tokens.len() - 1)]
     }
 
     fn span(&self) -> Span {
@@ -709,9 +718,9 @@ impl Parser {
             &["+", "-"],
             &["*", "/", "%"],
         ];
-        if level == LEVELS.len() {
+        let Some(operators) = LEVELS.get(level) else {
             return self.unary();
-        }
+        };
         let mut left = self.binary_level(level + 1)?;
         loop {
             if level == 2 && self.at_word("in") {
@@ -719,7 +728,7 @@ impl Parser {
                 left = self.in_expr(left)?;
                 continue;
             }
-            let Some(op) = LEVELS[level].iter().find(|op| self.at_punct(op)) else {
+            let Some(op) = operators.iter().find(|op| self.at_punct(op)) else {
                 return Ok(left);
             };
             self.advance();

@@ -104,7 +104,14 @@ impl SystemFiles {
 
     /// The DCF of vertex `vertex` on network `net`, or why there is none.
     pub fn dcf_of(&self, vertex: usize, net: u32) -> Result<PathBuf, SystemError> {
-        let v = &self.topology().vertices[vertex];
+        let Some(v) = self.topology().vertices.get(vertex) else {
+            return Err(SystemError::Dcf {
+                topology: self.path.display().to_string(),
+                device: format!("vertex {vertex}"),
+                net,
+                reason: "the topology has no such vertex".to_owned(),
+            });
+        };
         let error = |reason: String| SystemError::Dcf {
             topology: self.path.display().to_string(),
             device: v.label().to_owned(),

@@ -79,7 +79,11 @@ pub fn serve(
                 Err(TryRecvError::Disconnected) => commands_open = false,
             }
         }
-        let elapsed = buses[0].1.now().saturating_duration_since(started);
+        // `buses` is not empty (checked above); its first bus's clock is the simulation's.
+        let elapsed = buses
+            .first()
+            .map_or(started, |(_, bus)| bus.now())
+            .saturating_duration_since(started);
         let virtual_now = Instant::ZERO + elapsed;
         let mut links = sim.links();
         for (net, link) in links.iter_mut() {

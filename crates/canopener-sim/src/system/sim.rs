@@ -109,16 +109,22 @@ impl SystemSim {
             let partition = sim.wiring.partition(&faults);
             let now = sim.link.virtual_bus().now();
             let network = sim.link.virtual_bus_mut();
-            for (index, &station) in sim.stations.iter().enumerate() {
-                match partition.devices[index] {
+            // A station, a partition entry and an off flag per device of the wiring.
+            let per_device = sim
+                .stations
+                .iter()
+                .zip(&partition.devices)
+                .zip(sim.off.iter_mut());
+            for ((&station, segment), off) in per_device {
+                match *segment {
                     None => {
                         network.disconnect(station);
-                        sim.off[index] = true;
+                        *off = true;
                     }
                     Some(segment) => {
                         network.reconnect(station);
                         network.set_segment(station, segment as u32);
-                        if std::mem::take(&mut sim.off[index])
+                        if std::mem::take(off)
                             && let Some(device) = network.node_mut(station)
                         {
                             device.boot(now);
@@ -190,8 +196,10 @@ impl SystemSim {
         self.topology
             .find_vertex(name)
             .filter(|&v| {
-                self.topology.vertices[v].is_device()
-                    || self.topology.vertices[v].kind() == VertexKind::Active
+                self.topology
+                    .vertices
+                    .get(v)
+                    .is_some_and(|v| v.is_device() || v.kind() == VertexKind::Active)
             })
             .ok_or_else(|| SystemError::UnknownFault(format!("no device or hub {name:?} in the topology")))
     }
