@@ -40,7 +40,7 @@ fn run_test(args: &[&str]) -> (Option<i32>, String, String, Duration) {
     let mut proc = Proc::spawn(&format!("canopener test {}", args.join(" ")), command);
     let status = proc.wait(RUN_LIMIT);
     let stdout = proc.remaining_lines().join("\n");
-    (status.code(), stdout, proc.stderr(), start.elapsed())
+    (status.code(), stdout, proc.stderr_after_exit(), start.elapsed())
 }
 
 /// `canopener test --bus BUS --node NODE --eds EDS --format json -o DIR/report.json EXTRA…`: exit code,
@@ -265,7 +265,7 @@ fn ctrl_c_writes_the_partial_report_and_exits_130() {
     std::thread::sleep(Duration::from_secs(3));
     proc.interrupt();
     let status = proc.wait(Duration::from_secs(20));
-    assert_eq!(status.code(), Some(130), "stderr: {}", proc.stderr());
+    assert_eq!(status.code(), Some(130), "stderr: {}", proc.stderr_after_exit());
     let report = report(&out);
     assert_eq!(report["interrupted"], true);
     let run = report["tests"].as_array().map_or(0, Vec::len);

@@ -263,7 +263,7 @@ cat "$out/dump.jsonl"
     assert!(
         status.success(),
         "udp-multicast run failed ({status}); stderr:\n{}",
-        proc.stderr()
+        proc.stderr_after_exit()
     );
     let python_result: serde_json::Value = lines
         .iter()

@@ -116,7 +116,7 @@ fn stop(mut proc: Proc) -> Stopped {
     Stopped {
         status,
         events,
-        stderr: proc.stderr(),
+        stderr: proc.stderr_after_exit(),
     }
 }
 

@@ -52,6 +52,7 @@ pub(crate) struct Proc {
     stdin: Option<ChildStdin>,
     lines: Receiver<String>,
     stderr: std::sync::Arc<std::sync::Mutex<String>>,
+    stderr_reader: thread::JoinHandle<()>,
 }
 
 impl Proc {
@@ -75,7 +76,7 @@ impl Proc {
         let stderr = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
         let stderr_sink = std::sync::Arc::clone(&stderr);
         let child_stderr = child.stderr.take().expect("stderr was piped");
-        thread::spawn(move || {
+        let stderr_reader = thread::spawn(move || {
             for line in BufReader::new(child_stderr).lines().map_while(Result::ok) {
                 if let Ok(mut text) = stderr_sink.lock() {
                     // Keep the tail only: a chatty peer must not eat the test's memory.
@@ -98,6 +99,7 @@ impl Proc {
             stdin,
             lines,
             stderr,
+            stderr_reader,
         }
     }
 
@@ -182,6 +184,17 @@ impl Proc {
             }
             thread::sleep(Duration::from_millis(20));
         }
+    }
+
+    /// The whole stderr of a process that has exited: the reader thread may still be copying the last
+    /// lines when `wait` returns (under load it was, and a failure showed an empty stderr), so this
+    /// waits up to 2 s for the pipe's end before taking what was read.
+    pub(crate) fn stderr_after_exit(&self) -> String {
+        let deadline = Instant::now() + Duration::from_secs(2);
+        while !self.stderr_reader.is_finished() && Instant::now() < deadline {
+            thread::sleep(Duration::from_millis(5));
+        }
+        self.stderr()
     }
 
     /// All remaining stdout lines after the process exits.
