@@ -370,6 +370,56 @@ fn config(paths: &[&str], print_in_tests: bool) -> Table {
 
 /// The comparison itself can fail: a member file that drops a ban, lifts one LIFTS does not name or
 /// changes a setting is caught; one that adds a ban is not; an IO edge may drop anything.
+/// The library crates that may panic on a `None`, an `Err` or an index outside tests, and why.
+const PANICKING_LIBRARIES: &[(&str, &str)] = &[(
+    "crates/canopener-testkit",
+    "test support: its helpers panic on purpose, with the failure's message, as assertions do",
+)];
+
+/// The crate-level attribute that turns the three panicking lints into errors outside tests.
+fn denies_panics_outside_tests(lib_rs: &str) -> bool {
+    let flat: String = lib_rs.split_whitespace().collect();
+    const OPENING: &str = "#![cfg_attr(not(test),deny(";
+    let Some(start) = flat.find(OPENING) else {
+        return false;
+    };
+    let list = flat[start + OPENING.len()..].split(')').next().unwrap_or("");
+    [
+        "clippy::unwrap_used",
+        "clippy::expect_used",
+        "clippy::indexing_slicing",
+    ]
+    .iter()
+    .all(|lint| list.contains(lint))
+}
+
+#[test]
+fn every_library_denies_unwrap_expect_and_indexing_outside_tests() {
+    let root = workspace_root();
+    let mut missing = Vec::new();
+    for member in members(&root) {
+        let lib = root.join(&member).join("src/lib.rs");
+        if !lib.is_file() || PANICKING_LIBRARIES.iter().any(|(m, _)| *m == member) {
+            continue;
+        }
+        let text = std::fs::read_to_string(&lib).unwrap_or_else(|e| panic!("{}: {e}", lib.display()));
+        if !denies_panics_outside_tests(&text) {
+            missing.push(member);
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "these libraries lack #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, \
+         clippy::indexing_slicing))], or a PANICKING_LIBRARIES row with the reason: {missing:?}"
+    );
+    assert!(denies_panics_outside_tests(
+        "#![cfg_attr(\n    not(test),\n    deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)\n)]"
+    ));
+    assert!(!denies_panics_outside_tests(
+        "#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]"
+    ));
+}
+
 #[test]
 fn a_dropped_ban_is_caught_and_an_added_one_is_allowed() {
     const READ: &str = "std::fs::read";
