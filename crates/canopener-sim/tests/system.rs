@@ -17,7 +17,7 @@ use canopener_link::system_watch::SystemWatch;
 use canopener_network::localise::Kind;
 use canopener_network::monitor::{Event, MonitorConfig, NamedExplanation, SystemMonitor};
 use canopener_sim::system::files::SystemFiles;
-use canopener_sim::system::sim::SystemSim;
+use canopener_sim::system::sim::SimulatedSystem;
 use canopener_testkit::corpus::workspace_root;
 
 /// The fixture DCFs' producer heartbeat time (1017h).
@@ -35,7 +35,7 @@ fn fixture(name: &str) -> PathBuf {
 type Seen = (f64, Vec<String>, Vec<NamedExplanation>);
 
 struct Run {
-    sim: SystemSim,
+    sim: SimulatedSystem,
     watch: SystemWatch,
     now: Instant,
     at: Option<usize>,
@@ -51,7 +51,7 @@ impl Run {
             .network_numbers()
             .first()
             .and_then(|&net| topology.default_monitor(net));
-        let sim = SystemSim::new(&files, at, Timing::Ideal).expect("simulated system");
+        let sim = SimulatedSystem::new(&files, at, Timing::Ideal).expect("simulated system");
         let config = MonitorConfig {
             at,
             networks: topology.network_numbers().into_iter().collect(),

@@ -21,7 +21,7 @@ use canopener_network::monitor::{Event, MonitorConfig, Snapshot, SystemMonitor};
 use canopener_sim::simulation::Simulation;
 use canopener_sim::system::files::{SystemError, SystemFiles};
 use canopener_sim::system::serve::{ServeReport, serve};
-use canopener_sim::system::sim::SystemSim;
+use canopener_sim::system::sim::SimulatedSystem;
 
 pub use canopener_link::cancel::Cancel;
 
@@ -130,7 +130,7 @@ pub fn simulate_system(
     cancel: &Cancel,
     mut on_report: impl FnMut(String),
 ) -> Result<(), BackendError> {
-    let mut sim = SystemSim::ideal(&system.0, at)?;
+    let mut sim = SimulatedSystem::ideal(&system.0, at)?;
     let mut links = Vec::new();
     for (net, spec) in buses {
         links.push((*net, open_link(spec, cancel)?));

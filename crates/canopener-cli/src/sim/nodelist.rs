@@ -8,7 +8,7 @@ use std::path::Path;
 use canopener_link::link::BusLink;
 use canopener_sim::system::files::{SystemError, SystemFiles};
 use canopener_sim::system::serve::{ServeReport, serve, stdin_commands};
-use canopener_sim::system::sim::SystemSim;
+use canopener_sim::system::sim::SimulatedSystem;
 
 use crate::args::{bus_values, buses_by_network};
 use crate::bus_open::open_bus;
@@ -34,7 +34,7 @@ pub(crate) fn run(path: &Path, args: &SimArgs) -> CliResult {
         .unwrap_or(1);
     let values = bus_values(&args.buses)?;
     let specs = buses_by_network(&values, home, &topology.network_numbers()).map_err(CliError::Usage)?;
-    let mut sim = SystemSim::ideal(&files, at).map_err(sim_error)?;
+    let mut sim = SimulatedSystem::ideal(&files, at).map_err(sim_error)?;
     let initial = args
         .cuts
         .iter()

@@ -1,8 +1,8 @@
-//! A simulated system ([`SystemSim`]) on real buses, in real time: each bridged network's simulated bus
+//! A simulated system ([`SimulatedSystem`]) on real buses, in real time: each bridged network's simulated bus
 //! meets the real bus where the monitor would be connected (the wiring's root), so a tool on the real
 //! bus sees exactly what a monitor there would: devices beyond a cut vanish from it while they keep
 //! talking among themselves on their own segment. Faults change while running through commands
-//! ([`SystemSim::command`]), for example from standard input ([`stdin_commands`]).
+//! ([`SimulatedSystem::command`]), for example from standard input ([`stdin_commands`]).
 
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::time::Duration;
@@ -10,7 +10,7 @@ use std::time::Duration;
 use canopener_can::Instant;
 
 use crate::system::files::SystemError;
-use crate::system::sim::SystemSim;
+use crate::system::sim::SimulatedSystem;
 use canopener_link::link::{BusLink, Link};
 
 /// The longest the real buses are read before the simulation catches up with the wall clock.
@@ -51,7 +51,7 @@ pub fn stdin_commands() -> Receiver<String> {
 /// Runs `sim` against `buses` (network number, real bus) until a bus link is cancelled, applying the
 /// `commands` as they come and reporting each to `on_report`.
 pub fn serve(
-    sim: &mut SystemSim,
+    sim: &mut SimulatedSystem,
     mut buses: Vec<(u32, BusLink)>,
     commands: &Receiver<String>,
     mut on_report: impl FnMut(ServeReport),

@@ -30,22 +30,26 @@ pub struct SimNet {
     wiring: Wiring,
     /// The station of each device of `wiring`, in its order.
     stations: Vec<StationId>,
-    /// Whether each device was off at the last [`SystemSim::set_faults`].
+    /// Whether each device was off at the last [`SimulatedSystem::set_faults`].
     off: Vec<bool>,
 }
 
 /// A simulated system (see the [module docs](self)).
 #[derive(Debug)]
-pub struct SystemSim {
+pub struct SimulatedSystem {
     topology: Topology,
     nets: Vec<SimNet>,
     faults: Faults,
 }
 
-impl SystemSim {
+impl SimulatedSystem {
     /// Builds and powers on every present device of every network of `files` at virtual time zero;
     /// the monitor's endpoints sit at vertex `at` (else each network's default position).
-    pub fn new(files: &SystemFiles, at: Option<usize>, timing: Timing) -> Result<SystemSim, SystemError> {
+    pub fn new(
+        files: &SystemFiles,
+        at: Option<usize>,
+        timing: Timing,
+    ) -> Result<SimulatedSystem, SystemError> {
         let topology = files.topology().clone();
         let mut nets = Vec::new();
         for net in topology.network_numbers() {
@@ -67,17 +71,17 @@ impl SystemSim {
                 off,
             });
         }
-        Ok(SystemSim {
+        Ok(SimulatedSystem {
             topology,
             nets,
             faults: Faults::none(),
         })
     }
 
-    /// [`SystemSim::new`] with frames delivered at the instant they are sent, as on a real bus that a
+    /// [`SimulatedSystem::new`] with frames delivered at the instant they are sent, as on a real bus that a
     /// tool watches from outside (the real bus brings its own timing).
-    pub fn ideal(files: &SystemFiles, at: Option<usize>) -> Result<SystemSim, SystemError> {
-        SystemSim::new(files, at, Timing::Ideal)
+    pub fn ideal(files: &SystemFiles, at: Option<usize>) -> Result<SimulatedSystem, SystemError> {
+        SimulatedSystem::new(files, at, Timing::Ideal)
     }
 
     /// The system simulated.
