@@ -74,7 +74,7 @@ pub(crate) fn run(args: SessionReplayArgs) -> CliResult {
         .map_err(demo_error)?;
     out.flush().map_err(stdout_error)?;
     drop(out);
-    let summary = Summary {
+    let summary = ReplayFigures {
         outcome,
         monitor: &monitor,
         frames: &frames,
@@ -100,14 +100,15 @@ fn session_span(frames: &[(canopener_can::Instant, CanFrame)]) -> Duration {
     }
 }
 
-struct Summary<'a> {
+/// The figures of a replayed session (frames lost, bus load), for the printout and the exit code.
+struct ReplayFigures<'a> {
     outcome: ReplayReport,
     monitor: &'a Monitor,
     frames: &'a [(canopener_can::Instant, CanFrame)],
     spec: &'a BusSpec,
 }
 
-impl Summary<'_> {
+impl ReplayFigures<'_> {
     fn lost(&self) -> u64 {
         self.outcome.sent.saturating_sub(self.monitor.stats().frames)
     }

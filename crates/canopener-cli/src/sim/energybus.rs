@@ -169,13 +169,14 @@ fn virtual_boot(
     Ok(())
 }
 
-struct Summary {
+/// The EnergyBus system's boot, as text for people and JSON for machines.
+struct BootSummary {
     text: String,
     json: serde_json::Value,
 }
 
 /// Which devices got where, when, and the telegrams per service.
-fn summary(report: &BootReport, telegrams: &[Telegram], devices: usize, controller: bool) -> Summary {
+fn summary(report: &BootReport, telegrams: &[Telegram], devices: usize, controller: bool) -> BootSummary {
     let mut text = String::from("summary:\n");
     for w in &report.operating {
         text.push_str(&format!(
@@ -222,7 +223,7 @@ fn summary(report: &BootReport, telegrams: &[Telegram], devices: usize, controll
         "telegrams": telegrams.len(),
         "by_service": by_service.iter().map(|(n, c)| json!({"service": n, "count": c})).collect::<Vec<_>>(),
     });
-    Summary { text, json }
+    BootSummary { text, json }
 }
 
 fn service_name(service: Service) -> String {
