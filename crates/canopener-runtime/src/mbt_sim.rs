@@ -129,3 +129,20 @@ fn limits(e: &Entry) -> Option<(i64, Option<i64>, Option<i64>)> {
     let low = e.low_limit().and_then(value).filter(|l| *l > min);
     (high.is_some() || low.is_some()).then_some((size as i64, high, low))
 }
+
+/// What each CANopen model of issue 23 (`sdo-block`, `sdo-download`, `pdo`, `store`,
+/// `lss-config`, `life-guarding`) is composed with beyond the composition matrix (their
+/// `Shipped::canopen` stays false, so the matrix does not grow to 2^13 subsets): all the shipped
+/// CANopen models of the matrix (`nmt sdo sync lss emcy guarding heartbeat`), `nmt sdo`, and for
+/// the two SDO transfer models each other with `nmt sdo`. `tests/mbt_models.rs` and
+/// `examples/mbt_models.rs` run these lists; the model under test is added to each.
+pub fn compositions_of(name: &str) -> Vec<Vec<&'static str>> {
+    let matrix: Vec<&'static str> = canopener_mbt::shipped::canopen_models().map(|m| m.name).collect();
+    let mut all = vec![matrix, vec!["nmt", "sdo"]];
+    match name {
+        "sdo-block" => all.push(vec!["nmt", "sdo", "sdo-download"]),
+        "sdo-download" => all.push(vec!["nmt", "sdo", "sdo-block"]),
+        _ => {}
+    }
+    all
+}
