@@ -150,9 +150,9 @@ pub struct TraceStep {
     pub frame: Option<FrameJson>,
 }
 
-/// The end of a run.
+/// How a model-based run ended: the verdict, why, and the trace that decided it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Outcome {
+pub struct RunResult {
     /// The verdict.
     pub verdict: Verdict,
     /// Why, in words.
@@ -175,7 +175,7 @@ pub struct Outcome {
     pub purpose: Option<(String, bool)>,
 }
 
-impl Outcome {
+impl RunResult {
     /// The run's inputs with their times: the script that replays it.
     pub fn script(&self) -> Vec<ScriptStep> {
         self.inputs
@@ -252,7 +252,7 @@ pub struct Executor<'m> {
     script_waits: usize,
     waiting_for_script: bool,
     purpose_state: usize,
-    outcome: Option<Outcome>,
+    outcome: Option<RunResult>,
     reported: bool,
     /// The last instant the internal steps were taken for: windows opening later are due then.
     closed_at: i64,
@@ -303,12 +303,12 @@ impl<'m> Executor<'m> {
     }
 
     /// The outcome, once the run is over.
-    pub fn outcome(&self) -> Option<&Outcome> {
+    pub fn outcome(&self) -> Option<&RunResult> {
         self.outcome.as_ref()
     }
 
     /// Ends the run now (the driver's deadline): `pass` if nothing failed so far.
-    pub fn finish(&mut self, reason: &str) -> Outcome {
+    pub fn finish(&mut self, reason: &str) -> RunResult {
         match &self.outcome {
             Some(outcome) => outcome.clone(),
             None => self.conclude(Verdict::Pass, reason.to_owned(), Vec::new()),
@@ -481,7 +481,7 @@ impl<'m> Executor<'m> {
         out.into_iter().collect()
     }
 
-    fn conclude(&mut self, verdict: Verdict, reason: String, allowed: Vec<String>) -> Outcome {
+    fn conclude(&mut self, verdict: Verdict, reason: String, allowed: Vec<String>) -> RunResult {
         self.phase = Phase::Finished;
         self.outbox.clear();
         let taken: Vec<usize> = self.taken.iter().copied().collect();
@@ -490,7 +490,7 @@ impl<'m> Executor<'m> {
             .purpose
             .as_ref()
             .map(|p| (p.name.clone(), p.marker(self.purpose_state) == Marker::Accept));
-        let outcome = Outcome {
+        let outcome = RunResult {
             verdict,
             reason,
             trace: self.trace.clone(),
@@ -1149,7 +1149,7 @@ impl<'m> Executor<'m> {
 }
 
 impl Core for Executor<'_> {
-    type Event = Outcome;
+    type Event = RunResult;
 
     fn handle_frame(&mut self, now: Instant, frame: &CanFrame) {
         // Frames from before the run (buffered by the link) say nothing about the reset state.
@@ -1174,7 +1174,7 @@ impl Core for Executor<'_> {
         self.outbox.pop_front()
     }
 
-    fn poll_event(&mut self) -> Option<Outcome> {
+    fn poll_event(&mut self) -> Option<RunResult> {
         if self.reported {
             return None;
         }
@@ -1229,7 +1229,7 @@ mod tests {
 
     /// Runs the executor against a scripted device on virtual time: the device answers each frame
     /// it receives with frames after delays (µs).
-    fn run(config: RunConfig, device: impl Fn(&CanFrame) -> Vec<(u64, CanFrame)>) -> Outcome {
+    fn run(config: RunConfig, device: impl Fn(&CanFrame) -> Vec<(u64, CanFrame)>) -> RunResult {
         let (model, d) = one(ECHO);
         assert!(d.is_empty(), "{d:?}");
         let model = model.unwrap();

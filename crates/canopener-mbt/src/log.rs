@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::executor::{Outcome, RunConfig, ScriptStep, Strategy};
+use crate::executor::{RunConfig, RunResult, ScriptStep, Strategy};
 
 /// The log format's version.
 pub const VERSION: u32 = 1;
@@ -111,7 +111,7 @@ fn with_kind(value: serde_json::Value, kind: &str) -> serde_json::Value {
 }
 
 /// The log of a run as JSON Lines.
-pub fn write(header: &RunHeader, outcome: &Outcome) -> String {
+pub fn write(header: &RunHeader, outcome: &RunResult) -> String {
     let mut out = String::new();
     let mut line = |value: serde_json::Value| {
         out.push_str(&value.to_string());
@@ -217,7 +217,7 @@ mod tests {
             ..RunConfig::default()
         };
         let header = RunHeader::new(&["nmt".into()], "abc", 5, &config);
-        let outcome = Outcome {
+        let outcome = RunResult {
             verdict: Verdict::Fail,
             reason: "r".into(),
             trace: vec![TraceStep {

@@ -20,7 +20,7 @@ use std::time::Duration;
 use canopener_can::{Bitrate, Instant};
 use canopener_device::energybus::station::{DeviceFault, EnergyBusFault};
 use canopener_device::faults::Fault;
-use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::explore::explore;
 use canopener_runtime::energybus_graphs::{PURPOSES, PaperPurpose, follows, graph, model, run};
 use canopener_sim::energybus::system::{BOOT_LIMIT, EnergyBusSystem, boot, ready_for_test};
@@ -232,7 +232,7 @@ fn deviation_table(seeds: u64) {
                 "node 2 of 2 devices booted by the controller",
             )
         };
-        let mut caught: Vec<Outcome> = Vec::new();
+        let mut caught: Vec<RunResult> = Vec::new();
         for seed in 1..=seeds {
             let config = RunConfig {
                 seed,
@@ -285,7 +285,7 @@ fn deviation_table(seeds: u64) {
     }
 }
 
-fn virtual_time(o: &Outcome) -> f64 {
+fn virtual_time(o: &RunResult) -> f64 {
     o.trace.last().map_or(0.0, |s| s.t)
 }
 

@@ -41,7 +41,7 @@ use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
 use canopener_files::write_atomic;
 use canopener_mbt::compile::{Options, Source, compile};
-use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_run::run;
@@ -160,7 +160,7 @@ fn compose(names: &[&str], mask: u32, eds: &Eds) -> Model {
     model.unwrap_or_else(|| panic!("{} does not check: {report:?}", subset_name(names, mask)))
 }
 
-fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> RunResult {
     let mut bus = Simulation::ideal()
         .device(eds, NODE)
         .faults(faults.iter().copied())
@@ -256,7 +256,7 @@ struct Clean {
 }
 
 impl Clean {
-    fn of(o: &Outcome) -> Clean {
+    fn of(o: &RunResult) -> Clean {
         Clean {
             pass: o.verdict == Verdict::Pass,
             verdict: format!("{:?}", o.verdict).to_lowercase(),

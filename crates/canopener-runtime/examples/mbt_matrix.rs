@@ -21,7 +21,7 @@ use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
 use canopener_link::link::LinkError;
 use canopener_mbt::compile::{Options, Source, compile};
-use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_run::{run, shrink};
@@ -242,7 +242,7 @@ fn bus_for(eds: &Eds, node_id: u8, faults: &[Fault]) -> Result<SimulatedBus, Lin
     Ok(bus)
 }
 
-fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> RunResult {
     let config = RunConfig {
         seed,
         steps,

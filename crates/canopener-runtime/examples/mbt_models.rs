@@ -25,7 +25,7 @@
 use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
 use canopener_mbt::compile::{Options, Source, compile};
-use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_sim::{compositions_of, run_simulated, sdo_download_settings};
@@ -386,7 +386,7 @@ fn caught(model: &Model, eds: &Eds, a: &Args, fault: Fault) -> bool {
     (1..=a.seeds).any(|seed| test(model, eds, a.node, &[fault], seed, a.steps).verdict == Verdict::Fail)
 }
 
-fn verdict(o: &Outcome) -> String {
+fn verdict(o: &RunResult) -> String {
     format!("{:?}", o.verdict).to_lowercase()
 }
 
@@ -395,7 +395,7 @@ fn join(set: &BTreeSet<String>) -> String {
 }
 
 /// The transitions of the model file `name` (not of the models it uses) that a run took.
-fn own(model: &Model, name: &str, o: &Outcome) -> Vec<usize> {
+fn own(model: &Model, name: &str, o: &RunResult) -> Vec<usize> {
     let Some(file) = model.files.iter().position(|f| f.origin == name) else {
         return Vec::new();
     };
@@ -471,7 +471,7 @@ fn compose(names: &[&str], eds: &Eds, node_id: u8, set: &[(String, i64)]) -> Opt
     model
 }
 
-fn test(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+fn test(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> RunResult {
     let config = RunConfig {
         seed,
         steps,

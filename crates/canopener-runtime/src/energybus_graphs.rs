@@ -10,7 +10,7 @@
 
 use canopener_eds::Eds;
 use canopener_mbt::compile::{Options, Source, compile};
-use canopener_mbt::executor::{Dir, Outcome, RunConfig, TraceStep};
+use canopener_mbt::executor::{Dir, RunConfig, RunResult, TraceStep};
 use canopener_mbt::explore::{Lts, explore};
 use canopener_mbt::label::{LabelText, Offer};
 use canopener_mbt::model::Model;
@@ -109,7 +109,7 @@ pub fn run(
     under_test: Option<NodeId>,
     model: &Model,
     config: RunConfig,
-) -> Result<Outcome, SystemError> {
+) -> Result<RunResult, SystemError> {
     let (mut bus, _) = ready_for_test(system, under_test)?;
     Ok(mbt_run::run(&mut bus, model, config, None)?)
 }

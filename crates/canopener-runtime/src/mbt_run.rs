@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use canopener_mbt::executor::{Executor, Outcome, RunConfig, ScriptStep};
+use canopener_mbt::executor::{Executor, RunConfig, RunResult, ScriptStep};
 use canopener_mbt::model::Model;
 use rayon::prelude::*;
 
@@ -17,7 +17,7 @@ pub fn run<L: Link + ?Sized>(
     model: &Model,
     config: RunConfig,
     limit: Option<Duration>,
-) -> Result<Outcome, LinkError> {
+) -> Result<RunResult, LinkError> {
     run_watched(link, model, config, limit, &mut |_| {})
 }
 
@@ -29,7 +29,7 @@ pub fn run_watched<L: Link + ?Sized>(
     config: RunConfig,
     limit: Option<Duration>,
     on_step: &mut dyn FnMut(usize),
-) -> Result<Outcome, LinkError> {
+) -> Result<RunResult, LinkError> {
     let start = link.now();
     let mut watched = Watched {
         executor: Executor::new(model, config, start),
@@ -78,7 +78,7 @@ impl Watched<'_, '_> {
 }
 
 impl canopener_can::Core for Watched<'_, '_> {
-    type Event = Outcome;
+    type Event = RunResult;
 
     fn handle_frame(&mut self, now: canopener_can::Instant, frame: &canopener_can::CanFrame) {
         self.executor.handle_frame(now, frame);
@@ -94,7 +94,7 @@ impl canopener_can::Core for Watched<'_, '_> {
         self.executor.poll_transmit()
     }
 
-    fn poll_event(&mut self) -> Option<Outcome> {
+    fn poll_event(&mut self) -> Option<RunResult> {
         self.executor.poll_event()
     }
 
@@ -109,7 +109,7 @@ pub struct SeedRun {
     /// The seed.
     pub seed: u64,
     /// What the run found.
-    pub outcome: Outcome,
+    pub outcome: RunResult,
     /// Wall-clock time the run took.
     pub wall: Duration,
 }
@@ -181,10 +181,10 @@ pub struct Shrunk {
     /// How many runs shrinking took.
     pub runs: usize,
     /// The outcome of the shortened script (a `fail`).
-    pub outcome: Outcome,
+    pub outcome: RunResult,
 }
 
-/// Shrinks `inputs` (a failing run's, see [`Outcome::script`]) to the shortest script that still
+/// Shrinks `inputs` (a failing run's, see [`RunResult::script`]) to the shortest script that still
 /// fails on the device. `link_for_run` gives the link for each run: a fresh simulation on virtual
 /// time, or the same bus again (each run starts with the model's reset stimuli).
 pub fn shrink<L: Link, E: From<LinkError>>(
@@ -195,7 +195,7 @@ pub fn shrink<L: Link, E: From<LinkError>>(
     limit: Option<Duration>,
 ) -> Result<Option<Shrunk>, E> {
     let mut error = None;
-    let mut last_fail: Option<(Vec<ScriptStep>, Outcome)> = None;
+    let mut last_fail: Option<(Vec<ScriptStep>, RunResult)> = None;
     let mut fails = |script: &[ScriptStep]| -> bool {
         if error.is_some() {
             return false;

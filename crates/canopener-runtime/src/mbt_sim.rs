@@ -11,7 +11,7 @@ use canopener_can::Instant;
 use canopener_device::faults::Fault;
 use canopener_device::od_build::build_od;
 use canopener_eds::model::Eds;
-use canopener_mbt::executor::{Outcome, RunConfig};
+use canopener_mbt::executor::{RunConfig, RunResult};
 use canopener_mbt::model::Model;
 use canopener_od::{DataType, Entry, Number};
 
@@ -40,7 +40,7 @@ pub fn run_simulated(
     node_id: u8,
     faults: &[Fault],
     config: RunConfig,
-) -> Result<Outcome, SimRunError> {
+) -> Result<RunResult, SimRunError> {
     let mut bus = Simulation::ideal()
         .device(eds, node_id)
         .faults(faults.iter().copied())
@@ -56,7 +56,7 @@ pub fn run_simulated(
 
 /// The last `n` steps of a run's trace, one a line (`1.250 In ?NMT !0x01 !0x05`), after its
 /// verdict and reason: what a failing test prints.
-pub fn outcome_tail(o: &Outcome, n: usize) -> String {
+pub fn outcome_tail(o: &RunResult, n: usize) -> String {
     let skip = o.trace.len().saturating_sub(n);
     let steps: Vec<String> = o
         .trace

@@ -10,7 +10,7 @@ use canopener_device::energybus::{EDS, profile};
 use canopener_device::faults::Fault;
 use canopener_eds::Eds;
 use canopener_master::energybus_controller::ControllerConfig;
-use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_runtime::energybus_graphs::{PURPOSES, follows, graph, model, run};
 use canopener_sim::energybus::system::EnergyBusSystem;
@@ -43,7 +43,7 @@ fn param(model: &Model, name: &str) -> i64 {
         .unwrap_or_else(|| panic!("no {name}"))
 }
 
-fn show(o: &Outcome) -> String {
+fn show(o: &RunResult) -> String {
     let last: Vec<String> = o
         .trace
         .iter()

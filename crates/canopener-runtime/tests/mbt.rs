@@ -8,7 +8,7 @@ use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
 use canopener_link::link::{Link, LinkError};
 use canopener_mbt::compile::{Options, Source, compile};
-use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_run::{run, shrink};
@@ -45,7 +45,7 @@ fn model_for(names: &[&str], eds: &Eds, node_id: u8) -> Model {
     model.unwrap_or_else(|| panic!("{report:#?}"))
 }
 
-fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> RunResult {
     test_node(model, eds, NODE, faults, seed, steps)
 }
 
@@ -61,7 +61,7 @@ fn booted(eds: &Eds, node_id: u8, faults: &[Fault]) -> SimulatedBus {
     bus
 }
 
-fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64, steps: usize) -> RunResult {
     let mut bus = booted(eds, node_id, faults);
     let config = RunConfig {
         seed,
@@ -71,7 +71,7 @@ fn test_node(model: &Model, eds: &Eds, node_id: u8, faults: &[Fault], seed: u64,
     run(&mut bus, model, config, Some(Duration::from_secs(3600))).expect("link")
 }
 
-fn show(o: &Outcome) -> String {
+fn show(o: &RunResult) -> String {
     let tail: Vec<String> = o
         .trace
         .iter()
@@ -680,7 +680,7 @@ impl Link for Rewritten {
 }
 
 /// The `sdo` model on a device whose SDO answers `rewrite` changes, seeds 1..=4.
-fn rewritten_runs(model: &Model, eds: &Eds, rewrite: Rewrite) -> Vec<Outcome> {
+fn rewritten_runs(model: &Model, eds: &Eds, rewrite: Rewrite) -> Vec<RunResult> {
     (1..=4)
         .map(|seed| {
             let mut link = Rewritten {

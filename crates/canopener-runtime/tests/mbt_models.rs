@@ -10,7 +10,7 @@
 use canopener_device::faults::Fault;
 use canopener_eds::model::Eds;
 use canopener_mbt::compile::{Options, Source, compile};
-use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_sim::{compositions_of, outcome_tail, run_simulated, sdo_download_settings};
@@ -59,7 +59,7 @@ fn model(names: &[&str], eds: &Eds) -> Model {
     model.unwrap_or_else(|| panic!("{names:?}: {report:#?}"))
 }
 
-fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> Outcome {
+fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> RunResult {
     let config = RunConfig {
         seed,
         steps,
@@ -68,12 +68,12 @@ fn test(model: &Model, eds: &Eds, faults: &[Fault], seed: u64, steps: usize) -> 
     run_simulated(model, eds, NODE, faults, config).expect("simulated run")
 }
 
-fn show(o: &Outcome) -> String {
+fn show(o: &RunResult) -> String {
     outcome_tail(o, 8)
 }
 
 /// The transitions of the model file `origin` taken on a run, by their tags.
-fn tags_taken(model: &Model, origin: &str, o: &Outcome) -> Vec<String> {
+fn tags_taken(model: &Model, origin: &str, o: &RunResult) -> Vec<String> {
     let file = model
         .files
         .iter()

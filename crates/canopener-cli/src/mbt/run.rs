@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use canopener_can::Instant;
 use canopener_link::link::BusLink;
-use canopener_mbt::executor::{Outcome, RunConfig, Verdict};
+use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::log::{self, RunHeader};
 use canopener_mbt::model::Model;
 use canopener_runtime::mbt_run;
@@ -199,7 +199,7 @@ fn bus_link(device: &DeviceArgs) -> CliResult<BusLink> {
     Ok(BusLink::new(bus, StopFlag::install()?.token())?)
 }
 
-fn execute(device: &DeviceArgs, node: u8, model: &Model, config: RunConfig) -> CliResult<Outcome> {
+fn execute(device: &DeviceArgs, node: u8, model: &Model, config: RunConfig) -> CliResult<RunResult> {
     let limit: Option<Duration> = device.time_limit;
     Ok(match (&device.sim, device.energybus) {
         (_, Some(count)) => mbt_run::run(&mut energybus::link(device, count, node)?, model, config, limit)?,
@@ -221,7 +221,7 @@ fn execute(device: &DeviceArgs, node: u8, model: &Model, config: RunConfig) -> C
 
 /// Prints the outcome and maps the verdict to the exit code: 0 pass, 6 fail or inconclusive, 7 a
 /// device that sent nothing the models know.
-fn report(header: &RunHeader, model: &Model, outcome: &Outcome, format: Format) -> CliResult {
+fn report(header: &RunHeader, model: &Model, outcome: &RunResult, format: Format) -> CliResult {
     // The size of the untimed state space, for the coverage line; a composition's can be large, so
     // it is counted up to a bound (JSON `null`, "more than N" beyond it).
     const COUNT_STATES: usize = 20_000;
