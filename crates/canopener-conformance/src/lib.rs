@@ -18,7 +18,7 @@
 //! - [`model`]: the report every suite fills (verdicts, telegrams, measurements with raw samples and
 //!   statistics); its JSON form is version 1 of the documented report.
 //! - [`render`]: the human summary, the HTML page with plots, JUnit XML and candump telegram logs.
-//! - [`demo`]: the product tour of `canopener demo` (a bundled CiA 401 device, clean and with a fault).
+//! - [`tour`]: the product tour of `canopener demo` (a bundled CiA 401 device, clean and with a fault).
 //! - [`device_model`]: what the EDS says the device is; [`requirements`]: clauses and accepted abort
 //!   codes; [`junk`]: frames no correct device sends, which keep a test from passing.
 //!

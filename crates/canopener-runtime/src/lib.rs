@@ -18,7 +18,7 @@
 //!   whole or written frame by frame), [`capture`] (receiving live traffic, optionally into a log),
 //!   [`replay`] (recorded frames with their timing, scaled, or back to back), [`send`] (a list of
 //!   frames, repeated, with a gap), [`generate`] (counting frames at a fixed rate or as fast as the bus
-//!   takes them), [`hub`] (the socketcand hub served in the foreground until cancelled) and [`demo`]
+//!   takes them), [`hub`] (the socketcand hub served in the foreground until cancelled) and [`session_replay`]
 //!   (the embedded CANopen session played and watched end to end, by default through an in-process
 //!   hub).
 
