@@ -1,6 +1,6 @@
 //! The crate's modules depend one way, as `ARCHITECTURE.md` says: the foundation (report model,
 //! context, requirements, what a test is) below the shared procedures, those below the suites, the
-//! suites below the registry, and the registry below the runner, the renderers and the demo. A suite
+//! suites below the registry, and the registry below the runner, the renderers and the tour. A suite
 //! never reaches into another suite. Every `crate::…` path in every source file is checked, doc links
 //! included, because a doc link a reader follows is a dependency too.
 
@@ -29,7 +29,7 @@ const LAYERS: &[(&str, u8)] = &[
     ("cct", 3),
     ("runner", 4),
     ("render", 4),
-    ("demo", 5),
+    ("tour", 5),
 ];
 
 fn layer(module: &str) -> Option<u8> {
