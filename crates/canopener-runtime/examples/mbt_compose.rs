@@ -7,9 +7,14 @@
 //!
 //! * `--steps N` (2000), `--seeds N` (5): each subset on each device, seeds 1..=N;
 //! * `--eds A,B,...`: corpus EDS file names (default: the six below);
-//! * `--fault-steps N` (1000), `--fault-seeds N` (5): the fault part, on the first device;
-//! * `--subsets all|sample` (all): `sample` takes the single models, the issue's compositions,
-//!   every model with nmt, and the whole set (the CI sample);
+//! * `--fault-steps N` (1000), `--fault-seeds N` (20): the fault part, on the first device;
+//! * `--subsets all|sample|pairs` (all): `sample` takes the single models, the issue's
+//!   compositions, every model with nmt, and the whole set (the CI sample); `pairs` the single
+//!   models, every pair, every set but one (one model left out) and the whole set;
+//! * `--models canopen|thirteen` (canopen): the models composed: the shipped CANopen models (the
+//!   2^7 matrix), or those and the six CANopen models added by issue 23 (every shipped model but
+//!   the EnergyBus ones; 2^13 subsets are too many to run, so with `--subsets pairs`). The tables
+//!   go between `<!-- mbt_compose thirteen: begin -->` and `<!-- mbt_compose thirteen: end -->`;
 //! * `--no-faults`: the clean part only;
 //! * `--results FILE` (`target/mbt_compose.tsv`): every finished run is appended there, and runs
 //!   already there (same subset, device, seed and steps) are not run again, so a matrix cut short
@@ -45,6 +50,7 @@ use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_run::run;
+use canopener_runtime::mbt_sim::sdo_download_settings;
 use canopener_sim::simulation::Simulation;
 use canopener_testkit::corpus;
 use rayon::prelude::*;
@@ -63,6 +69,8 @@ const DEVICES: &[&str] = &[
 const NODE: u8 = 5;
 const BEGIN: &str = "<!-- mbt_compose: begin -->";
 const END: &str = "<!-- mbt_compose: end -->";
+const BEGIN_13: &str = "<!-- mbt_compose thirteen: begin -->";
+const END_13: &str = "<!-- mbt_compose thirteen: end -->";
 
 struct Args {
     steps: usize,
@@ -71,6 +79,8 @@ struct Args {
     fault_steps: usize,
     fault_seeds: u64,
     sample: bool,
+    pairs: bool,
+    thirteen: bool,
     faults: bool,
     results: PathBuf,
     budget: Option<Duration>,
@@ -84,8 +94,10 @@ fn args() -> Args {
         seeds: 5,
         eds: DEVICES.iter().map(|s| (*s).to_owned()).collect(),
         fault_steps: 1000,
-        fault_seeds: 5,
+        fault_seeds: 20,
         sample: false,
+        pairs: false,
+        thirteen: false,
         faults: true,
         results: PathBuf::from("target/mbt_compose.tsv"),
         budget: None,
@@ -101,7 +113,17 @@ fn args() -> Args {
             "--eds" => a.eds = value().split(',').map(str::to_owned).collect(),
             "--fault-steps" => a.fault_steps = value().parse().expect("--fault-steps N"),
             "--fault-seeds" => a.fault_seeds = value().parse().expect("--fault-seeds N"),
-            "--subsets" => a.sample = value() == "sample",
+            "--subsets" => match value().as_str() {
+                "all" => {}
+                "sample" => a.sample = true,
+                "pairs" => a.pairs = true,
+                other => panic!("--subsets all|sample|pairs, not {other}"),
+            },
+            "--models" => match value().as_str() {
+                "canopen" => {}
+                "thirteen" => a.thirteen = true,
+                other => panic!("--models canopen|thirteen, not {other}"),
+            },
             "--no-faults" => a.faults = false,
             "--results" => a.results = value().into(),
             "--budget" => a.budget = Some(Duration::from_secs(value().parse().expect("--budget SECONDS"))),
@@ -113,9 +135,20 @@ fn args() -> Args {
     a
 }
 
-/// The subsets of `names` to run, as bit masks: all of them, or the CI sample.
-fn subsets(names: &[&str], sample: bool) -> Vec<u32> {
+/// The subsets of `names` to run, as bit masks: all of them, the CI sample, or the singles, pairs,
+/// all but one and all.
+fn subsets(names: &[&str], sample: bool, pairs: bool) -> Vec<u32> {
     let all = (1u32 << names.len()) - 1;
+    if pairs {
+        let n = names.len();
+        let mut out: Vec<u32> = (0..n).map(|i| 1 << i).collect();
+        out.extend((0..n).flat_map(|i| (i + 1..n).map(move |j| (1u32 << i) | (1 << j))));
+        out.extend((0..n).map(|i| all & !(1 << i)));
+        out.push(all);
+        out.sort_unstable();
+        out.dedup();
+        return out;
+    }
     if !sample {
         return (1..=all).collect();
     }
@@ -151,10 +184,20 @@ fn compose(names: &[&str], mask: u32, eds: &Eds) -> Model {
             text: shipped::text(n).expect("shipped").to_owned(),
         })
         .collect();
+    // `sdo-download` is told the description's long and limited entries, as `mbt run` tells it.
+    let set = if names
+        .iter()
+        .enumerate()
+        .any(|(i, n)| mask & (1 << i) != 0 && *n == "sdo-download")
+    {
+        sdo_download_settings(eds, NODE)
+    } else {
+        Vec::new()
+    };
     let options = Options {
         node_id: NODE,
         eds: Some(eds),
-        set: Vec::new(),
+        set,
     };
     let (model, report) = compile(&sources, &options, &|n| shipped::text(n).map(str::to_owned));
     model.unwrap_or_else(|| panic!("{} does not check: {report:?}", subset_name(names, mask)))
@@ -295,7 +338,20 @@ impl Clean {
 fn main() {
     let a = args();
     let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
-    let names: Vec<&str> = shipped::canopen_models().map(|m| m.name).collect();
+    let names: Vec<&str> = if a.thirteen {
+        shipped::MODELS
+            .iter()
+            .filter(|m| !m.name.starts_with("energybus"))
+            .map(|m| m.name)
+            .collect()
+    } else {
+        shipped::canopen_models().map(|m| m.name).collect()
+    };
+    let (begin_marker, end_marker) = if a.thirteen {
+        (BEGIN_13, END_13)
+    } else {
+        (BEGIN, END)
+    };
     let devices: Vec<(String, Eds)> = a
         .eds
         .iter()
@@ -304,7 +360,7 @@ fn main() {
             (f.clone(), canopener_eds::load(&bytes).eds)
         })
         .collect();
-    let masks = subsets(&names, a.sample);
+    let masks = subsets(&names, a.sample, a.pairs);
     let results = Results::open(&a.results);
     let wall = std::time::Instant::now();
     let in_budget = || a.budget.is_none_or(|b| wall.elapsed() < b);
@@ -478,13 +534,13 @@ fn main() {
     print!("{out}");
     if let Some(path) = &a.write {
         let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let (Some(begin), Some(end)) = (text.find(BEGIN), text.find(END)) else {
+        let (Some(begin), Some(end)) = (text.find(begin_marker), text.find(end_marker)) else {
             panic!(
-                "{} has no lines {BEGIN} and {END} to write between",
+                "{} has no lines {begin_marker} and {end_marker} to write between",
                 path.display()
             );
         };
-        let updated = format!("{}{BEGIN}\n\n{out}\n{}", &text[..begin], &text[end..]);
+        let updated = format!("{}{begin_marker}\n\n{out}\n{}", &text[..begin], &text[end..]);
         write_atomic(path, updated.as_bytes(), false).unwrap_or_else(|e| panic!("{e}"));
         eprintln!("wrote the tables into {}", path.display());
     }

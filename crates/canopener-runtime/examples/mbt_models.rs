@@ -64,15 +64,15 @@ const WRITABLE: &[&str] = &[
 ];
 
 /// Per model, the devices it is composed on (`--compositions`): those of its devices on which the
-/// seven shipped CANopen models pass alone (the matrix devices; for life guarding the three whose
-/// description the seven pass on, not e35, where `sync` and the EMCY CAN-ID of 1014h differ).
+/// seven shipped CANopen models pass alone (the matrix devices; for life guarding the four with a
+/// life time, e35 among them since the EMCY models take 1014h's CAN-ID).
 const COMPOSED: &[(&str, &[&str])] = &[
     ("sdo-block", &[DEVICES[0], DEVICES[1], DEVICES[2], DEVICES[4]]),
     ("sdo-download", &[WRITABLE[0], WRITABLE[2], WRITABLE[5]]),
     ("pdo", &[DEVICES[0], DEVICES[1], DEVICES[2], DEVICES[3]]),
     ("store", &[DEVICES[0], DEVICES[1], DEVICES[2]]),
     ("lss-config", &[DEVICES[0], DEVICES[1], DEVICES[4]]),
-    ("life-guarding", &[GUARDED[0], GUARDED[3], GUARDED[4]]),
+    ("life-guarding", &[GUARDED[0], GUARDED[1], GUARDED[3], GUARDED[4]]),
 ];
 
 /// The models of issue 23, the faults each is about, and the devices (with the feature) it runs on

@@ -7,6 +7,7 @@ use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::diagnostics::{has_errors, render};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
+use canopener_runtime::mbt_sim::sdo_download_settings;
 
 use crate::error::{CliError, CliResult};
 
@@ -54,10 +55,23 @@ pub(crate) fn load(
     set: &[(String, i64)],
 ) -> CliResult<Loaded> {
     let sources = models.iter().map(|m| source(m)).collect::<CliResult<Vec<_>>>()?;
+    // `sdo-download` tests a long entry and a limited one only where it is told which: the
+    // description names them (as the test suite and the examples pick them); `--set` still wins.
+    let mut settings: Vec<(String, i64)> = Vec::new();
+    if let Some(eds) = eds
+        && models.iter().any(|m| m == "sdo-download")
+    {
+        settings.extend(
+            sdo_download_settings(eds, node)
+                .into_iter()
+                .filter(|(name, _)| !set.iter().any(|(given, _)| given == name)),
+        );
+    }
+    settings.extend(set.iter().cloned());
     let options = Options {
         node_id: node,
         eds,
-        set: set.to_vec(),
+        set: settings,
     };
     let (model, report) = compile(&sources, &options, &|name| shipped::text(name).map(str::to_owned));
     let text: String = report.iter().map(|r| render(&r.origin, &r.diagnostics)).collect();
