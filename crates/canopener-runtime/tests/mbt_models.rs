@@ -392,9 +392,9 @@ fn the_emcy_models_follow_the_cob_id_of_1014h_and_allow_the_devices_other_errors
 
 #[test]
 fn all_thirteen_canopen_models_composed_pass_the_matrix_devices_and_e35() {
-    // Beyond the 2^7 matrix: the seven and the six added later, all at once (tools/mbt_thirteen.sh
-    // runs every pair and every twelve too, 5 seeds each, for docs/mbt.md). One seed per device,
-    // rotating, keeps this within CI's budget.
+    // Beyond the 2^7 matrix: the seven and the six added later, all at once (`mbt_compose --models
+    // thirteen --subsets pairs` runs every pair and every twelve too, 5 seeds each, with the fault
+    // part, for docs/mbt.md). One seed per device, rotating, keeps this within CI's budget.
     let all = [
         "nmt",
         "sdo",
