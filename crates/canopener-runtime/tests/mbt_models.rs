@@ -26,7 +26,6 @@ const DEMO: &str = "CANopenNode__CANopenDemo__demo__demoDevice.eds";
 const EPOS4: &str = "YamamotoSoya__maxon_epos4compact50-5can_ros2__maxon_epos4_ros2__config__bus_config_cia402_epos4_pos__maxon_epos4_0x1018.eds";
 const SAMPLE_NODE: &str = "iota2__CANopen-tools-suite__eds_files__sample_node_0x01.eds";
 const SAMPLE: &str = "christiansandberg__canopen__test__sample.eds";
-const EXAMPLE: &str = "Daxbot__node-canopen__examples__eds__example.eds";
 const GOCANOPEN: &str = "samsamfire__gocanopen__pkg__od__base.eds";
 const E35: &str = "christiansandberg__canopen__examples__eds__e35.eds";
 const ISD860: &str = "ros-industrial__ros_canopen__canopen_chain_node__test__eds__ISD860.eds";
@@ -393,8 +392,9 @@ fn the_emcy_models_follow_the_cob_id_of_1014h_and_allow_the_devices_other_errors
 #[test]
 fn all_thirteen_canopen_models_composed_pass_the_matrix_devices_and_e35() {
     // Beyond the 2^7 matrix: the seven and the six added later, all at once (`mbt_compose --models
-    // thirteen --subsets pairs` runs every pair and every twelve too, 5 seeds each, with the fault
-    // part, for docs/mbt.md). One seed per device, rotating, keeps this within CI's budget.
+    // thirteen --subsets pairs` runs every pair too, 5 seeds each, with the fault
+    // part, for docs/mbt.md). One seed per device, rotating, on four devices keeps this within
+    // CI's budget (a run of thirteen takes about 2.4 s of CPU in release, some 20 s in debug).
     let all = [
         "nmt",
         "sdo",
@@ -410,7 +410,8 @@ fn all_thirteen_canopen_models_composed_pass_the_matrix_devices_and_e35() {
         "lss-config",
         "life-guarding",
     ];
-    let devices = [IO, DEMO, EPOS4, SAMPLE_NODE, SAMPLE, EXAMPLE, E35];
+    // The devices where all thirteen once failed or were inconclusive, and e35.
+    let devices = [IO, SAMPLE_NODE, SAMPLE, E35];
     devices.par_iter().enumerate().for_each(|(d, file)| {
         let eds = load(file);
         let m = model(&all, &eds);
