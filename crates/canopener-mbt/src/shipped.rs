@@ -127,6 +127,12 @@ pub fn canopen_models() -> impl Iterator<Item = &'static Shipped> {
     MODELS.iter().filter(|m| m.canopen)
 }
 
+/// Every shipped model of CANopen services, in or beyond the composition matrix: all but the
+/// EnergyBus (CiA 454) ones, which need the emulated EnergyBus system.
+pub fn all_canopen_models() -> impl Iterator<Item = &'static Shipped> {
+    MODELS.iter().filter(|m| !m.name.starts_with("energybus"))
+}
+
 /// The text of the shipped model `name`.
 pub fn text(name: &str) -> Option<&'static str> {
     MODELS.iter().find(|m| m.name == name).map(|m| m.text)

@@ -50,7 +50,7 @@ use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
 use canopener_runtime::mbt_run::run;
-use canopener_runtime::mbt_sim::sdo_download_settings;
+use canopener_runtime::mbt_sim::model_settings;
 use canopener_sim::simulation::Simulation;
 use canopener_testkit::corpus;
 use rayon::prelude::*;
@@ -183,16 +183,14 @@ fn compose(names: &[&str], mask: u32, eds: &Eds) -> Model {
             text: shipped::text(n).expect("shipped").to_owned(),
         })
         .collect();
-    // `sdo-download` is told the description's long and limited entries, as `mbt run` tells it.
-    let set = if names
+    // The same settings as `mbt run` (the description's entries for `sdo-download`).
+    let chosen: Vec<&str> = names
         .iter()
         .enumerate()
-        .any(|(i, n)| mask & (1 << i) != 0 && *n == "sdo-download")
-    {
-        sdo_download_settings(eds, NODE)
-    } else {
-        Vec::new()
-    };
+        .filter(|(i, _)| mask & (1 << i) != 0)
+        .map(|(_, n)| *n)
+        .collect();
+    let set = model_settings(&chosen, eds, NODE, &[]);
     let options = Options {
         node_id: NODE,
         eds: Some(eds),
@@ -338,11 +336,7 @@ fn main() {
     let a = args();
     let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
     let names: Vec<&str> = if a.thirteen {
-        shipped::MODELS
-            .iter()
-            .filter(|m| !m.name.starts_with("energybus"))
-            .map(|m| m.name)
-            .collect()
+        shipped::all_canopen_models().map(|m| m.name).collect()
     } else {
         shipped::canopen_models().map(|m| m.name).collect()
     };

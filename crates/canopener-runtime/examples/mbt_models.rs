@@ -28,7 +28,7 @@ use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
-use canopener_runtime::mbt_sim::{compositions_of, run_simulated, sdo_download_settings};
+use canopener_runtime::mbt_sim::{compositions_of, model_settings, run_simulated, sdo_download_settings};
 use canopener_testkit::corpus;
 use rayon::prelude::*;
 use std::collections::BTreeSet;
@@ -447,14 +447,7 @@ fn compose(names: &[&str], eds: &Eds, node_id: u8, set: &[(String, i64)]) -> Opt
         })
         .collect();
     // The entries sdo-download writes, from the description (given ones win).
-    let mut set = set.to_vec();
-    if names.contains(&"sdo-download") {
-        for (name, value) in sdo_download_settings(eds, node_id) {
-            if !set.iter().any(|(n, _)| *n == name) {
-                set.push((name, value));
-            }
-        }
-    }
+    let set = model_settings(names, eds, node_id, set);
     let options = Options {
         node_id,
         eds: Some(eds),

@@ -67,6 +67,28 @@ pub fn outcome_tail(o: &RunResult, n: usize) -> String {
     format!("{:?}: {}\n  {}", o.verdict, o.reason, steps.join("\n  "))
 }
 
+/// The parameter settings a composition of `models` runs with on a device described by `eds`:
+/// `given` (the user's `--set`), and for `sdo-download` the description's long and limited entries
+/// ([`sdo_download_settings`]) where `given` does not name them. `mbt run`, the tests and the
+/// examples all compose through this, so a model is told the same wherever it runs.
+pub fn model_settings<S: AsRef<str>>(
+    models: &[S],
+    eds: &Eds,
+    node_id: u8,
+    given: &[(String, i64)],
+) -> Vec<(String, i64)> {
+    let mut settings: Vec<(String, i64)> = Vec::new();
+    if models.iter().any(|m| m.as_ref() == "sdo-download") {
+        settings.extend(
+            sdo_download_settings(eds, node_id)
+                .into_iter()
+                .filter(|(name, _)| !given.iter().any(|(g, _)| g == name)),
+        );
+    }
+    settings.extend(given.iter().cloned());
+    settings
+}
+
 /// The settings for `sdo-download`: `LONG_INDEX`/`LONG_SUB` (a readable and writable
 /// variable-length entry that takes at least 14 bytes) and `LIMIT_INDEX`/`LIMIT_SUB`/`LIMIT_SIZE`
 /// with `HAS_HIGH`/`HIGH` and `HAS_LOW`/`LOW` (a writable integer entry of 1, 2 or 4 bytes with a

@@ -13,7 +13,7 @@ use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::executor::{RunConfig, RunResult, Verdict};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
-use canopener_runtime::mbt_sim::{compositions_of, outcome_tail, run_simulated, sdo_download_settings};
+use canopener_runtime::mbt_sim::{compositions_of, model_settings, outcome_tail, run_simulated};
 use canopener_testkit::corpus;
 use rayon::prelude::*;
 
@@ -45,11 +45,7 @@ fn model(names: &[&str], eds: &Eds) -> Model {
             text: shipped::text(n).expect("shipped model").into(),
         })
         .collect();
-    let set = if names.contains(&"sdo-download") {
-        sdo_download_settings(eds, NODE)
-    } else {
-        Vec::new()
-    };
+    let set = model_settings(names, eds, NODE, &[]);
     let options = Options {
         node_id: NODE,
         eds: Some(eds),
@@ -395,21 +391,8 @@ fn all_thirteen_canopen_models_composed_pass_the_matrix_devices_and_e35() {
     // thirteen --subsets pairs` runs every pair too, 5 seeds each, with the fault
     // part, for docs/mbt.md). One seed per device, rotating, on four devices keeps this within
     // CI's budget (a run of thirteen takes about 2.4 s of CPU in release, some 20 s in debug).
-    let all = [
-        "nmt",
-        "sdo",
-        "sync",
-        "lss",
-        "emcy",
-        "guarding",
-        "heartbeat",
-        "sdo-block",
-        "sdo-download",
-        "pdo",
-        "store",
-        "lss-config",
-        "life-guarding",
-    ];
+    let all: Vec<&str> = shipped::all_canopen_models().map(|m| m.name).collect();
+    assert_eq!(all.len(), 13, "{all:?}");
     // The devices where all thirteen once failed or were inconclusive, and e35.
     let devices = [IO, SAMPLE_NODE, SAMPLE, E35];
     devices.par_iter().enumerate().for_each(|(d, file)| {
@@ -424,4 +407,23 @@ fn all_thirteen_canopen_models_composed_pass_the_matrix_devices_and_e35() {
             show(&o)
         );
     });
+}
+
+#[test]
+fn sdo_download_is_told_the_descriptions_entries_unless_the_user_names_them() {
+    // sample.eds has a limited entry: `mbt run sdo-download --sim` tested only 1005h before it
+    // was told it (and so passed limit-not-enforced).
+    let eds = load(SAMPLE);
+    let found = model_settings(&["nmt", "sdo-download"], &eds, NODE, &[]);
+    assert!(found.iter().any(|(n, _)| n == "LIMIT_INDEX"), "{found:?}");
+    let given = vec![("LIMIT_INDEX".to_owned(), 0x2000_i64)];
+    let chosen = model_settings(&["nmt", "sdo-download"], &eds, NODE, &given);
+    let limits: Vec<&i64> = chosen
+        .iter()
+        .filter(|(n, _)| n == "LIMIT_INDEX")
+        .map(|(_, v)| v)
+        .collect();
+    assert_eq!(limits, [&0x2000], "the user's value wins, once: {chosen:?}");
+    // Other models get only what the user gave.
+    assert_eq!(model_settings(&["nmt", "sdo"], &eds, NODE, &given), given);
 }

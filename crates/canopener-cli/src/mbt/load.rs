@@ -7,7 +7,7 @@ use canopener_mbt::compile::{Options, Source, compile};
 use canopener_mbt::diagnostics::{has_errors, render};
 use canopener_mbt::model::Model;
 use canopener_mbt::shipped;
-use canopener_runtime::mbt_sim::sdo_download_settings;
+use canopener_runtime::mbt_sim::model_settings;
 
 use crate::error::{CliError, CliResult};
 
@@ -56,18 +56,11 @@ pub(crate) fn load(
 ) -> CliResult<Loaded> {
     let sources = models.iter().map(|m| source(m)).collect::<CliResult<Vec<_>>>()?;
     // `sdo-download` tests a long entry and a limited one only where it is told which: the
-    // description names them (as the test suite and the examples pick them); `--set` still wins.
-    let mut settings: Vec<(String, i64)> = Vec::new();
-    if let Some(eds) = eds
-        && models.iter().any(|m| m == "sdo-download")
-    {
-        settings.extend(
-            sdo_download_settings(eds, node)
-                .into_iter()
-                .filter(|(name, _)| !set.iter().any(|(given, _)| given == name)),
-        );
-    }
-    settings.extend(set.iter().cloned());
+    // description names them; `--set` still wins.
+    let settings = match eds {
+        Some(eds) => model_settings(models, eds, node, set),
+        None => set.to_vec(),
+    };
     let options = Options {
         node_id: node,
         eds,
